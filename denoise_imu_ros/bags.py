@@ -1,0 +1,177 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+ROS 1 / ROS 2 bags through ``rosbags``: read a recording, write one.
+
+Reading takes an IMU topic (``sensor_msgs/Imu``) and a pose topic
+(``geometry_msgs/PoseStamped``, ``geometry_msgs/TransformStamped`` or
+``nav_msgs/Odometry``); either is auto-detected when it is the only topic of its kind.
+Message header stamps are used, not the bag's receive times.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rosbags.highlevel import AnyReader, AnyReaderError
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer, \
+    WriterError
+from rosbags.typesys import get_typestore, Stores
+
+from .dataset import check_recording, Recording
+from .errors import DatasetError
+
+IMU_TYPE = 'sensor_msgs/msg/Imu'
+POSE_TYPES = ('geometry_msgs/msg/PoseStamped', 'geometry_msgs/msg/TransformStamped',
+              'nav_msgs/msg/Odometry')
+# Topic names `denoise-imu convert` writes (EuRoC's bags also call the IMU /imu0).
+IMU_TOPIC = '/imu0'
+POSE_TOPIC = '/groundtruth/pose'
+
+TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+
+
+def _stamp_ns(header: Any) -> int:
+    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+
+
+def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
+    """(position, orientation) of any supported pose message."""
+    if msgtype == 'geometry_msgs/msg/TransformStamped':
+        return msg.transform.translation, msg.transform.rotation
+    if msgtype == 'nav_msgs/msg/Odometry':
+        return msg.pose.pose.position, msg.pose.pose.orientation
+    return msg.pose.position, msg.pose.orientation
+
+
+def _pick(reader: AnyReader, topic: str | None, types: tuple[str, ...], what: str,
+          path: Path) -> Any:
+    """Return the connections of ``topic``, checked against ``types``, or the only candidate."""
+    conns = reader.connections
+    listing = ', '.join(sorted({f'{c.topic} [{c.msgtype}]' for c in conns})) or 'none'
+    if topic is None:
+        cands = {c.topic for c in conns if c.msgtype in types}
+        if len(cands) != 1:
+            raise DatasetError(f'{path}: {len(cands)} candidate {what} topics, pass the '
+                               f'topic name explicitly (topics: {listing})')
+        topic = cands.pop()
+    norm = '/' + topic.lstrip('/')  # 'imu0' and '/imu0' name the same topic
+    chosen = [c for c in conns if '/' + c.topic.lstrip('/') == norm]
+    if not chosen:
+        raise DatasetError(f'{path}: no topic {topic!r} (topics: {listing})')
+    if chosen[0].msgtype not in types:
+        raise DatasetError(f'{path}: topic {topic!r} has type {chosen[0].msgtype}, '
+                           f'expected {" or ".join(types)}')
+    return chosen
+
+
+def read_bag(path: str | Path, imu_topic: str | None = None,
+             pose_topic: str | None = None, with_pose: bool = True) -> Recording:
+    """
+    Read IMU and ground-truth pose from a ROS 1 or ROS 2 (sqlite3/mcap) bag.
+
+    With ``with_pose=False`` only the IMU is read (the ground-truth arrays are empty).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise DatasetError(f'{path}: bag not found')
+    try:
+        with AnyReader([path], default_typestore=TYPESTORE) as reader:
+            imu_conns = _pick(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
+            pose_conns = (_pick(reader, pose_topic, POSE_TYPES, 'pose', path)
+                          if with_pose else [])
+            imu_t, imu, gt_t, gt = [], [], [], []
+            for conn, _, raw in reader.messages(connections=imu_conns + pose_conns):
+                msg = reader.deserialize(raw, conn.msgtype)
+                if conn.msgtype == IMU_TYPE:
+                    w, a = msg.angular_velocity, msg.linear_acceleration
+                    imu_t.append(_stamp_ns(msg.header))
+                    imu.append((w.x, w.y, w.z, a.x, a.y, a.z))
+                else:
+                    p, q = _pose(msg, conn.msgtype)
+                    gt_t.append(_stamp_ns(msg.header))
+                    gt.append((q.x, q.y, q.z, q.w, p.x, p.y, p.z))
+    except AnyReaderError as err:
+        raise DatasetError(f'{path}: cannot read bag: {err}') from err
+    if not imu or (with_pose and not gt):
+        raise DatasetError(f'{path}: {len(imu)} IMU and {len(gt)} pose messages, need both')
+    gt_arr = np.array(gt, dtype=np.float64).reshape(-1, 7)
+    name = path.stem if path.is_file() else path.name
+    rec = Recording(name=name, source=str(path),
+                    imu_stamp_ns=np.array(imu_t, dtype=np.int64),
+                    imu=np.array(imu, dtype=np.float64),
+                    gt_stamp_ns=np.array(gt_t, dtype=np.int64),
+                    gt_quat=gt_arr[:, :4], gt_pos=gt_arr[:, 4:])
+    check_recording(rec)
+    return rec
+
+
+def _header(stamp_ns: int, frame_id: str) -> Any:
+    t = TYPESTORE.types
+    sec, nanosec = divmod(int(stamp_ns), 1_000_000_000)
+    return t['std_msgs/msg/Header'](stamp=t['builtin_interfaces/msg/Time'](
+        sec=sec, nanosec=nanosec), frame_id=frame_id)
+
+
+def imu_message(stamp_ns: int, gyro: np.ndarray, accel: np.ndarray,
+                frame_id: str = 'imu0') -> Any:
+    """Build a rosbags ``sensor_msgs/Imu`` with no orientation (covariance[0] = -1)."""
+    t = TYPESTORE.types
+    vec = t['geometry_msgs/msg/Vector3']
+    no_orientation = np.zeros(9)
+    no_orientation[0] = -1.0
+    return t[IMU_TYPE](
+        header=_header(stamp_ns, frame_id),
+        orientation=t['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0),
+        orientation_covariance=no_orientation,
+        angular_velocity=vec(x=float(gyro[0]), y=float(gyro[1]), z=float(gyro[2])),
+        angular_velocity_covariance=np.zeros(9),
+        linear_acceleration=vec(x=float(accel[0]), y=float(accel[1]), z=float(accel[2])),
+        linear_acceleration_covariance=np.zeros(9))
+
+
+def write_bag(rec: Recording, out: str | Path, storage: str = 'mcap',
+              compress: bool = False) -> None:
+    """
+    Write a recording as a ROS 2 bag: IMU on /imu0, ground truth on /groundtruth/pose.
+
+    ``compress`` uses zstd (inside the MCAP chunks, or per message for sqlite3).
+    """
+    t = TYPESTORE.types
+    plugin = {'mcap': StoragePlugin.MCAP, 'sqlite3': StoragePlugin.SQLITE3}.get(storage)
+    if plugin is None:
+        raise DatasetError(f'unknown bag storage {storage!r} (mcap or sqlite3)')
+    try:
+        writer = Writer(out, version=9, storage_plugin=plugin)
+        if compress:
+            writer.set_compression(
+                CompressionMode.STORAGE if plugin == StoragePlugin.MCAP
+                else CompressionMode.MESSAGE, CompressionFormat.ZSTD)
+        with writer:
+            imu_conn = writer.add_connection(IMU_TOPIC, IMU_TYPE, typestore=TYPESTORE)
+            pose_conn = writer.add_connection(POSE_TOPIC, POSE_TYPES[0], typestore=TYPESTORE)
+            for stamp, row in zip(rec.imu_stamp_ns, rec.imu):
+                msg = imu_message(stamp, row[:3], row[3:])
+                writer.write(imu_conn, int(stamp), TYPESTORE.serialize_cdr(msg, IMU_TYPE))
+            for stamp, q, p in zip(rec.gt_stamp_ns, rec.gt_quat, rec.gt_pos):
+                msg = t[POSE_TYPES[0]](header=_header(stamp, 'world'), pose=t[
+                    'geometry_msgs/msg/Pose'](
+                    position=t['geometry_msgs/msg/Point'](x=p[0], y=p[1], z=p[2]),
+                    orientation=t['geometry_msgs/msg/Quaternion'](
+                        x=q[0], y=q[1], z=q[2], w=q[3])))
+                writer.write(pose_conn, int(stamp), TYPESTORE.serialize_cdr(msg, POSE_TYPES[0]))
+    except (WriterError, FileExistsError) as err:
+        raise DatasetError(f'{out}: cannot write bag: {err}') from err

@@ -1,0 +1,122 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+``denoise-imu``: convert, train, eval and correct from the command line.
+
+Each subcommand's work lives in its own module; this layer only parses arguments and
+turns the package's exceptions into a one-line message and exit code 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .errors import DenoiseError
+
+
+def _train(args: argparse.Namespace) -> None:
+    from .modelfile import save_model
+    from .train import load_config, train
+    cfg = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps,
+                      calibration_only=True if args.calibration_only else None)
+    model, meta = train(cfg, progress=not args.quiet)
+    save_model(args.out, model, meta)
+    val = meta['validation']
+    print(f'saved {args.out}: best validation step {val["step"]}, loss {val["loss"]:.4g}, '
+          f'tail AOE {val["aoe_mean_deg"]:.3f} deg, {meta["train_seconds"]:.0f} s')
+
+
+def _eval(args: argparse.Namespace) -> None:
+    from .evaluate import evaluate
+    evaluate(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
+             imu_topic=args.imu_topic, pose_topic=args.pose_topic, plots=not args.no_plots)
+
+
+def _correct(args: argparse.Namespace) -> None:
+    from .evaluate import correct_to_csv
+    n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic)
+    print(f'wrote {n} corrected gyro samples to {args.output}')
+
+
+def _convert(args: argparse.Namespace) -> None:
+    from .bags import write_bag
+    from .dataset import crop, read_asl
+    rec = crop(read_asl(args.asl_dir), args.start, args.duration)
+    write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress)
+    print(f'wrote {args.out_bag}')
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the argument parser (exposed for tests and documentation)."""
+    parser = argparse.ArgumentParser(prog='denoise-imu', description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest='command', required=True)
+
+    p = sub.add_parser('convert', help='ASL folder -> ROS 2 bag (IMU + ground-truth pose)')
+    p.add_argument('asl_dir')
+    p.add_argument('out_bag')
+    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
+    p.add_argument('--start', type=float, default=0.0, help='s after the first IMU sample')
+    p.add_argument('--duration', type=float, help='s to keep (default: all)')
+    p.add_argument('--compress', action='store_true', help='zstd compression')
+    p.set_defaults(func=_convert)
+
+    p = sub.add_parser('train', help='train a model from a YAML recipe')
+    p.add_argument('--config', required=True, help='e.g. config/train_euroc.yaml')
+    p.add_argument('--out', default='model.safetensors', help='model file to write')
+    p.add_argument('--seed', type=int, help='overrides the recipe seed')
+    p.add_argument('--data', help='overrides the recipe data folder')
+    p.add_argument('--steps', type=int, help='overrides the recipe step count')
+    p.add_argument('--calibration-only', action='store_true',
+                   help='train the 12-parameter "calibrated IMU" baseline')
+    p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.set_defaults(func=_train)
+
+    topics = argparse.ArgumentParser(add_help=False)
+    topics.add_argument('--imu-topic', help='bags: IMU topic (default: the only one)')
+    topics.add_argument('--pose-topic', help='bags: pose topic (default: the only one)')
+
+    p = sub.add_parser('eval', parents=[topics],
+                       help='AOE/ROE of raw, calibrated and corrected gyro integration')
+    p.add_argument('--model', required=True, help='shipped name (euroc, tumvi) or file')
+    p.add_argument('--data', required=True, help='folder holding the sequences')
+    p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags')
+    p.add_argument('--out', required=True, help='output folder (JSON, Markdown, PNG)')
+    p.add_argument('--baseline', help='calibrated-IMU model (default: <dataset>_calibrated '
+                   'when shipped)')
+    p.add_argument('--no-plots', action='store_true')
+    p.set_defaults(func=_eval)
+
+    p = sub.add_parser('correct', parents=[topics],
+                       help='write the corrected gyro of every IMU sample as CSV')
+    p.add_argument('--model', required=True)
+    p.add_argument('--input', required=True, help='ASL sequence folder or bag')
+    p.add_argument('--output', required=True, help='CSV: timestamp_ns,wx,wy,wz')
+    p.set_defaults(func=_correct)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``denoise-imu`` console script."""
+    args = build_parser().parse_args(argv)
+    try:
+        args.func(args)
+    except DenoiseError as err:
+        print(f'denoise-imu {args.command}: error: {err}', file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

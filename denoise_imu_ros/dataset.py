@@ -1,0 +1,231 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+IMU + ground-truth recordings: reading ASL folders and aligning ground truth.
+
+A :class:`Recording` is what a file holds (IMU and pose streams on their own clocks);
+a :class:`Sequence` is the same data on the IMU's time base, which every consumer
+(training, evaluation, correction) uses. Bags are read by :mod:`denoise_imu_ros.bags`.
+
+Conventions: stamps are int64 nanoseconds; gyro rad/s, accel m/s^2; quaternions are
+scalar-last ``(x, y, z, w)`` and rotate body (IMU) vectors into the world frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
+
+from .errors import DatasetError
+
+# A ground-truth sample at an IMU instant is trusted only if the ground-truth samples
+# around it are at most this far apart (s). TUM-VI mocap runs at 120 Hz with holes of
+# up to 3 s; interpolating across a hole would invent ground truth.
+DEFAULT_MAX_GT_GAP_S = 0.02
+
+
+@dataclass(frozen=True)
+class Recording:
+    """IMU and pose streams as read from a file, each on its own stamps."""
+
+    name: str
+    source: str                 # file or folder it came from, for error messages
+    imu_stamp_ns: np.ndarray    # (N,) int64, strictly increasing
+    imu: np.ndarray             # (N, 6) float64: gyro xyz rad/s, accel xyz m/s^2
+    gt_stamp_ns: np.ndarray     # (M,) int64, strictly increasing
+    gt_quat: np.ndarray         # (M, 4) float64 xyzw, body to world
+    gt_pos: np.ndarray          # (M, 3) float64, m
+
+
+@dataclass(frozen=True)
+class Sequence:
+    """A recording on the IMU time base, cropped to where ground truth exists."""
+
+    name: str
+    stamp_ns: np.ndarray        # (N,) int64
+    imu: np.ndarray             # (N, 6) float64
+    gt_quat: np.ndarray         # (N, 4) float64 xyzw, slerped to the IMU stamps
+    gt_pos: np.ndarray          # (N, 3) float64, linearly interpolated
+    gt_valid: np.ndarray        # (N,) bool: False inside ground-truth holes
+
+    def __len__(self) -> int:
+        """Return the number of IMU samples."""
+        return len(self.stamp_ns)
+
+    @property
+    def dt(self) -> np.ndarray:
+        """(N - 1,) s: sample k drives the attitude from stamp k to stamp k + 1."""
+        return np.diff(self.stamp_ns).astype(np.float64) * 1e-9
+
+    @property
+    def rate_hz(self) -> float:
+        """Mean IMU sample rate."""
+        return (len(self) - 1) / ((self.stamp_ns[-1] - self.stamp_ns[0]) * 1e-9)
+
+
+def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Read an ASL CSV: int64 ns stamps (column 0) and float64 columns 1..ncols-1.
+
+    Parsed by hand because the stamps (~1.4e18 ns) do not survive a float64 parse, and
+    so that every error names the file and line.
+    """
+    if not path.is_file():
+        raise DatasetError(f'{path}: file not found')
+    stamps: list[int] = []
+    rows: list[list[float]] = []
+    with path.open() as f:
+        for lineno, line in enumerate(f, 1):
+            if line.startswith('#') or not line.strip():
+                continue
+            parts = line.split(',')
+            if len(parts) < ncols:
+                raise DatasetError(
+                    f'{path}:{lineno}: expected {ncols} columns, found {len(parts)}')
+            try:
+                stamps.append(int(parts[0]))
+                rows.append([float(x) for x in parts[1:ncols]])
+            except ValueError:
+                raise DatasetError(
+                    f'{path}:{lineno}: unparsable row {line.strip()[:60]!r}') from None
+    if not stamps:
+        raise DatasetError(f'{path}: no data rows')
+    return np.array(stamps, dtype=np.int64), np.array(rows, dtype=np.float64)
+
+
+def read_asl(path: str | Path, with_gt: bool = True) -> Recording:
+    """
+    Read an ASL folder: EuRoC (imu0 + state_groundtruth_estimate0) or TUM-VI (mocap0).
+
+    With ``with_gt=False`` only the IMU is read (the ground-truth arrays are empty).
+    """
+    root = Path(path)
+    mav = root / 'mav0'
+    if not mav.is_dir():
+        raise DatasetError(f'{root}: not an ASL sequence folder (no mav0/ inside)')
+    imu_stamp, imu = read_csv(mav / 'imu0' / 'data.csv', 7)
+    if not with_gt:
+        rec = Recording(root.name, str(root), imu_stamp, imu, np.zeros(0, np.int64),
+                        np.zeros((0, 4)), np.zeros((0, 3)))
+        check_recording(rec, imu_file=mav / 'imu0' / 'data.csv')
+        return rec
+    for gt_dir in ('state_groundtruth_estimate0', 'mocap0'):
+        if (mav / gt_dir).is_dir():
+            break
+    else:
+        raise DatasetError(f'{mav}: no ground truth (state_groundtruth_estimate0/ or mocap0/)')
+    gt_stamp, gt = read_csv(mav / gt_dir / 'data.csv', 8)  # t, p xyz, q wxyz
+    rec = Recording(name=root.name, source=str(root), imu_stamp_ns=imu_stamp, imu=imu,
+                    gt_stamp_ns=gt_stamp, gt_quat=gt[:, [4, 5, 6, 3]], gt_pos=gt[:, :3])
+    check_recording(rec, imu_file=mav / 'imu0' / 'data.csv', gt_file=mav / gt_dir / 'data.csv')
+    return rec
+
+
+def check_recording(rec: Recording, imu_file: object = None, gt_file: object = None) -> None:
+    """Reject what would silently corrupt training or evaluation: NaN, unordered stamps."""
+    for what, stamps, values, where in (
+            ('IMU', rec.imu_stamp_ns, rec.imu, imu_file or rec.source),
+            ('ground truth', rec.gt_stamp_ns, np.hstack([rec.gt_quat, rec.gt_pos]),
+             gt_file or rec.source)):
+        bad = np.flatnonzero(~np.isfinite(values).all(axis=1))
+        if len(bad):
+            raise DatasetError(f'{where}: non-finite {what} values in sample {bad[0]} '
+                               f'({len(bad)} such samples)')
+        back = np.flatnonzero(np.diff(stamps) <= 0)
+        if len(back):
+            i = back[0]
+            kind = 'duplicate' if stamps[i + 1] == stamps[i] else 'non-monotonic'
+            raise DatasetError(f'{where}: {kind} {what} stamp at sample {i + 1} '
+                               f'({stamps[i]} then {stamps[i + 1]} ns)')
+    norms = np.linalg.norm(rec.gt_quat, axis=1)
+    if np.any(norms < 0.5) or np.any(norms > 1.5):
+        raise DatasetError(f'{gt_file or rec.source}: ground-truth quaternions are not unit '
+                           f'quaternions (norm {norms.min():.3g}..{norms.max():.3g})')
+
+
+def crop(rec: Recording, start_s: float = 0.0, duration_s: float | None = None) -> Recording:
+    """Cut a recording to ``duration_s`` from ``start_s`` after its first IMU stamp."""
+    t0 = rec.imu_stamp_ns[0] + int(start_s * 1e9)
+    t1 = np.iinfo(np.int64).max if duration_s is None else t0 + int(duration_s * 1e9)
+    imu = (rec.imu_stamp_ns >= t0) & (rec.imu_stamp_ns < t1)
+    gt = (rec.gt_stamp_ns >= t0) & (rec.gt_stamp_ns < t1)
+    if not imu.any():
+        raise DatasetError(f'{rec.source}: no IMU samples in the requested time range')
+    return Recording(rec.name, rec.source, rec.imu_stamp_ns[imu], rec.imu[imu],
+                     rec.gt_stamp_ns[gt], rec.gt_quat[gt], rec.gt_pos[gt])
+
+
+def align(rec: Recording, max_gt_gap_s: float = DEFAULT_MAX_GT_GAP_S,
+          min_samples: int = 1) -> Sequence:
+    """
+    Crop to the IMU/ground-truth overlap and interpolate ground truth to IMU stamps.
+
+    Orientation is slerped, position linearly interpolated; IMU instants whose
+    bracketing ground-truth samples are more than ``max_gt_gap_s`` apart are marked
+    invalid (their interpolated values are kept, never trusted).
+    """
+    t_imu, t_gt = rec.imu_stamp_ns, rec.gt_stamp_ns
+    start, end = max(t_imu[0], t_gt[0]), min(t_imu[-1], t_gt[-1])
+    if start >= end:
+        raise DatasetError(f'{rec.source}: IMU and ground truth do not overlap in time')
+    keep = (t_imu >= start) & (t_imu <= end)
+    if keep.sum() < max(min_samples, 2):
+        raise DatasetError(f'{rec.source}: {keep.sum()} IMU samples overlap the ground '
+                           f'truth, need at least {max(min_samples, 2)}')
+    t = t_imu[keep]
+    # Relative float seconds: exact enough (ns resolution for 100 days), unlike raw ns.
+    rel = (t - t_gt[0]) * 1e-9
+    rel_gt = (t_gt - t_gt[0]) * 1e-9
+    quat = Slerp(rel_gt, Rotation.from_quat(rec.gt_quat))(rel).as_quat()
+    pos = np.stack([np.interp(rel, rel_gt, rec.gt_pos[:, i]) for i in range(3)], axis=1)
+    after = np.clip(np.searchsorted(t_gt, t, side='left'), 1, len(t_gt) - 1)
+    gap = (t_gt[after] - t_gt[after - 1]) * 1e-9
+    exact = t_gt[after - 1] == t  # sitting on a ground-truth sample needs no neighbour
+    valid = (gap <= max_gt_gap_s) | exact | (t_gt[after] == t)
+    return Sequence(name=rec.name, stamp_ns=t, imu=rec.imu[keep], gt_quat=quat,
+                    gt_pos=pos, gt_valid=valid)
+
+
+def is_bag(path: str | Path) -> bool:
+    """ROS 1 .bag, ROS 2 .mcap/.db3 file, or a ROS 2 bag folder (metadata.yaml)."""
+    p = Path(path)
+    return p.suffix in ('.bag', '.mcap', '.db3') or (p / 'metadata.yaml').is_file()
+
+
+def load_imu(path: str | Path, imu_topic: str | None = None) -> Recording:
+    """IMU stream only (no ground truth needed) from an ASL folder or a bag."""
+    if is_bag(path):
+        from .bags import read_bag
+        return read_bag(path, imu_topic=imu_topic, with_pose=False)
+    if not Path(path).exists():
+        raise DatasetError(f'{path}: no such sequence folder or bag')
+    return read_asl(path, with_gt=False)
+
+
+def load_sequence(path: str | Path, imu_topic: str | None = None,
+                  pose_topic: str | None = None,
+                  max_gt_gap_s: float = DEFAULT_MAX_GT_GAP_S,
+                  min_samples: int = 1) -> Sequence:
+    """Read an ASL folder or a bag and align it; topics are auto-detected when None."""
+    if is_bag(path):
+        from .bags import read_bag  # bags builds on this module's records
+        rec = read_bag(path, imu_topic=imu_topic, pose_topic=pose_topic)
+    elif Path(path).exists():
+        rec = read_asl(path)
+    else:
+        raise DatasetError(f'{path}: no such sequence folder or bag')
+    return align(rec, max_gt_gap_s=max_gt_gap_s, min_samples=min_samples)

@@ -1,0 +1,93 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Open-loop attitude integration and the paper's error metrics (numpy + scipy).
+
+One index convention everywhere: gyro sample k drives the attitude from stamp k to
+stamp k + 1 (R_{k+1} = R_k Exp(omega_k dt_k)), starting from the ground-truth attitude
+at the first stamp. The training loss uses the same convention.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+ROE_DISTANCES_M = (7.0, 21.0, 35.0)
+
+
+def integrate(q0: np.ndarray, gyro: np.ndarray, dt: np.ndarray) -> Rotation:
+    """
+    Attitudes at N stamps from an xyzw start ``q0``, (N-1, 3) rad/s and (N-1,) s.
+
+    The ordered products Exp(w_0 dt_0) ... Exp(w_k dt_k) are formed by a parallel
+    prefix scan (log2 N vectorised compositions) rather than a Python loop.
+    """
+    steps = Rotation.from_rotvec(gyro * dt[:, None]).as_quat()
+    shift = 1
+    while shift < len(steps):
+        r = Rotation.from_quat(steps)
+        steps[shift:] = (r[:-shift] * r[shift:]).as_quat()
+        shift *= 2
+    start = Rotation.from_quat(q0)
+    return Rotation.concatenate([start, start * Rotation.from_quat(steps)])
+
+
+class AttitudeErrors(NamedTuple):
+    """Errors of one estimated trajectory against ground truth, degrees."""
+
+    aoe: float                 # RMS of the 3-D orientation error angle
+    aoe_yaw: float             # RMS of the yaw error (about world z)
+    roe: dict[float, np.ndarray]  # relative orientation errors per distance (m)
+    error_deg: np.ndarray      # (N,) 3-D error angle at each stamp (NaN in GT holes)
+
+    def roe_median(self) -> dict[float, float]:
+        """Median ROE per distance (the paper's figure); NaN if never travelled."""
+        return {d: float(np.median(e)) if len(e) else float('nan')
+                for d, e in self.roe.items()}
+
+
+def attitude_errors(est: Rotation, gt: Rotation, gt_pos: np.ndarray, valid: np.ndarray,
+                    distances: tuple[float, ...] = ROE_DISTANCES_M) -> AttitudeErrors:
+    """
+    AOE (3-D and yaw) and ROE, skipping stamps where ground truth is not valid.
+
+    Yaw error is the first angle of the intrinsic Z-Y-X decomposition of the world-frame
+    error R_est R_gt^T, i.e. its rotation about the world z axis.
+    """
+    angle = np.degrees((gt.inv() * est).magnitude())
+    yaw = np.degrees((est * gt.inv()).as_euler('ZYX')[:, 0])
+    roe = {}
+    travelled = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(gt_pos, axis=0),
+                                                                axis=1))])
+    for d in distances:
+        i = np.arange(len(travelled))
+        j = np.searchsorted(travelled, travelled + d)
+        ok = j < len(travelled)
+        i, j = i[ok], j[ok]
+        ok = valid[i] & valid[j]
+        i, j = i[ok], j[ok]
+        if len(i) == 0:
+            roe[d] = np.zeros(0)
+            continue
+        rel_gt = gt[i].inv() * gt[j]
+        rel_est = est[i].inv() * est[j]
+        roe[d] = np.degrees((rel_gt.inv() * rel_est).magnitude())
+    return AttitudeErrors(
+        aoe=float(np.sqrt(np.mean(angle[valid] ** 2))),
+        aoe_yaw=float(np.sqrt(np.mean(yaw[valid] ** 2))),
+        roe=roe,
+        error_deg=np.where(valid, angle, np.nan))

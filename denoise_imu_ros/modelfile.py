@@ -1,0 +1,121 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Model files: one ``.safetensors`` per model, loadable without pickle.
+
+The tensors are the model's state dict (weights, BatchNorm statistics, input
+normalisation, gyro_std, Delta); the safetensors header metadata holds JSON strings
+that make the file self-describing: architecture, sample rate, receptive field,
+training recipe and sequences, validation figures and the code version.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+import json
+from pathlib import Path
+import subprocess
+from typing import Any, NamedTuple
+
+from safetensors import safe_open, SafetensorError
+from safetensors.torch import load_file, save_file
+import torch
+
+from . import __version__
+from .errors import ModelFileError
+from .model import GyroNet, ModelConfig
+
+FORMAT = 'denoise_imu_ros.gyro_model'
+FORMAT_VERSION = 1
+SHIPPED_DIR = Path(__file__).parent / 'models'
+
+
+class LoadedModel(NamedTuple):
+    """A model in eval mode plus the metadata it was saved with."""
+
+    model: GyroNet
+    meta: dict[str, Any]
+    path: Path
+
+
+def shipped_models() -> list[str]:
+    """Names accepted by ``--model`` besides paths."""
+    return sorted(p.stem for p in SHIPPED_DIR.glob('*.safetensors'))
+
+
+def code_version() -> str:
+    """Package version, plus the git commit when running from a checkout."""
+    try:
+        rev = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], cwd=Path(__file__).parent,
+                             capture_output=True, text=True, timeout=5, check=True).stdout
+    except (OSError, subprocess.SubprocessError):
+        return __version__
+    return f'{__version__}+g{rev.strip()}'
+
+
+def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:
+    """Write weights and metadata; ``meta`` values must be JSON-serialisable."""
+    header = {'format': FORMAT, 'format_version': str(FORMAT_VERSION),
+              'model_config': json.dumps(asdict(model.config)),
+              'receptive_field': str(model.receptive_field)}
+    header.update({k: json.dumps(v) for k, v in meta.items()})
+    tensors = {k: v.detach().contiguous() for k, v in model.state_dict().items()}
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    save_file(tensors, str(path), metadata=header)
+
+
+def resolve(spec: str | Path) -> Path:
+    """Find a shipped model by name (``euroc``, ``tumvi``, ...) or a model file by path."""
+    shipped = SHIPPED_DIR / f'{spec}.safetensors'
+    if str(spec) in shipped_models():
+        return shipped
+    path = Path(spec)
+    if not path.is_file():
+        raise ModelFileError(f'{spec}: no such model file, and not a shipped model '
+                             f'({", ".join(shipped_models()) or "none shipped"})')
+    return path
+
+
+def load_model(spec: str | Path) -> LoadedModel:
+    """Rebuild a model from its file alone, in eval mode; every failure is ModelFileError."""
+    path = resolve(spec)
+    try:
+        with open(path, 'rb') as f:
+            head = f.read(8)
+        if len(head) < 8:
+            raise ModelFileError(f'{path}: not a model file (too short)')
+        with safe_open(str(path), framework='pt') as f:
+            header = f.metadata() or {}
+        tensors = load_file(str(path))
+    except (SafetensorError, OSError, ValueError) as err:
+        raise ModelFileError(f'{path}: corrupt or not a model file ({err})') from err
+    if header.get('format') != FORMAT:
+        raise ModelFileError(f'{path}: not a {FORMAT} file')
+    if header.get('format_version') != str(FORMAT_VERSION):
+        raise ModelFileError(f'{path}: model format version {header.get("format_version")}, '
+                             f'this code reads version {FORMAT_VERSION}')
+    try:
+        cfg = json.loads(header['model_config'])
+        config = ModelConfig(**{k: tuple(v) if isinstance(v, list) else v
+                                for k, v in cfg.items()})
+        model = GyroNet(config)
+        model.load_state_dict(tensors, strict=True)
+        meta = {k: json.loads(v) for k, v in header.items()
+                if k not in ('format', 'format_version')}
+    except (KeyError, TypeError, ValueError, RuntimeError) as err:
+        raise ModelFileError(f'{path}: inconsistent model file ({err})') from err
+    if not all(torch.isfinite(t.float()).all() for t in tensors.values()):
+        raise ModelFileError(f'{path}: model file holds non-finite weights')
+    model.eval()
+    return LoadedModel(model=model, meta=meta, path=path)
