@@ -224,25 +224,29 @@ def train(cfg: TrainConfig, progress: bool = True) -> tuple[GyroNet, dict[str, A
 
     best: dict[str, Any] = {'loss': math.inf}
     history = []
-    bar = tqdm(range(1, cfg.steps + 1), disable=not progress, desc='train', unit='step')
+    loss = torch.tensor(0.0)
+    bar = tqdm(range(0, cfg.steps + 1), disable=not progress, desc='train', unit='step')
     for step in bar:
-        u, dt, quat, valid = batch(split, cfg, gen)
-        loss = increment_loss(model(u), dt, quat, valid, loss_cfg)
-        if not torch.isfinite(loss):
-            raise TrainingError(f'non-finite training loss at step {step} (lr '
-                                f'{scheduler.get_last_lr()[0]:.3g}); lower lr or check data')
-        optimizer.zero_grad(set_to_none=True)
-        loss.backward()
-        optimizer.step()
-        scheduler.step()
-        bar.set_postfix(loss=f'{loss.item():.4g}')
-        if step % cfg.val_every == 0 or step == cfg.steps:
+        if step > 0:
+            u, dt, quat, valid = batch(split, cfg, gen)
+            loss = increment_loss(model(u), dt, quat, valid, loss_cfg)
+            if not torch.isfinite(loss):
+                raise TrainingError(f'non-finite training loss at step {step} (lr '
+                                    f'{scheduler.get_last_lr()[0]:.3g}); lower the learning '
+                                    'rate or check the data')
+            optimizer.zero_grad(set_to_none=True)
+            loss.backward()
+            optimizer.step()
+            scheduler.step()
+            bar.set_postfix(loss=f'{loss.item():.4g}')
+        if step % cfg.val_every == 0 or step == cfg.steps:  # step 0: the untrained baseline
             val = validate(model, seqs, val_start, loss_cfg)
-            history.append({'step': step, 'train_loss': loss.item(), 'val_loss': val['loss'],
+            history.append({'step': step, 'train_loss': loss.item() if step else None,
+                            'val_loss': val['loss'],
                             'val_aoe_mean_deg': val['aoe_mean_deg']})
             bar.write(f'step {step}: train {loss.item():.4g}  val {val["loss"]:.4g}  '
                       f'val AOE {val["aoe_mean_deg"]:.3f} deg')
-            if val['loss'] < best['loss']:
+            if step > 0 and val['loss'] < best['loss']:
                 best = dict(val, step=step, state=copy.deepcopy(model.state_dict()))
 
     model.load_state_dict(best.pop('state'))

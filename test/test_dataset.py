@@ -1,0 +1,128 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""ASL reading and ground-truth alignment, on real data and on broken files."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from denoise_imu_ros.dataset import load_sequence
+from denoise_imu_ros.errors import DatasetError
+
+T0 = 1_403_636_579_758_555_648  # a real EuRoC stamp: too big for a float64 parse
+
+
+def write_asl(root: Path, n_imu=1000, imu_rate=200.0, gt_rate=200.0, gt_offset_s=0.0,
+              gt_dir='state_groundtruth_estimate0', yaw_rate=0.3, gt_hole=None):
+    """Write a synthetic ASL folder: constant yaw rate, ground truth in w,x,y,z order."""
+    (root / 'mav0' / 'imu0').mkdir(parents=True)
+    (root / 'mav0' / gt_dir).mkdir(parents=True)
+    t_imu = T0 + np.round(np.arange(n_imu) / imu_rate * 1e9).astype(np.int64)
+    with open(root / 'mav0' / 'imu0' / 'data.csv', 'w') as f:
+        f.write('#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n')
+        for t in t_imu:
+            f.write(f'{t},0.0,0.0,{yaw_rate},0.0,0.0,9.81\n')
+    duration = n_imu / imu_rate
+    t_gt = T0 + np.round((gt_offset_s + np.arange(int(duration * gt_rate)) / gt_rate)
+                         * 1e9).astype(np.int64)
+    if gt_hole is not None:
+        rel = (t_gt - T0) * 1e-9
+        t_gt = t_gt[(rel < gt_hole[0]) | (rel > gt_hole[1])]
+    with open(root / 'mav0' / gt_dir / 'data.csv', 'w') as f:
+        f.write('#timestamp, p_x, p_y, p_z, q_w, q_x, q_y, q_z\n')
+        for t in t_gt:
+            yaw = yaw_rate * (t - T0) * 1e-9
+            f.write(f'{t},0.1,0.2,0.3,{math.cos(yaw / 2)},0.0,0.0,{math.sin(yaw / 2)}\n')
+    return root
+
+
+def test_real_euroc_sequence_is_aligned_at_200_hz(euroc):
+    seq = load_sequence(euroc / 'MH_01_easy')
+    assert seq.stamp_ns.dtype == np.int64 and len(seq) > 30000
+    assert seq.rate_hz == pytest.approx(200.0, rel=1e-3)
+    assert seq.gt_valid.all()
+    np.testing.assert_allclose(np.linalg.norm(seq.gt_quat, axis=1), 1.0, atol=1e-12)
+
+
+def test_real_tumvi_mocap_holes_are_masked(data_dir):
+    seq = load_sequence(data_dir / 'tumvi' / 'dataset-room3_512_16')
+    assert 0.8 < seq.gt_valid.mean() < 0.99
+
+
+def test_quaternions_are_read_as_wxyz_and_stored_xyzw(tmp_path):
+    seq = load_sequence(write_asl(tmp_path / 's', yaw_rate=0.5))
+    yaw = 0.5 * (seq.stamp_ns - T0) * 1e-9
+    np.testing.assert_allclose(seq.gt_quat[:, 2], np.sin(yaw / 2), atol=1e-9)
+    np.testing.assert_allclose(seq.gt_quat[:, 3], np.cos(yaw / 2), atol=1e-9)
+    assert seq.stamp_ns[0] == T0  # nanoseconds survive parsing exactly
+
+
+def test_overlap_crop_and_interpolation_to_imu_stamps(tmp_path):
+    seq = load_sequence(write_asl(tmp_path / 's', gt_rate=120.0, gt_offset_s=0.5))
+    assert seq.stamp_ns[0] >= T0 + 500_000_000
+    yaw = 0.3 * (seq.stamp_ns - T0) * 1e-9
+    np.testing.assert_allclose(seq.gt_quat[:, 2], np.sin(yaw / 2), atol=1e-9)
+
+
+def test_ground_truth_hole_is_masked_and_only_the_hole(tmp_path):
+    seq = load_sequence(write_asl(tmp_path / 's', n_imu=2000, gt_rate=120.0,
+                                  gt_dir='mocap0', gt_hole=(3.0, 4.5)))
+    rel = (seq.stamp_ns - T0) * 1e-9
+    inside = (rel > 3.0) & (rel < 4.5)
+    assert not seq.gt_valid[inside].any()
+    assert seq.gt_valid[(rel < 2.99) | (rel > 4.51)].all()
+
+
+def _break(path: Path, line: int, text: str):
+    lines = path.read_text().splitlines()
+    lines[line] = text
+    path.write_text('\n'.join(lines) + '\n')
+
+
+@pytest.mark.parametrize('damage, message', [
+    (lambda r: None, None),
+    (lambda r: (r / 'mav0' / 'imu0' / 'data.csv').unlink(), 'imu0/data.csv: file not found'),
+    (lambda r: _break(r / 'mav0' / 'imu0' / 'data.csv', 5, f'{T0 + 20_000_000},1,2'),
+     'data.csv:6: expected 7 columns, found 3'),
+    (lambda r: _break(r / 'mav0' / 'imu0' / 'data.csv', 5, f'{T0},a,b,c,d,e,f'),
+     'data.csv:6: unparsable row'),
+    (lambda r: _break(r / 'mav0' / 'imu0' / 'data.csv', 5, f'{T0 + 1},0,0,0,0,0,9.8'),
+     'non-monotonic IMU stamp at sample 4'),
+    (lambda r: _break(r / 'mav0' / 'imu0' / 'data.csv', 5, f'{T0 + 15_000_000},0,0,0,0,0,1'),
+     'duplicate IMU stamp at sample 4'),
+    (lambda r: _break(r / 'mav0' / 'imu0' / 'data.csv', 5, f'{T0 + 20_000_000},nan,0,0,0,0,1'),
+     'non-finite IMU values in sample 4'),
+    (lambda r: _break(r / 'mav0' / 'state_groundtruth_estimate0' / 'data.csv', 3,
+                      f'{T0 + 10_000_000},0,0,0,nan,0,0,0'), 'non-finite ground truth'),
+])
+def test_broken_asl_files_raise_a_clear_error_naming_the_file(tmp_path, damage, message):
+    root = write_asl(tmp_path / 'seq')
+    damage(root)
+    if message is None:
+        load_sequence(root)
+        return
+    with pytest.raises(DatasetError, match=message):
+        load_sequence(root)
+
+
+def test_missing_folders_and_ground_truth_are_reported(tmp_path):
+    with pytest.raises(DatasetError, match='no such sequence folder'):
+        load_sequence(tmp_path / 'absent')
+    (tmp_path / 'empty').mkdir()
+    with pytest.raises(DatasetError, match=r'empty: not an ASL sequence folder'):
+        load_sequence(tmp_path / 'empty')
+    root = write_asl(tmp_path / 'nogt')
+    for f in (root / 'mav0' / 'state_groundtruth_estimate0').iterdir():
+        f.unlink()
+    (root / 'mav0' / 'state_groundtruth_estimate0').rmdir()
+    with pytest.raises(DatasetError, match='no ground truth'):
+        load_sequence(root)
+
+
+def test_no_time_overlap_and_too_short_sequences_are_refused(tmp_path):
+    with pytest.raises(DatasetError, match='do not overlap'):
+        load_sequence(write_asl(tmp_path / 'a', gt_offset_s=100.0))
+    with pytest.raises(DatasetError, match='need at least 511'):
+        load_sequence(write_asl(tmp_path / 'b', n_imu=400), min_samples=511)

@@ -1,0 +1,81 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""Model files: self-describing, pickle-free, and refused clearly when broken."""
+
+import json
+
+import pytest
+from safetensors.torch import save_file
+import torch
+
+from denoise_imu_ros.errors import ModelFileError
+from denoise_imu_ros.model import GyroNet, ModelConfig
+from denoise_imu_ros.modelfile import load_model, save_model, shipped_models
+
+
+def _model():
+    torch.manual_seed(0)
+    model = GyroNet(ModelConfig(gyro_std=(0.01, 0.02, 0.03)))
+    model.set_normalization(torch.randn(6), torch.rand(6) + 0.5)
+    with torch.no_grad():
+        model.delta.copy_(0.01 * torch.randn(3, 3))
+    return model.eval()
+
+
+def test_round_trip_rebuilds_the_same_model_from_the_file_alone(tmp_path):
+    model = _model()
+    save_model(tmp_path / 'm.safetensors', model, {'dataset': 'x', 'sample_rate_hz': 200.0})
+    loaded = load_model(tmp_path / 'm.safetensors')
+    u = torch.randn(1, 800, 6)
+    assert torch.equal(loaded.model(u), model(u))
+    assert loaded.meta['sample_rate_hz'] == 200.0
+    assert loaded.meta['receptive_field'] == 511
+    assert not loaded.model.training
+
+
+@pytest.mark.parametrize('name', ['euroc', 'tumvi', 'euroc_calibrated', 'tumvi_calibrated'])
+def test_shipped_models_load_by_name_with_their_provenance(name):
+    assert name in shipped_models()
+    loaded = load_model(name)
+    meta = loaded.meta
+    for key in ('sample_rate_hz', 'train_sequences', 'train_config', 'validation',
+                'code_version', 'receptive_field'):
+        assert key in meta
+    expected = {'euroc': ['MH_01_easy', 'MH_03_medium', 'MH_05_difficult', 'V1_02_medium',
+                          'V2_01_easy', 'V2_03_difficult'],
+                'tumvi': ['dataset-room1_512_16', 'dataset-room3_512_16',
+                          'dataset-room5_512_16']}[name.split('_')[0]]
+    assert meta['train_sequences'] == expected
+    assert loaded.model.receptive_field == (1 if 'calibrated' in name else 511)
+
+
+def test_corrupt_foreign_and_missing_files_raise_model_file_error(tmp_path):
+    good = tmp_path / 'good.safetensors'
+    save_model(good, _model(), {})
+    data = good.read_bytes()
+    (tmp_path / 'trunc.safetensors').write_bytes(data[: len(data) // 2])
+    (tmp_path / 'junk.safetensors').write_bytes(b'\x00' * 3)
+    torch.save({'a': torch.zeros(1)}, tmp_path / 'pickle.pt')  # a pickle is never loaded
+    save_file({'x': torch.zeros(1)}, str(tmp_path / 'foreign.safetensors'))
+    cases = {'trunc.safetensors': 'corrupt', 'junk.safetensors': 'not a model file',
+             'pickle.pt': 'corrupt', 'foreign.safetensors': 'not a denoise_imu_ros',
+             'absent.safetensors': 'no such model file'}
+    for name, message in cases.items():
+        with pytest.raises(ModelFileError, match=message):
+            load_model(tmp_path / name)
+
+
+def test_other_format_version_and_mismatched_weights_are_refused(tmp_path):
+    model = _model()
+    tensors = {k: v.contiguous() for k, v in model.state_dict().items()}
+    cfg = json.dumps({'calibration_only': False})
+    meta = {'format': 'denoise_imu_ros.gyro_model', 'format_version': '99',
+            'model_config': cfg}
+    save_file(tensors, str(tmp_path / 'v99.safetensors'), metadata=meta)
+    with pytest.raises(ModelFileError, match='format version 99, this code reads version 1'):
+        load_model(tmp_path / 'v99.safetensors')
+    meta['format_version'] = '1'
+    del tensors['delta']
+    save_file(tensors, str(tmp_path / 'partial.safetensors'), metadata=meta)
+    with pytest.raises(ModelFileError, match='inconsistent model file'):
+        load_model(tmp_path / 'partial.safetensors')
