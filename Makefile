@@ -24,7 +24,7 @@ test: venv
 # Offline correction + evaluation of the shipped EuRoC sample with the shipped model.
 demo: venv
 	$(BIN)/denoise-imu eval --model euroc --data denoise_imu_ros/sample \
-		--sequences V1_03_difficult_sample.mcap --out demo_out
+		--sequences euroc_V1_03_90s --out demo_out
 	@echo "figures and tables in demo_out/"
 
 clean:

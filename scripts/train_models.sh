@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Train the shipped models and their seed repeats (the figures in the README).
+#   scripts/train_models.sh OUT_DIR [SEEDS...]    (default seeds: 0 1 2)
+# Each run writes OUT_DIR/<name>.safetensors and OUT_DIR/<name>.log. Runs one after the
+# other: a run uses both cores.
+set -euo pipefail
+out=${1:?usage: scripts/train_models.sh OUT_DIR [SEEDS...]}
+shift
+seeds=("${@:-0 1 2}")
+mkdir -p "$out"
+bin=$(dirname "$0")/../.venv/bin
+run() {  # name, args...
+  local name=$1; shift
+  [ -f "$out/$name.safetensors" ] && { echo "skip $name (exists)"; return; }
+  echo "$(date -u +%H:%M:%S) training $name"
+  "$bin/python" -u -m denoise_imu_ros.cli train "$@" --out "$out/$name.safetensors" --quiet \
+    > "$out/$name.log" 2>&1
+  tail -n 1 "$out/$name.log"
+}
+run euroc_calibrated --config config/train_euroc.yaml --calibration-only
+run tumvi_calibrated --config config/train_tumvi.yaml --calibration-only
+for seed in ${seeds[@]}; do
+  run "euroc_s$seed" --config config/train_euroc.yaml --seed "$seed"
+  run "tumvi_s$seed" --config config/train_tumvi.yaml --seed "$seed"
+done

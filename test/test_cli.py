@@ -1,0 +1,105 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""denoise-imu correct / eval end to end, and one-line errors with exit code 1."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from denoise_imu_ros import evaluate as evaluate_module
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.dataset import load_imu
+from denoise_imu_ros.evaluate import correct_gyro
+from denoise_imu_ros.model import GyroNet, ModelConfig
+from denoise_imu_ros.modelfile import load_model, save_model
+from test_dataset import write_asl
+
+SAMPLE_DIR = Path(__file__).parents[1] / 'denoise_imu_ros' / 'sample'
+SAMPLE = SAMPLE_DIR / 'euroc_V1_03_90s'
+
+
+@pytest.fixture()
+def model_file(tmp_path):
+    """An untrained but complete model file (200 Hz, EuRoC-like normalisation)."""
+    torch.manual_seed(0)
+    model = GyroNet(ModelConfig())
+    model.set_normalization(torch.tensor([0.0, 0.0, 0.0, 9.0, 0.0, -3.0]),
+                            torch.tensor([0.3, 0.3, 0.3, 1.0, 1.0, 1.0]))
+    path = tmp_path / 'model.safetensors'
+    save_model(path, model.eval(), {'dataset': 'test', 'sample_rate_hz': 200.0})
+    return path
+
+
+def _error(capsys):
+    err = capsys.readouterr().err.strip()
+    assert '\n' not in err, err
+    return err
+
+
+def test_correct_writes_every_sample_of_a_bag_as_csv(model_file, tmp_path):
+    out = tmp_path / 'corrected.csv'
+    assert main(['correct', '--model', str(model_file), '--input', str(SAMPLE),
+                 '--output', str(out)]) == 0
+    lines = out.read_text().splitlines()
+    assert lines[0] == 'timestamp_ns,wx,wy,wz'
+    rec = load_imu(SAMPLE)
+    assert len(lines) == len(rec.imu) + 1
+    table = np.loadtxt(out, delimiter=',', skiprows=1, dtype=np.float64)
+    assert [int(x.split(',')[0]) for x in lines[1:4]] == rec.imu_stamp_ns[:3].tolist()
+    expect = correct_gyro(load_model(model_file).model, rec.imu)
+    np.testing.assert_allclose(table[:, 1:], expect, rtol=1e-8, atol=1e-9)
+
+
+def test_chunked_correction_equals_one_batch_call(model_file, monkeypatch):
+    model = load_model(model_file).model
+    imu = load_imu(SAMPLE).imu[:5000]
+    with torch.no_grad():
+        whole = model(torch.tensor(imu, dtype=torch.float32)[None])[0].double().numpy()
+    monkeypatch.setattr(evaluate_module, 'CHUNK', 700)
+    np.testing.assert_allclose(correct_gyro(model, imu), whole, rtol=0, atol=1e-6)
+
+
+def test_eval_writes_json_markdown_and_figures(model_file, tmp_path):
+    out = tmp_path / 'eval'
+    assert main(['eval', '--model', str(model_file), '--data', str(SAMPLE_DIR),
+                 '--sequences', SAMPLE.name, '--out', str(out),
+                 '--baseline', str(model_file)]) == 0
+    report = json.loads((out / 'results.json').read_text())
+    seq = report['sequences'][SAMPLE.name]
+    assert set(seq) == {'raw', 'calibrated', 'network'}
+    assert set(seq['raw']['roe_median_deg']) == {'7', '21', '35'}
+    assert seq['raw']['aoe_deg'] > 1
+    assert (out / 'results.md').read_text().startswith('| method |')
+    for png in (f'{SAMPLE.name}.png', 'roe.png'):
+        assert (out / png).read_bytes()[:4] == b'\x89PNG'
+
+
+def test_shipped_euroc_model_beats_raw_and_calibrated_on_the_shipped_test_sample(tmp_path):
+    report = evaluate_module.evaluate('euroc', str(SAMPLE_DIR), [SAMPLE.name],
+                                      str(tmp_path), plots=False)
+    aoe = {m: r['aoe_deg'] for m, r in report['sequences'][SAMPLE.name].items()}
+    assert aoe['network'] < aoe['calibrated'] < aoe['raw']
+
+
+def test_errors_are_one_line_naming_the_file(model_file, tmp_path, capsys):
+    assert main(['correct', '--model', str(tmp_path / 'nope.safetensors'), '--input',
+                 str(SAMPLE), '--output', str(tmp_path / 'o.csv')]) == 1
+    assert 'nope.safetensors: no such model file' in _error(capsys)
+    (tmp_path / 'bad.safetensors').write_bytes(b'garbage' * 10)
+    assert main(['correct', '--model', str(tmp_path / 'bad.safetensors'), '--input',
+                 str(SAMPLE), '--output', str(tmp_path / 'o.csv')]) == 1
+    assert 'bad.safetensors: corrupt' in _error(capsys)
+    short = write_asl(tmp_path / 'short', n_imu=400)
+    assert main(['correct', '--model', str(model_file), '--input', str(short),
+                 '--output', str(tmp_path / 'o.csv')]) == 1
+    assert 'short: 400 IMU samples, shorter than the receptive field (511)' in _error(capsys)
+    slow = write_asl(tmp_path / 'slow', n_imu=2000, imu_rate=100.0)
+    assert main(['eval', '--model', str(model_file), '--data', str(tmp_path), '--sequences',
+                 'slow', '--out', str(tmp_path / 'e'), '--no-plots']) == 1
+    assert 'IMU rate 100.0 Hz, the model was trained at 200.0 Hz' in _error(capsys)
+    assert main(['correct', '--model', str(model_file), '--input', str(SAMPLE),
+                 '--imu-topic', '/imu9', '--output', str(tmp_path / 'o.csv')]) == 1
+    assert "no topic '/imu9'" in _error(capsys)
