@@ -4,17 +4,16 @@
 
 from pathlib import Path
 
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.dataset import load_sequence
+from denoise_imu_ros.errors import DatasetError
+from denoise_imu_ros.train import load_config, training_split
 import numpy as np
 import pytest
 from rosbags.rosbag1 import Writer as Writer1
 from rosbags.rosbag2 import Writer as Writer2
 from rosbags.typesys import get_typestore, Stores
 import torch
-
-from denoise_imu_ros.cli import main
-from denoise_imu_ros.dataset import load_sequence
-from denoise_imu_ros.errors import DatasetError
-from denoise_imu_ros.train import load_config, training_split
 
 ROS1 = get_typestore(Stores.ROS1_NOETIC)
 ROS2 = get_typestore(Stores.ROS2_JAZZY)

@@ -5,17 +5,16 @@
 import json
 from pathlib import Path
 
-import numpy as np
-import pytest
-import torch
-
 from denoise_imu_ros import evaluate as evaluate_module
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.dataset import load_imu
 from denoise_imu_ros.evaluate import correct_gyro
 from denoise_imu_ros.model import GyroNet, ModelConfig
 from denoise_imu_ros.modelfile import load_model, save_model
+import numpy as np
+import pytest
 from test_dataset import write_asl
+import torch
 
 SAMPLE_DIR = Path(__file__).parents[1] / 'denoise_imu_ros' / 'sample'
 SAMPLE = SAMPLE_DIR / 'euroc_V1_03_90s'
@@ -23,7 +22,7 @@ SAMPLE = SAMPLE_DIR / 'euroc_V1_03_90s'
 
 @pytest.fixture()
 def model_file(tmp_path):
-    """An untrained but complete model file (200 Hz, EuRoC-like normalisation)."""
+    """Write an untrained but complete model file (200 Hz, EuRoC-like normalisation)."""
     torch.manual_seed(0)
     model = GyroNet(ModelConfig())
     model.set_normalization(torch.tensor([0.0, 0.0, 0.0, 9.0, 0.0, -3.0]),
@@ -96,7 +95,7 @@ def test_errors_are_one_line_naming_the_file(model_file, tmp_path, capsys):
     assert main(['correct', '--model', str(model_file), '--input', str(short),
                  '--output', str(tmp_path / 'o.csv')]) == 1
     assert 'short: 400 IMU samples, shorter than the receptive field (511)' in _error(capsys)
-    slow = write_asl(tmp_path / 'slow', n_imu=2000, imu_rate=100.0)
+    write_asl(tmp_path / 'slow', n_imu=2000, imu_rate=100.0)
     assert main(['eval', '--model', str(model_file), '--data', str(tmp_path), '--sequences',
                  'slow', '--out', str(tmp_path / 'e'), '--no-plots']) == 1
     assert 'IMU rate 100.0 Hz, the model was trained at 200.0 Hz' in _error(capsys)

@@ -5,11 +5,10 @@
 import math
 from pathlib import Path
 
-import numpy as np
-import pytest
-
 from denoise_imu_ros.dataset import load_sequence
 from denoise_imu_ros.errors import DatasetError
+import numpy as np
+import pytest
 
 T0 = 1_403_636_579_758_555_648  # a real EuRoC stamp: too big for a float64 parse
 

@@ -2,12 +2,11 @@
 # Licensed under the Apache License, Version 2.0
 """The increment loss: zero for the true rate, masks holes, sees every axis."""
 
+from denoise_imu_ros.loss import increment_loss, LossConfig
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 import torch
-
-from denoise_imu_ros.loss import increment_loss, LossConfig
 
 T = 640
 

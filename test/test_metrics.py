@@ -2,12 +2,11 @@
 # Licensed under the Apache License, Version 2.0
 """Integration and AOE/ROE: against a plain loop, evo, and hand-made errors."""
 
+from denoise_imu_ros.dataset import load_sequence
+from denoise_imu_ros.metrics import attitude_errors, integrate
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-
-from denoise_imu_ros.dataset import load_sequence
-from denoise_imu_ros.metrics import attitude_errors, integrate
 
 
 def test_prefix_scan_integration_equals_the_step_by_step_loop():

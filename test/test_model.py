@@ -2,9 +2,8 @@
 # Licensed under the Apache License, Version 2.0
 """The network: the paper's size, its receptive field, causality, the calibration."""
 
-import torch
-
 from denoise_imu_ros.model import Dropout, GyroNet, ModelConfig
+import torch
 
 
 def test_paper_network_has_77052_trainable_parameters_and_receptive_field_511():

@@ -4,13 +4,12 @@
 
 import json
 
-import pytest
-from safetensors.torch import save_file
-import torch
-
 from denoise_imu_ros.errors import ModelFileError
 from denoise_imu_ros.model import GyroNet, ModelConfig
 from denoise_imu_ros.modelfile import load_model, save_model, shipped_models
+import pytest
+from safetensors.torch import save_file
+import torch
 
 
 def _model():

@@ -2,11 +2,10 @@
 # Licensed under the Apache License, Version 2.0
 """Torch quaternion helpers against scipy, including at zero rotation."""
 
+from denoise_imu_ros.so3 import quat_exp, quat_log, quat_mul, tree_product
 import numpy as np
 from scipy.spatial.transform import Rotation
 import torch
-
-from denoise_imu_ros.so3 import quat_exp, quat_log, quat_mul, tree_product
 
 
 def test_exp_mul_log_match_scipy():

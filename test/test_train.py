@@ -4,20 +4,19 @@
 
 from pathlib import Path
 
-import pytest
-import yaml
-
 from denoise_imu_ros import train as train_module
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.errors import TrainingError
 from denoise_imu_ros.modelfile import load_model
 from denoise_imu_ros.train import load_config, train
+import pytest
+import yaml
 
 CONFIG = Path(__file__).parents[1] / 'config' / 'train_euroc.yaml'
 
 
 def _short(euroc, **changes):
-    """The EuRoC recipe on two sequences with 10 s windows and a few steps."""
+    """Return the EuRoC recipe on two sequences with 10 s windows and a few steps."""
     return load_config(CONFIG, data=str(euroc), sequences=['MH_01_easy', 'V1_02_medium'],
                        window=2048, steps=24, val_every=12, restart_period=24, **changes)
 
