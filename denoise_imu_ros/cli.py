@@ -31,7 +31,7 @@ def _train(args: argparse.Namespace) -> None:
     from .train import load_config, train
     cfg = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps,
                       calibration_only=True if args.calibration_only else None)
-    model, meta = train(cfg, progress=not args.quiet)
+    model, meta = train(cfg, progress=not args.quiet, candidates_dir=args.candidates_dir)
     save_model(args.out, model, meta)
     val = meta['validation']
     print(f'saved {args.out}: best validation step {val["step"]}, loss {val["loss"]:.4g}, '
@@ -80,6 +80,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--steps', type=int, help='overrides the recipe step count')
     p.add_argument('--calibration-only', action='store_true',
                    help='train the 12-parameter "calibrated IMU" baseline')
+    p.add_argument('--candidates-dir', help='also write every candidate model here')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=_train)
 

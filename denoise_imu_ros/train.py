@@ -42,7 +42,7 @@ from .errors import TrainingError
 from .loss import BLOCK, increment_loss, LossConfig
 from .metrics import attitude_errors, integrate
 from .model import GyroNet, ModelConfig
-from .modelfile import code_version
+from .modelfile import code_version, save_model
 
 
 # ----------------------------------------------------------------------------------
@@ -77,6 +77,8 @@ class TrainConfig:
     weight_32: float = 0.5             # weight of the 32-sample loss term
     skip_blocks: int = 5               # warm-up blocks left out of the training loss
     val_every: int = 100               # steps between validations (and at the end)
+    swa_start: int = 0                 # > 0: also average the weights from this step on
+                                       # (SWA); kept if its validation loss is lower
     seed: int = 0
     threads: int = 2                   # torch intra-op threads
 
@@ -196,8 +198,14 @@ def block_residual(omega: np.ndarray, s: Sequence, start: int) -> np.ndarray:
 # ----------------------------------------------------------------------------------
 # The run
 
-def train(cfg: TrainConfig, progress: bool = True) -> tuple[GyroNet, dict[str, Any]]:
-    """Train per ``cfg``; return the best-validation model and its metadata."""
+def train(cfg: TrainConfig, progress: bool = True,
+          candidates_dir: Path | None = None) -> tuple[GyroNet, dict[str, Any]]:
+    """
+    Train per ``cfg``; return the best-validation model and its metadata.
+
+    With ``candidates_dir``, every candidate (best checkpoint, SWA) is also written there
+    as a model file, so that the choice validation made can be studied afterwards.
+    """
     torch.manual_seed(cfg.seed)
     torch.set_num_threads(cfg.threads)
     gen = torch.Generator().manual_seed(cfg.seed)
@@ -222,6 +230,7 @@ def train(cfg: TrainConfig, progress: bool = True) -> tuple[GyroNet, dict[str, A
                           skip_blocks=cfg.skip_blocks)
     val_start = cfg.window + cfg.max_offset
 
+    swa = torch.optim.swa_utils.AveragedModel(model) if cfg.swa_start > 0 else None
     best: dict[str, Any] = {'loss': math.inf}
     history = []
     loss = torch.tensor(0.0)
@@ -239,6 +248,8 @@ def train(cfg: TrainConfig, progress: bool = True) -> tuple[GyroNet, dict[str, A
             optimizer.step()
             scheduler.step()
             bar.set_postfix(loss=f'{loss.item():.4g}')
+            if swa is not None and step >= cfg.swa_start:
+                swa.update_parameters(model)
         if step % cfg.val_every == 0 or step == cfg.steps:  # step 0: the untrained baseline
             val = validate(model, seqs, val_start, loss_cfg)
             history.append({'step': step, 'train_loss': loss.item() if step else None,
@@ -249,6 +260,18 @@ def train(cfg: TrainConfig, progress: bool = True) -> tuple[GyroNet, dict[str, A
             if step > 0 and val['loss'] < best['loss']:
                 best = dict(val, step=step, state=copy.deepcopy(model.state_dict()))
 
+    candidates = {'best_checkpoint': {k: v for k, v in best.items() if k != 'state'}}
+    states = {'best_checkpoint': best['state']}
+    if swa is not None:
+        # BatchNorm statistics of the averaged weights: recomputed on training windows.
+        torch.optim.swa_utils.update_bn([batch(split, cfg, gen)[0] for _ in range(8)], swa)
+        val = validate(swa.module, seqs, val_start, loss_cfg)
+        candidates['swa'] = dict(val, step=cfg.steps)
+        states['swa'] = swa.module.state_dict()
+        bar.write(f'SWA from step {cfg.swa_start}: val {val["loss"]:.4g}  '
+                  f'val AOE {val["aoe_mean_deg"]:.3f} deg')
+        if val['loss'] < best['loss']:
+            best = dict(val, step=cfg.steps, state=swa.module.state_dict())
     model.load_state_dict(best.pop('state'))
     model.eval()
     meta = {
@@ -257,9 +280,16 @@ def train(cfg: TrainConfig, progress: bool = True) -> tuple[GyroNet, dict[str, A
         'train_sequences': cfg.sequences,
         'train_config': asdict(cfg),
         'validation': best,
+        'candidates': candidates,
         'history': history,
         'train_seconds': time.monotonic() - t_start,
         'code_version': code_version(),
         'created': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
     }
+    if candidates_dir is not None:
+        for name, state in states.items():
+            candidate = GyroNet(model_cfg)
+            candidate.load_state_dict(state)
+            save_model(Path(candidates_dir) / f'{name}.safetensors', candidate.eval(),
+                       dict(meta, validation=candidates[name]))
     return model, meta

@@ -14,6 +14,7 @@ run() {  # name, args...
   [ -f "$out/$name.safetensors" ] && { echo "skip $name (exists)"; return; }
   echo "$(date -u +%H:%M:%S) training $name"
   "$bin/python" -u -m denoise_imu_ros.cli train "$@" --out "$out/$name.safetensors" --quiet \
+    --candidates-dir "$out/$name.candidates" \
     > "$out/$name.log" 2>&1
   tail -n 1 "$out/$name.log"
 }

@@ -21,12 +21,17 @@ def _short(euroc, **changes):
                        window=2048, steps=24, val_every=12, restart_period=24, **changes)
 
 
-def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc):
-    model, meta = train(_short(euroc), progress=False)
+def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
+    model, meta = train(_short(euroc, swa_start=12), progress=False, candidates_dir=tmp_path)
     history = meta['history']
     assert [h['step'] for h in history] == [0, 12, 24]
     assert history[-1]['val_loss'] < 0.5 * history[0]['val_loss']
     assert meta['validation']['step'] in (12, 24)
+    chosen = min(meta['candidates'].values(), key=lambda c: c['loss'])
+    assert meta['validation']['loss'] == chosen['loss']
+    for name in ('best_checkpoint', 'swa'):
+        cand = load_model(tmp_path / f'{name}.safetensors')
+        assert cand.meta['validation']['loss'] == meta['candidates'][name]['loss']
     assert meta['train_sequences'] == ['MH_01_easy', 'V1_02_medium']
     assert 199 < meta['sample_rate_hz'] < 201
     assert len(meta['validation']['gyro_residual_std']) == 3
