@@ -77,8 +77,7 @@ class TrainConfig:
     weight_32: float = 0.5             # weight of the 32-sample loss term
     skip_blocks: int = 5               # warm-up blocks left out of the training loss
     val_every: int = 100               # steps between validations (and at the end)
-    swa_start: int = 0                 # > 0: also average the weights from this step on
-                                       # (SWA); kept if its validation loss is lower
+    swa_start: int = 0                 # > 0: average weights from this step on (SWA)
     seed: int = 0
     threads: int = 2                   # torch intra-op threads
 
