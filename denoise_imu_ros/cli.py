@@ -46,7 +46,8 @@ def _eval(args: argparse.Namespace) -> None:
 
 def _correct(args: argparse.Namespace) -> None:
     from .evaluate import correct_to_csv
-    n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic)
+    n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic,
+                       engine=args.engine)
     print(f'wrote {n} corrected gyro samples to {args.output}')
 
 
@@ -104,6 +105,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--model', required=True)
     p.add_argument('--input', required=True, help='ASL sequence folder or bag')
     p.add_argument('--output', required=True, help='CSV: timestamp_ns,wx,wy,wz')
+    p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',
+                   help='whole-recording torch network, or the per-sample numpy engine')
     p.set_defaults(func=_correct)
     return parser
 

@@ -1,0 +1,78 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Streaming engine vs recomputing the window, side by side, on a real EuRoC test sequence.
+
+Prints, for the same model and samples: the median and p99 per-sample cost of the
+numpy streaming engine, of the batch torch network recomputing the last 511 samples for
+every new sample, their ratio, and the largest difference between the streaming output
+over the whole sequence and the batch output.
+Run: .venv/bin/python bench/streaming.py [--model euroc] [--sequence V1_01_easy]
+"""
+
+import argparse
+from pathlib import Path
+import time
+
+from denoise_imu_ros.dataset import load_imu
+from denoise_imu_ros.evaluate import correct_gyro
+from denoise_imu_ros.modelfile import load_model
+from denoise_imu_ros.streaming import StreamingCorrector
+import numpy as np
+import torch
+
+DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc'
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument('--model', default='euroc')
+    parser.add_argument('--sequence', default='V1_01_easy')
+    parser.add_argument('--window-samples', type=int, default=2000,
+                        help='samples timed for the window recompute (it is slow)')
+    args = parser.parse_args()
+    torch.set_num_threads(1)
+    model = load_model(args.model).model
+    imu = load_imu(DATA / args.sequence).imu
+    stream = StreamingCorrector(model)
+
+    costs = np.empty(len(imu))
+    out = np.empty((len(imu), 3))
+    for n, row in enumerate(imu):
+        t = time.perf_counter()
+        out[n] = stream.step(row)
+        costs[n] = time.perf_counter() - t
+    batch = correct_gyro(model, imu)
+
+    rf = model.receptive_field
+    u = torch.tensor(imu, dtype=torch.float32)
+    window_costs = []
+    with torch.no_grad():
+        for n in range(rf, rf + args.window_samples):
+            t = time.perf_counter()
+            model(u[None, n - rf + 1:n + 1])[0, -1]
+            window_costs.append(time.perf_counter() - t)
+    window_costs = np.array(window_costs)
+
+    print(f'sequence {args.sequence}: {len(imu)} samples, model {args.model}')
+    print(f'streaming engine : median {np.median(costs) * 1e6:7.1f} us  '
+          f'p99 {np.percentile(costs, 99) * 1e6:7.1f} us per sample')
+    print(f'window recompute : median {np.median(window_costs) * 1e6:7.1f} us  '
+          f'p99 {np.percentile(window_costs, 99) * 1e6:7.1f} us per sample (torch, 1 thread)')
+    print(f'speed-up (median): {np.median(window_costs) / np.median(costs):.1f}x')
+    print(f'max |streaming - batch| over the sequence: {np.abs(out - batch).max():.2e} rad/s')
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,73 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The numpy streaming engine equals the batch network, from the first sample on."""
+
+from pathlib import Path
+
+from denoise_imu_ros.dataset import load_imu
+from denoise_imu_ros.evaluate import correct_gyro
+from denoise_imu_ros.model import GyroNet, ModelConfig
+from denoise_imu_ros.modelfile import load_model
+from denoise_imu_ros.streaming import StreamingCorrector
+import numpy as np
+import pytest
+import torch
+
+SAMPLE = Path(__file__).parents[1] / 'denoise_imu_ros' / 'sample' / 'euroc_V1_03_90s'
+
+
+@pytest.fixture(scope='module')
+def imu():
+    """Real EuRoC IMU samples (the bundled test-sequence sample)."""
+    return load_imu(SAMPLE).imu
+
+
+def _random_model(calibration_only=False):
+    """Build an eval-mode network with non-trivial BatchNorm statistics and calibration."""
+    torch.manual_seed(3)
+    model = GyroNet(ModelConfig(calibration_only=calibration_only))
+    model.set_normalization(torch.tensor([0.0, 0.0, 0.0, 9.0, 0.0, -3.0]),
+                            torch.tensor([0.3, 0.3, 0.3, 1.0, 1.0, 1.0]))
+    with torch.no_grad():
+        model.delta.normal_(std=0.01)
+        for mod in model.modules():
+            if isinstance(mod, torch.nn.BatchNorm1d):
+                mod.running_mean.normal_()
+                mod.running_var.uniform_(0.5, 2.0)
+                mod.weight.normal_()
+                mod.bias.normal_()
+            if calibration_only:
+                model.bias.normal_()
+    return model.eval()
+
+
+@pytest.mark.parametrize('calibration_only', [False, True])
+def test_streaming_equals_batch_including_the_first_510_samples(imu, calibration_only):
+    model = _random_model(calibration_only)
+    batch = correct_gyro(model, imu[:3000])
+    np.testing.assert_allclose(StreamingCorrector(model).process(imu[:3000]), batch,
+                               rtol=0, atol=1e-6)
+
+
+def test_shipped_model_streams_the_whole_sample_exactly(imu):
+    model = load_model('euroc').model
+    np.testing.assert_allclose(StreamingCorrector(model).process(imu), correct_gyro(model, imu),
+                               rtol=0, atol=1e-6)
+
+
+def test_reset_starts_a_new_recording(imu):
+    model = _random_model()
+    stream = StreamingCorrector(model)
+    stream.process(imu[:1000])
+    stream.reset()
+    np.testing.assert_allclose(stream.process(imu[2000:2800]), correct_gyro(model, imu[2000:2800]),
+                               rtol=0, atol=1e-6)
+
+
+def test_outputs_never_depend_on_future_samples(imu):
+    stream = StreamingCorrector(_random_model())
+    first = stream.process(imu[:700])
+    stream.reset()
+    changed = imu[:800].copy()
+    changed[700:] += 5.0
+    assert np.array_equal(stream.process(changed)[:700], first)
