@@ -41,7 +41,8 @@ def _train(args: argparse.Namespace) -> None:
 def _eval(args: argparse.Namespace) -> None:
     from .evaluate import evaluate
     evaluate(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
-             imu_topic=args.imu_topic, pose_topic=args.pose_topic, plots=not args.no_plots)
+             imu_topic=args.imu_topic, pose_topic=args.pose_topic, plots=not args.no_plots,
+             start_sample=args.start_sample)
 
 
 def _correct(args: argparse.Namespace) -> None:
@@ -97,6 +98,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--out', required=True, help='output folder (JSON, Markdown, PNG)')
     p.add_argument('--baseline', help='calibrated-IMU model (default: <dataset>_calibrated '
                    'when shipped)')
+    p.add_argument('--start-sample', type=int, default=0,
+                   help='score from this sample on (16032: the validation tail of the '
+                        'training recipe); the network still sees the samples before')
     p.add_argument('--no-plots', action='store_true')
     p.set_defaults(func=_eval)
 

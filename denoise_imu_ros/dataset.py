@@ -71,6 +71,11 @@ class Sequence:
         """(N - 1,) s: sample k drives the attitude from stamp k to stamp k + 1."""
         return np.diff(self.stamp_ns).astype(np.float64) * 1e-9
 
+    def tail(self, start: int) -> Sequence:
+        """Return the samples from index ``start`` on."""
+        return Sequence(self.name, self.stamp_ns[start:], self.imu[start:],
+                        self.gt_quat[start:], self.gt_pos[start:], self.gt_valid[start:])
+
     @property
     def rate_hz(self) -> float:
         """Mean IMU sample rate."""

@@ -99,8 +99,15 @@ def _errors(seq: Sequence, gyro: np.ndarray) -> tuple[Rotation, AttitudeErrors]:
 
 def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
              baseline: str | None = None, imu_topic: str | None = None,
-             pose_topic: str | None = None, plots: bool = True) -> dict[str, Any]:
-    """Evaluate raw, calibrated and corrected gyro; write JSON, Markdown and PNG files."""
+             pose_topic: str | None = None, plots: bool = True,
+             start_sample: int = 0) -> dict[str, Any]:
+    """
+    Evaluate raw, calibrated and corrected gyro; write JSON, Markdown and PNG files.
+
+    With ``start_sample`` > 0 only the part from that sample on is scored (e.g. the
+    validation tail of a training sequence); the networks still see the samples before
+    it, and integration starts from the ground truth at ``start_sample``.
+    """
     loaded = load_model(model_spec)
     models = {'network': loaded}
     if baseline is None:
@@ -116,8 +123,12 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
                             min_samples=loaded.model.receptive_field)
         check_rate(seq.rate_hz, loaded.meta, name)
+        if start_sample >= len(seq) - 1:
+            raise DatasetError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')
         gyros = {'raw': seq.imu[:, :3]}
         gyros.update({m: correct_gyro(lm.model, seq.imu) for m, lm in models.items()})
+        seq = seq.tail(start_sample)
+        gyros = {m: g[start_sample:] for m, g in gyros.items()}
         estimates, results[name] = {}, {}
         for method, gyro in gyros.items():
             estimates[method], err = _errors(seq, gyro)
@@ -131,7 +142,8 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     average = {m: {k: float(np.mean([results[s][m][k] for s in results]))
                    for k in ('aoe_deg', 'aoe_yaw_deg')} for m in methods}
     report = {'model': str(loaded.path), 'model_code_version': loaded.meta.get('code_version'),
-              'baseline': baseline, 'data': str(data), 'sequences': results,
+              'baseline': baseline, 'data': str(data), 'start_sample': start_sample,
+              'sequences': results,
               'average': average,
               'conventions': 'R_{k+1} = R_k Exp(w_k dt_k) from ground truth at the first '
                              'stamp; AOE = RMS error angle; yaw = rotation about world z of '

@@ -27,7 +27,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.special import erf
+from scipy.special import ndtr
 
 from .model import GyroNet
 
@@ -44,11 +44,17 @@ class _Layer(NamedTuple):
 
 
 def _gelu(x: np.ndarray) -> np.ndarray:
-    return 0.5 * x * (1.0 + erf(x * 0.7071067811865476))
+    return x * ndtr(x)  # exact GELU: x * Phi(x), one ufunc instead of erf arithmetic
 
 
 def _layers(model: GyroNet) -> list[_Layer]:
-    """Convolutions of a GyroNet with its (eval-mode) BatchNorm folded in, in float64."""
+    """
+    Convolutions of a GyroNet with its (eval-mode) BatchNorm folded in.
+
+    Folding is done in float64, the result kept in float32: a float32 matrix-vector
+    product costs about half as much, and the output still matches the (float32) batch
+    network to ~1e-8 rad/s.
+    """
     state = {k: v.detach().double().numpy() for k, v in model.state_dict().items()}
     cfg = model.config
     layers = []
@@ -61,8 +67,10 @@ def _layers(model: GyroNet) -> list[_Layer]:
             w = w * scale[:, None, None]
             b = (b - state[bn + 'running_mean']) * scale + state[bn + 'bias']
         c_out = w.shape[0]
-        layers.append(_Layer(weight=np.ascontiguousarray(w.transpose(0, 2, 1)).reshape(c_out, -1),
-                             summed=w.sum(axis=2), bias=b, kernel=w.shape[2], dilation=d,
+        flat = np.ascontiguousarray(w.transpose(0, 2, 1)).reshape(c_out, -1)
+        layers.append(_Layer(weight=flat.astype(np.float32),
+                             summed=w.sum(axis=2).astype(np.float32),
+                             bias=b.astype(np.float32), kernel=w.shape[2], dilation=d,
                              gelu=hidden))
     return layers
 
@@ -74,8 +82,8 @@ class StreamingCorrector:
         if model.training:
             raise ValueError('StreamingCorrector needs a model in eval mode')
         self.receptive_field = model.receptive_field
-        self._mean = model.input_mean.double().numpy()
-        self._std = model.input_std.double().numpy()
+        self._mean = model.input_mean.numpy().astype(np.float32)
+        self._std = model.input_std.numpy().astype(np.float32)
         self._gyro_std = model.gyro_std.double().numpy()
         self._calib = np.eye(3) + model.delta.detach().double().numpy()
         if model.config.calibration_only:
@@ -87,7 +95,7 @@ class StreamingCorrector:
         # History of each layer's input, stored twice over (at i and i + span) so the
         # last `span` entries are always one contiguous slice: no modulo per tap.
         self._span = [(ly.kernel - 1) * ly.dilation + 1 for ly in self._layers]
-        self._hist = [np.zeros((2 * s, ly.weight.shape[1] // ly.kernel))
+        self._hist = [np.zeros((2 * s, ly.weight.shape[1] // ly.kernel), np.float32)
                       for s, ly in zip(self._span, self._layers)]
         self._pos = 0
         self.samples = 0
@@ -107,7 +115,7 @@ class StreamingCorrector:
 
     def step(self, imu: np.ndarray) -> np.ndarray:
         """Corrected gyro (3,) rad/s for one raw sample (6,): gyro rad/s, accel m/s^2."""
-        x = (imu - self._mean) / self._std
+        x = (imu.astype(np.float32) - self._mean) / self._std
         if self.samples == 0:
             self._prime(x)
         self.samples += 1
@@ -120,7 +128,7 @@ class StreamingCorrector:
             if ly.gelu:
                 x = _gelu(x)
         self._pos += 1
-        correction = self._gyro_std * x if self._layers else self._const
+        correction = self._gyro_std * x.astype(np.float64) if self._layers else self._const
         return self._calib @ imu[:3] + correction
 
     def process(self, imu: np.ndarray) -> np.ndarray:
