@@ -13,6 +13,7 @@ setup(
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
+        ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
     ],
     install_requires=['setuptools'],
     zip_safe=False,
@@ -24,6 +25,7 @@ setup(
     entry_points={
         'console_scripts': [
             'denoise-imu = denoise_imu_ros.cli:main',
+            'gyro_denoiser = denoise_imu_ros.node:main',
         ],
     },
 )

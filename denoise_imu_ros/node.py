@@ -1,0 +1,254 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+``gyro_denoiser``: corrects ``imu/data_raw`` into ``imu/corrected`` and ``imu/attitude``.
+
+A thin ROS wrapper around :class:`~denoise_imu_ros.online.OnlineDenoiser`: it converts
+messages, owns the parameters and topics, and reports on ``/diagnostics``. Header stamps
+and frame ids are copied from the input, never re-stamped.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+import math
+import sys
+import time
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import QuaternionStamped, Vector3
+import numpy as np
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos_overriding_options import QoSOverridingOptions
+from sensor_msgs.msg import Imu
+from std_srvs.srv import Trigger
+
+from .errors import DenoiseError
+from .modelfile import load_model
+from .online import OnlineDenoiser
+from .streaming import StreamingCorrector
+
+
+def _param(description: str, read_only: bool = False, floats: tuple | None = None,
+           ints: tuple | None = None) -> ParameterDescriptor:
+    d = ParameterDescriptor(description=description, read_only=read_only)
+    if floats:
+        d.floating_point_range = [FloatingPointRange(from_value=floats[0], to_value=floats[1])]
+    if ints:
+        d.integer_range = [IntegerRange(from_value=ints[0], to_value=ints[1], step=1)]
+    return d
+
+
+# Every parameter, in one place: (name, default, descriptor). config/gyro_denoiser.yaml
+# mirrors it.
+PARAMETERS = [
+    ('model', 'euroc', _param(
+        'Shipped model name (euroc, tumvi) or path to a .safetensors model file.',
+        read_only=True)),
+    ('fixed_frame', 'odom', _param(
+        'frame_id of imu/attitude: gravity-aligned at start (roll/pitch from the '
+        'accelerometer), yaw 0 at start.', read_only=True)),
+    ('embed_attitude', False, _param(
+        'Also write the attitude into imu/corrected orientation (otherwise '
+        'orientation_covariance[0] = -1: no orientation).')),
+    ('orientation_stddev', 0.05, _param(
+        'rad; orientation covariance diagonal when embed_attitude is on.',
+        floats=(0.0, math.pi))),
+    ('angular_velocity_stddev', -1.0, _param(
+        'rad/s; < 0 uses the per-axis residual std the model measured on its '
+        'validation data.', floats=(-1.0, 10.0))),
+    ('max_gap_factor', 3.0, _param(
+        'A stamp gap above this many nominal periods restarts the network history '
+        '(warm-up) and holds the attitude across the gap.', floats=(1.5, 1000.0))),
+    ('time_jump_threshold', 1.0, _param(
+        's; a stamp this far behind the last one resets everything (bag loop); '
+        'smaller backward steps are dropped as out of order.', floats=(0.0, 3600.0))),
+    ('rate_tolerance', 0.05, _param(
+        'Relative input-rate mismatch to the model rate that raises a warning and a '
+        'diagnostics error.', floats=(0.0, 1.0))),
+    ('input_queue_depth', 200, _param(
+        'Subscription depth (sensor-data reliability); bursts beyond it are lost.',
+        read_only=True, ints=(10, 10000))),
+]
+
+
+class GyroDenoiser(Node):
+    """Learned gyro correction of every IMU sample, plus the integrated attitude."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__('gyro_denoiser', **kwargs)
+        self.declare_parameters('', PARAMETERS)
+        p = self.get_parameter
+        loaded = load_model(p('model').value)  # raises DenoiseError: handled in main()
+        self._model_rate = float(loaded.meta['sample_rate_hz'])
+        self._denoiser = OnlineDenoiser(
+            StreamingCorrector(loaded.model), self._model_rate,
+            max_gap_factor=p('max_gap_factor').value,
+            time_jump_s=p('time_jump_threshold').value)
+        self._residual_std = np.asarray(
+            loaded.meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3))
+        self._fixed_frame = p('fixed_frame').value
+        self.add_post_set_parameters_callback(self._on_parameters)
+
+        self._pub_imu = self.create_publisher(
+            Imu, 'imu/corrected', QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
+            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        self._pub_att = self.create_publisher(
+            QuaternionStamped, 'imu/attitude',
+            QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
+            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        self._pub_diag = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.create_subscription(
+            Imu, 'imu/data_raw', self._on_imu,
+            QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p('input_queue_depth').value,
+                       reliability=ReliabilityPolicy.BEST_EFFORT),
+            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        self.create_service(Trigger, '~/reset_attitude', self._on_reset)
+        self.create_timer(1.0, self._publish_diagnostics)
+        self._waiting_timer = self.create_timer(10.0, self._still_waiting)
+
+        self._stamps: deque[int] = deque(maxlen=int(2 * self._model_rate) + 1)
+        self._infer_s: deque[float] = deque(maxlen=1000)
+        self._apply_parameters()
+        self.get_logger().info(
+            f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field '
+            f'{loaded.model.receptive_field} samples); imu/data_raw -> imu/corrected')
+
+    # -- parameters ---------------------------------------------------------------
+    def _apply_parameters(self) -> None:
+        p = self.get_parameter
+        self._embed = p('embed_attitude').value
+        self._orientation_var = p('orientation_stddev').value ** 2
+        std = p('angular_velocity_stddev').value
+        stds = self._residual_std if std < 0 else np.full(3, std)
+        self._gyro_cov = np.diag(stds ** 2).ravel().tolist()
+        self._denoiser.max_gap_factor = p('max_gap_factor').value
+        self._denoiser.time_jump_s = p('time_jump_threshold').value
+        self._rate_tolerance = p('rate_tolerance').value
+
+    def _on_parameters(self, _params: list) -> None:
+        self._apply_parameters()
+
+    # -- data ---------------------------------------------------------------------
+    def _on_imu(self, msg: Imu) -> None:
+        if self._waiting_timer is not None:
+            self._waiting_timer.cancel()
+            self._waiting_timer = None
+        t0 = time.perf_counter()
+        w, a = msg.angular_velocity, msg.linear_acceleration
+        stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        out = self._denoiser.process(stamp_ns, np.array([w.x, w.y, w.z]),
+                                     np.array([a.x, a.y, a.z]))
+        if isinstance(out, str):
+            self.get_logger().warning(f'dropped an IMU message: {out.replace("_", " ")}',
+                                      throttle_duration_sec=5.0)
+            return
+        if out.event in ('gap', 'time_jump'):
+            self.get_logger().warning(
+                f'{"stamp gap" if out.event == "gap" else "backward time jump"} before '
+                f'{stamp_ns} ns: network history restarted'
+                + (', attitude re-initialised' if out.event == 'time_jump' else ''))
+        self._stamps.append(stamp_ns)
+
+        corrected = Imu(header=msg.header, linear_acceleration=msg.linear_acceleration,
+                        linear_acceleration_covariance=msg.linear_acceleration_covariance,
+                        angular_velocity_covariance=self._gyro_cov)
+        corrected.angular_velocity = Vector3(x=float(out.gyro[0]), y=float(out.gyro[1]),
+                                             z=float(out.gyro[2]))
+        attitude = QuaternionStamped()
+        attitude.header.stamp = msg.header.stamp
+        attitude.header.frame_id = self._fixed_frame
+        q = attitude.quaternion
+        q.x, q.y, q.z, q.w = (float(v) for v in out.attitude)
+        if self._embed:
+            corrected.orientation = q
+            corrected.orientation_covariance = [self._orientation_var, 0.0, 0.0,
+                                                0.0, self._orientation_var, 0.0,
+                                                0.0, 0.0, self._orientation_var]
+        else:
+            corrected.orientation_covariance[0] = -1.0
+        self._pub_imu.publish(corrected)
+        self._pub_att.publish(attitude)
+        self._infer_s.append(time.perf_counter() - t0)
+
+    def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        self._denoiser.reset_attitude()
+        response.success = True
+        response.message = 'attitude re-initialised from the accelerometer at the next sample'
+        return response
+
+    # -- monitoring ---------------------------------------------------------------
+    def input_rate_hz(self) -> float:
+        """Mean input rate over the last ~2 s of accepted stamps (0 if unknown)."""
+        if len(self._stamps) < 2 or self._stamps[-1] <= self._stamps[0]:
+            return 0.0
+        return (len(self._stamps) - 1) / ((self._stamps[-1] - self._stamps[0]) * 1e-9)
+
+    def _publish_diagnostics(self) -> None:
+        counts = self._denoiser.counts
+        rate = self.input_rate_hz()
+        status = DiagnosticStatus(name=f'{self.get_name()}: gyro correction',
+                                  hardware_id=self._fixed_frame, level=DiagnosticStatus.OK,
+                                  message='ok')
+        fill = min(self._denoiser.engine.samples, self._denoiser.engine.receptive_field)
+        if rate and abs(rate / self._model_rate - 1.0) > self._rate_tolerance:
+            status.level = DiagnosticStatus.ERROR
+            status.message = (f'input rate {rate:.1f} Hz differs from the model rate '
+                              f'{self._model_rate:.1f} Hz: corrections are not valid')
+            self.get_logger().error(status.message, throttle_duration_sec=10.0)
+        elif counts['accepted'] == 0:
+            status.level, status.message = DiagnosticStatus.WARN, 'no input yet'
+        elif fill < self._denoiser.engine.receptive_field:
+            status.level, status.message = DiagnosticStatus.WARN, 'warming up'
+        infer = np.array(self._infer_s) if self._infer_s else np.zeros(1)
+        values = {'input_rate_hz': f'{rate:.2f}', 'model_rate_hz': f'{self._model_rate:.2f}',
+                  'buffer_fill': f'{fill}/{self._denoiser.engine.receptive_field}',
+                  'callback_time_p50_us': f'{np.median(infer) * 1e6:.1f}',
+                  'callback_time_max_us': f'{infer.max() * 1e6:.1f}'}
+        values.update({f'{k}': str(v) for k, v in counts.items()})
+        status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self._pub_diag.publish(array)
+
+    def _still_waiting(self) -> None:
+        sub = self.resolve_topic_name('imu/data_raw')
+        self.get_logger().warning(f'still waiting for data on {sub}')
+
+
+def main(args: list[str] | None = None) -> int:
+    """Entry point of ``gyro_denoiser`` (console script and ``ros2 run``)."""
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = GyroDenoiser()
+        rclpy.spin(node)
+    except DenoiseError as err:
+        print(f'gyro_denoiser: error: {err}', file=sys.stderr)
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

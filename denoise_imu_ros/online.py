@@ -1,0 +1,113 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The online correction pipeline without ROS: input checks, streaming network, attitude.
+
+:class:`OnlineDenoiser` takes one IMU sample at a time (stamp, gyro, accel) and either
+returns the corrected gyro with the integrated attitude or a counted drop. The ROS node
+and the bag processor both drive it, so they publish identical numbers.
+
+Policies (each counted in :attr:`OnlineDenoiser.counts`):
+- a non-finite field, a zero stamp, a duplicate or out-of-order stamp: sample dropped;
+- a stamp more than ``time_jump_s`` behind the last one (bag loop, clock reset): full
+  reset (network history and attitude), the sample is the first of a new recording;
+- a gap longer than ``max_gap_factor`` nominal periods: the network history restarts
+  (as at start-up) and the attitude is held across the gap, which cannot be integrated.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+from typing import NamedTuple
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .streaming import StreamingCorrector
+
+DROP_CAUSES = ('non_finite', 'zero_stamp', 'duplicate_stamp', 'out_of_order')
+
+
+class Output(NamedTuple):
+    """What one accepted sample yields."""
+
+    gyro: np.ndarray        # (3,) corrected angular velocity, rad/s
+    attitude: np.ndarray    # (4,) xyzw, IMU frame to the fixed frame
+    event: str | None       # 'start', 'gap', 'time_jump' when state was reset, else None
+
+
+def gravity_attitude(accel: np.ndarray) -> Rotation:
+    """Roll and pitch from a (static) accelerometer reading, yaw 0 (z up, ENU-like)."""
+    ax, ay, az = accel
+    roll = math.atan2(ay, az)
+    pitch = math.atan2(-ax, math.hypot(ay, az))
+    return Rotation.from_euler('ZYX', [0.0, pitch, roll])
+
+
+@dataclass
+class OnlineDenoiser:
+    """Streaming gyro correction and attitude integration with input checks."""
+
+    engine: StreamingCorrector
+    rate_hz: float                      # the model's sample rate
+    max_gap_factor: float = 3.0         # gap threshold, in nominal sample periods
+    time_jump_s: float = 1.0            # backward stamp jump that resets everything
+    counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
+        (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets'), 0))
+    _last_ns: int | None = None
+    _attitude: Rotation | None = None
+    _last_gyro: np.ndarray | None = None
+    _pending_reset: bool = False
+
+    def reset_attitude(self) -> None:
+        """Re-initialise the attitude from the accelerometer at the next sample."""
+        self._pending_reset = True
+
+    def _drop(self, cause: str) -> str:
+        self.counts[cause] += 1
+        return cause
+
+    def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray) -> Output | str:
+        """Correct one sample; returns an :class:`Output` or the cause of a drop."""
+        if not (np.isfinite(gyro).all() and np.isfinite(accel).all()):
+            return self._drop('non_finite')
+        if stamp_ns <= 0:
+            return self._drop('zero_stamp')
+        event = None
+        if self._last_ns is None:
+            event = 'start'
+        elif stamp_ns == self._last_ns:
+            return self._drop('duplicate_stamp')
+        elif stamp_ns < self._last_ns:
+            if (self._last_ns - stamp_ns) * 1e-9 <= self.time_jump_s:
+                return self._drop('out_of_order')
+            event = 'time_jump'
+            self.counts['time_jump_resets'] += 1
+        elif (stamp_ns - self._last_ns) * 1e-9 > self.max_gap_factor / self.rate_hz:
+            event = 'gap'
+            self.counts['gap_resets'] += 1
+
+        if event is not None:
+            self.engine.reset()
+        if event in ('start', 'time_jump') or self._pending_reset:
+            self._attitude = gravity_attitude(accel)
+            self._pending_reset = False
+        elif event is None:  # sample k-1 drives the attitude from stamp k-1 to stamp k
+            dt = (stamp_ns - self._last_ns) * 1e-9
+            self._attitude = self._attitude * Rotation.from_rotvec(self._last_gyro * dt)
+        corrected = self.engine.step(np.concatenate([gyro, accel]))
+        self._last_ns, self._last_gyro = stamp_ns, corrected
+        self.counts['accepted'] += 1
+        return Output(gyro=corrected, attitude=self._attitude.as_quat(), event=event)

@@ -1,0 +1,226 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The gyro_denoiser node in-process: topics, headers, bad input, fuzz, services."""
+
+import os
+from pathlib import Path
+import time
+
+from builtin_interfaces.msg import Time
+from denoise_imu_ros.dataset import load_imu
+from denoise_imu_ros.evaluate import correct_gyro
+from denoise_imu_ros.model import GyroNet, ModelConfig
+from denoise_imu_ros.modelfile import save_model
+from denoise_imu_ros.node import GyroDenoiser, main, PARAMETERS
+from denoise_imu_ros.online import DROP_CAUSES
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import QuaternionStamped
+import numpy as np
+import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu
+from std_srvs.srv import Trigger
+import torch
+
+SAMPLE = Path(__file__).parents[1] / 'denoise_imu_ros' / 'sample' / 'euroc_V1_03_90s'
+DOMAIN = 10 + os.getpid() % 90
+NODE_PARAMETERS = {name: default for name, default, _ in PARAMETERS}
+
+
+@pytest.fixture()
+def model_file(tmp_path):
+    """Write an untrained model file with EuRoC-like normalisation and residual std."""
+    torch.manual_seed(0)
+    net = GyroNet(ModelConfig())
+    net.set_normalization(torch.tensor([0.0, 0.0, 0.0, 9.0, 0.0, -3.0]),
+                          torch.tensor([0.3, 0.3, 0.3, 1.0, 1.0, 1.0]))
+    path = tmp_path / 'm.safetensors'
+    save_model(path, net.eval(), {'sample_rate_hz': 200.0,
+                                  'validation': {'gyro_residual_std': [0.01, 0.02, 0.03]}})
+    return path
+
+
+class Harness:
+    """A context with the node under test and a client node that talks to it."""
+
+    def __init__(self, model_file, **params):
+        self.ctx = rclpy.context.Context()
+        rclpy.init(context=self.ctx, domain_id=DOMAIN)
+        overrides = [Parameter('model', value=str(model_file))]
+        overrides += [Parameter(k, value=v) for k, v in params.items()]
+        self.node = GyroDenoiser(context=self.ctx, parameter_overrides=overrides)
+        self.client = rclpy.create_node('client', context=self.ctx)
+        self.pub = self.client.create_publisher(
+            Imu, 'imu/data_raw', QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+        self.corrected, self.attitude, self.diagnostics = [], [], []
+        reliable = QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE)
+        self.client.create_subscription(Imu, 'imu/corrected', self.corrected.append, reliable)
+        self.client.create_subscription(QuaternionStamped, 'imu/attitude',
+                                        self.attitude.append, reliable)
+        self.client.create_subscription(DiagnosticArray, '/diagnostics',
+                                        self.diagnostics.append, 10)
+        self.executor = SingleThreadedExecutor(context=self.ctx)
+        self.executor.add_node(self.node)
+        self.executor.add_node(self.client)
+        self.spin_until(lambda: self.pub.get_subscription_count() > 0)
+
+    def spin_until(self, done, timeout=10.0):
+        deadline = time.monotonic() + timeout
+        while not done() and time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.01)
+        assert done(), 'timed out'
+
+    def processed(self):
+        counts = self.node._denoiser.counts
+        return counts['accepted'] + sum(counts[c] for c in DROP_CAUSES)
+
+    def send(self, msgs):
+        """Publish in bursts well inside the input queue; wait until all are handled."""
+        start = self.processed()
+        for k in range(0, len(msgs), 50):
+            for msg in msgs[k:k + 50]:
+                self.pub.publish(msg)
+            self.spin_until(lambda: self.processed() - start >= min(k + 50, len(msgs)))
+        self.spin_until(lambda: len(self.corrected) >= self.node._denoiser.counts['accepted'])
+        self.spin_until(lambda: len(self.attitude) >= self.node._denoiser.counts['accepted'])
+
+    def close(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.client.destroy_node()
+        rclpy.shutdown(context=self.ctx)
+
+
+@pytest.fixture()
+def harness(model_file):
+    """Yield a running node and client; torn down after the test."""
+    made = []
+
+    def make(**params):
+        made.append(Harness(model_file, **params))
+        return made[-1]
+    yield make
+    for h in made:
+        h.close()
+
+
+def imu_msg(stamp_ns, gyro, accel, frame='imu4'):
+    """Build a sensor_msgs/Imu as a driver would."""
+    msg = Imu()
+    msg.header.stamp = Time(sec=int(stamp_ns // 10**9), nanosec=int(stamp_ns % 10**9))
+    msg.header.frame_id = frame
+    (msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z) = map(float, gyro)
+    (msg.linear_acceleration.x, msg.linear_acceleration.y,
+     msg.linear_acceleration.z) = map(float, accel)
+    msg.linear_acceleration_covariance[0] = 0.04
+    return msg
+
+
+def test_corrected_imu_copies_headers_and_matches_the_batch_network(harness, model_file):
+    from denoise_imu_ros.modelfile import load_model
+    rec = load_imu(SAMPLE)
+    n = 700
+    h = harness(fixed_frame='world')
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:n], rec.imu[:n])])
+    got = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
+                    for m in h.corrected])
+    np.testing.assert_allclose(got, correct_gyro(load_model(model_file).model, rec.imu[:n]),
+                               atol=1e-6)
+    first = h.corrected[0]
+    assert first.header.frame_id == 'imu4'
+    assert first.header.stamp.sec * 10**9 + first.header.stamp.nanosec == rec.imu_stamp_ns[0]
+    assert first.linear_acceleration.x == rec.imu[0, 3]
+    assert first.linear_acceleration_covariance[0] == 0.04
+    assert first.orientation_covariance[0] == -1.0
+    np.testing.assert_allclose(np.diag(np.reshape(first.angular_velocity_covariance, (3, 3))),
+                               [1e-4, 4e-4, 9e-4])
+    assert h.attitude[-1].header.frame_id == 'world'
+    assert h.attitude[-1].header.stamp == h.corrected[-1].header.stamp
+
+
+def test_fuzz_two_thousand_messages_with_garbage(harness):
+    rng = np.random.default_rng(7)
+    h = harness()
+    t, msgs = 1_700_000_000 * 10**9, []
+    for _ in range(2000):
+        kind = rng.random()
+        t += int(rng.choice([5_000_000, 5_000_000, 5_000_000, 0, -3_000_000, 40_000_000,
+                             -2_000_000_000]))
+        gyro, accel = rng.normal(size=3), rng.normal(size=3) + [0, 0, 9.8]
+        if kind < 0.05:
+            gyro[rng.integers(3)] = rng.choice([np.nan, np.inf, -np.inf])
+        elif kind < 0.08:
+            accel[rng.integers(3)] = np.nan
+        elif kind < 0.10:
+            gyro *= 1e30
+        stamp = 0 if kind > 0.98 else max(t, 0)
+        msgs.append(imu_msg(stamp, gyro, accel))
+    h.send(msgs)
+    counts = h.node._denoiser.counts
+    dropped = sum(counts[c] for c in DROP_CAUSES)
+    assert counts['accepted'] + dropped == 2000
+    assert len(h.corrected) == counts['accepted'] > 1000
+    for m in h.corrected:
+        assert np.isfinite([m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
+                            *m.angular_velocity_covariance]).all()
+    for q in h.attitude:
+        assert np.isfinite([q.quaternion.x, q.quaternion.y, q.quaternion.z, q.quaternion.w]).all()
+    stamps = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in h.corrected]
+    resets = counts['time_jump_resets']
+    assert sum(np.diff(stamps) <= 0) == resets  # increasing, except after a declared reset
+
+
+def test_rate_mismatch_is_a_diagnostics_error(harness):
+    h = harness()
+    rec = load_imu(SAMPLE)
+    stamps = rec.imu_stamp_ns[0] + np.arange(600) * 10_000_000  # 100 Hz into a 200 Hz model
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(stamps, rec.imu[:600])])
+    h.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR
+                             for d in h.diagnostics for s in d.status), timeout=5.0)
+    status = [s for d in h.diagnostics for s in d.status if s.level == DiagnosticStatus.ERROR][0]
+    assert 'input rate 100.0 Hz differs from the model rate 200.0 Hz' in status.message
+    assert {kv.key for kv in status.values} >= {'input_rate_hz', 'buffer_fill', 'accepted',
+                                                'out_of_order', 'callback_time_p50_us'}
+
+
+def test_reset_attitude_service_and_embedded_attitude(harness):
+    h = harness(embed_attitude=True, orientation_stddev=0.1)
+    cli = h.client.create_client(Trigger, 'gyro_denoiser/reset_attitude')
+    h.spin_until(cli.service_is_ready)
+    future = cli.call_async(Trigger.Request())
+    h.spin_until(future.done)
+    assert future.result().success
+    h.send([imu_msg(10**9 + k * 5_000_000, [0, 0, 0], [0, 0, 9.81]) for k in range(5)])
+    assert h.corrected[-1].orientation_covariance[0] == pytest.approx(0.01)
+    assert h.corrected[-1].orientation.w == pytest.approx(1.0)
+
+
+def test_missing_or_corrupt_model_exits_non_zero_with_one_line(tmp_path, capsys):
+    args = ['--ros-args', '-p', f'model:={tmp_path / "absent.safetensors"}']
+    assert main(args) == 1
+    assert 'absent.safetensors: no such model file' in capsys.readouterr().err
+    (tmp_path / 'bad.safetensors').write_bytes(b'x' * 100)
+    assert main(['--ros-args', '-p', f'model:={tmp_path / "bad.safetensors"}']) == 1
+    assert 'bad.safetensors: corrupt' in capsys.readouterr().err
+
+
+def test_launch_file_compiles_and_config_is_keyed_for_any_node_name():
+    import yaml
+    root = Path(__file__).parents[1]
+    compile((root / 'launch' / 'denoiser.launch.py').read_text(), 'denoiser.launch.py', 'exec')
+    config = yaml.safe_load((root / 'config' / 'gyro_denoiser.yaml').read_text())
+    params = config['/**']['ros__parameters']
+    assert params['model'] == 'euroc'
+    for name, value in params.items():  # every key is a declared parameter of the node
+        assert name in NODE_PARAMETERS, name
+        assert type(value) is type(NODE_PARAMETERS[name]), name
+
+
+def test_use_sim_time_is_accepted(harness):
+    h = harness(use_sim_time=True)
+    assert h.node.get_parameter('use_sim_time').value is True
+    h.send([imu_msg(10**9 + k * 5_000_000, [0, 0, 0], [0, 0, 9.81]) for k in range(3)])
+    assert len(h.corrected) == 3
