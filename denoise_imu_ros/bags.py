@@ -57,7 +57,7 @@ def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
     return msg.pose.position, msg.pose.orientation
 
 
-def _pick(reader: AnyReader, topic: str | None, types: tuple[str, ...], what: str,
+def pick_connections(reader: AnyReader, topic: str | None, types: tuple[str, ...], what: str,
           path: Path) -> Any:
     """Return the connections of ``topic``, checked against ``types``, or the only candidate."""
     conns = reader.connections
@@ -90,8 +90,8 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
         raise DatasetError(f'{path}: bag not found')
     try:
         with AnyReader([path], default_typestore=TYPESTORE) as reader:
-            imu_conns = _pick(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
-            pose_conns = (_pick(reader, pose_topic, POSE_TYPES, 'pose', path)
+            imu_conns = pick_connections(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
+            pose_conns = (pick_connections(reader, pose_topic, POSE_TYPES, 'pose', path)
                           if with_pose else [])
             imu_t, imu, gt_t, gt = [], [], [], []
             for conn, _, raw in reader.messages(connections=imu_conns + pose_conns):

@@ -60,6 +60,13 @@ def _convert(args: argparse.Namespace) -> None:
     print(f'wrote {args.out_bag}')
 
 
+def _process_bag(args: argparse.Namespace) -> None:
+    from .bagtools import process_bag
+    counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
+                         storage=args.storage, fixed_frame=args.fixed_frame)
+    print(f'wrote {args.output}: ' + ', '.join(f'{k} {v}' for k, v in counts.items()))
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser (exposed for tests and documentation)."""
     parser = argparse.ArgumentParser(prog='denoise-imu', description=__doc__.splitlines()[0])
@@ -112,6 +119,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',
                    help='whole-recording torch network, or the per-sample numpy engine')
     p.set_defaults(func=_correct)
+
+    p = sub.add_parser('process-bag', parents=[topics],
+                       help='copy a bag and add /imu/corrected and /imu/attitude (as the node)')
+    p.add_argument('input', help='ROS 1 or ROS 2 bag')
+    p.add_argument('output', help='ROS 2 bag to write (must not exist)')
+    p.add_argument('--model', required=True)
+    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
+    p.add_argument('--fixed-frame', default='odom', help='frame_id of /imu/attitude')
+    p.set_defaults(func=_process_bag)
     return parser
 
 

@@ -115,3 +115,24 @@ def test_convert_refuses_an_existing_output(euroc, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith('denoise-imu convert: error:') and str(tmp_path / 'out') in err
     assert '\n' not in err
+
+
+def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path):
+    from denoise_imu_ros.model import GyroNet, ModelConfig
+    from denoise_imu_ros.modelfile import save_model
+    from rosbags.highlevel import AnyReader
+    path = tmp_path / 'in.bag'
+    with Writer1(path) as writer:
+        conns = {}
+        for topic, msgtype, stamp, msg in _msgs(ROS1, 'geometry_msgs/msg/TransformStamped',
+                                                ros1=True):
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msgtype, typestore=ROS1)
+            writer.write(conns[topic], stamp, ROS1.serialize_ros1(msg, msgtype))
+    save_model(tmp_path / 'm.safetensors', GyroNet(ModelConfig()).eval(),
+               {'sample_rate_hz': 200.0})
+    assert main(['process-bag', str(path), str(tmp_path / 'out'), '--model',
+                 str(tmp_path / 'm.safetensors'), '--storage', 'sqlite3']) == 0
+    with AnyReader([tmp_path / 'out']) as reader:
+        topics = {c.topic: c.msgcount for c in reader.connections}
+    assert topics == {'/imu0': N, '/vicon/body': N, '/imu/corrected': N, '/imu/attitude': N}

@@ -224,3 +224,28 @@ def test_use_sim_time_is_accepted(harness):
     assert h.node.get_parameter('use_sim_time').value is True
     h.send([imu_msg(10**9 + k * 5_000_000, [0, 0, 0], [0, 0, 9.81]) for k in range(3)])
     assert len(h.corrected) == 3
+
+
+def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path):
+    from denoise_imu_ros.cli import main as cli
+    from rosbags.highlevel import AnyReader
+    assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
+                str(model_file)]) == 0
+    with AnyReader([tmp_path / 'out']) as reader:
+        topics = {c.topic: c.msgcount for c in reader.connections}
+        conns = [c for c in reader.connections if c.topic == '/imu/corrected']
+        bag = []
+        for conn, _, raw in reader.messages(connections=conns):
+            m = reader.deserialize(raw, conn.msgtype)
+            bag.append([m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
+                        *m.angular_velocity_covariance, m.orientation_covariance[0]])
+            if len(bag) == 600:
+                break
+    assert topics['/imu0'] == topics['/imu/corrected'] == topics['/imu/attitude'] == 18000
+    assert topics['/groundtruth/pose'] > 17000
+    rec = load_imu(SAMPLE)
+    h = harness()
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:600], rec.imu[:600])])
+    node = [[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
+             *m.angular_velocity_covariance, m.orientation_covariance[0]] for m in h.corrected]
+    assert np.array_equal(np.array(node), np.array(bag))

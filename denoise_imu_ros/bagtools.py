@@ -1,0 +1,119 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Offline bag processing with the online pipeline: ``denoise-imu process-bag``.
+
+The output bag holds every input topic unchanged plus ``/imu/corrected`` and
+``/imu/attitude``, computed by the same :class:`~denoise_imu_ros.online.OnlineDenoiser`
+the node runs, so the numbers are those the node would publish for that input.
+ROS 1 bags are first converted to ROS 2 with ``rosbags.convert``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+import tempfile
+from typing import Any
+
+import numpy as np
+from rosbags.convert import convert, ConverterError
+from rosbags.highlevel import AnyReader, AnyReaderError
+from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+
+from .bags import pick_connections, IMU_TYPE, TYPESTORE
+from .errors import DatasetError
+from .modelfile import load_model
+from .online import DROP_CAUSES, OnlineDenoiser
+from .streaming import StreamingCorrector
+
+CORRECTED_TOPIC = '/imu/corrected'
+ATTITUDE_TOPIC = '/imu/attitude'
+ATTITUDE_TYPE = 'geometry_msgs/msg/QuaternionStamped'
+
+
+def gyro_covariance(meta: dict[str, Any], stddev: float = -1.0) -> np.ndarray:
+    """angular_velocity_covariance: diagonal from ``stddev`` or the model's residual std."""
+    std = meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3)
+    return np.diag(np.asarray(std if stddev < 0 else [stddev] * 3, float) ** 2).ravel()
+
+
+def _ros2_source(src: Path, workdir: Path) -> Path:
+    """The bag itself if it is ROS 2, else its conversion into ``workdir``."""
+    if src.suffix != '.bag':
+        return src
+    dst = workdir / 'converted'
+    try:
+        convert([src], dst, dst_storage='sqlite3', dst_version=9, compress=None,
+                compress_mode='file', default_typestore=None, typestore=TYPESTORE,
+                exclude_topics=[], include_topics=[], exclude_msgtypes=[], include_msgtypes=[])
+    except ConverterError as err:
+        raise DatasetError(f'{src}: cannot convert ROS 1 bag: {err}') from err
+    return dst
+
+
+def process_bag(src: str | Path, dst: str | Path, model_spec: str,
+                imu_topic: str | None = None, storage: str = 'mcap',
+                fixed_frame: str = 'odom') -> dict[str, int]:
+    """Copy a bag and add the corrected IMU and attitude; returns the pipeline's counts."""
+    src = Path(src)
+    if not src.exists():
+        raise DatasetError(f'{src}: bag not found')
+    loaded = load_model(model_spec)
+    den = OnlineDenoiser(StreamingCorrector(loaded.model), float(loaded.meta['sample_rate_hz']))
+    cov = gyro_covariance(loaded.meta)
+    t = TYPESTORE.types
+    plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            with AnyReader([_ros2_source(src, Path(tmp))], default_typestore=TYPESTORE) as rd, \
+                    Writer(dst, version=9, storage_plugin=plugin) as wr:
+                imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
+                out = {c.id: wr.add_connection(c.topic, c.msgtype, typestore=rd.typestore)
+                       for c in rd.connections}
+                corr = wr.add_connection(CORRECTED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
+                att = wr.add_connection(ATTITUDE_TOPIC, ATTITUDE_TYPE, typestore=TYPESTORE)
+                imu_ids = {c.id for c in imu_conns}
+                for conn, stamp, raw in rd.messages():
+                    wr.write(out[conn.id], stamp, raw)
+                    if conn.id not in imu_ids:
+                        continue
+                    msg = rd.deserialize(raw, conn.msgtype)
+                    w, a = msg.angular_velocity, msg.linear_acceleration
+                    stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+                    res = den.process(stamp_ns, np.array([w.x, w.y, w.z]),
+                                      np.array([a.x, a.y, a.z]))
+                    if isinstance(res, str):
+                        continue
+                    no_orientation = np.zeros(9)
+                    no_orientation[0] = -1.0
+                    vec = t['geometry_msgs/msg/Vector3']
+                    corrected = t[IMU_TYPE](
+                        header=msg.header, orientation=msg.orientation,
+                        orientation_covariance=no_orientation,
+                        angular_velocity=vec(x=float(res.gyro[0]), y=float(res.gyro[1]),
+                                             z=float(res.gyro[2])),
+                        angular_velocity_covariance=cov,
+                        linear_acceleration=msg.linear_acceleration,
+                        linear_acceleration_covariance=msg.linear_acceleration_covariance)
+                    q = res.attitude
+                    attitude = t[ATTITUDE_TYPE](
+                        header=t['std_msgs/msg/Header'](stamp=msg.header.stamp,
+                                                        frame_id=fixed_frame),
+                        quaternion=t['geometry_msgs/msg/Quaternion'](
+                            x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3])))
+                    wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
+                    wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
+        except (AnyReaderError, WriterError, FileExistsError) as err:
+            raise DatasetError(f'{src} -> {dst}: {err}') from err
+    return {k: v for k, v in den.counts.items() if v or k in DROP_CAUSES}
