@@ -57,8 +57,8 @@ def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
     return msg.pose.position, msg.pose.orientation
 
 
-def pick_connections(reader: AnyReader, topic: str | None, types: tuple[str, ...], what: str,
-          path: Path) -> Any:
+def pick_connections(reader: AnyReader, topic: str | None, types: tuple[str, ...],
+                     what: str, path: Path) -> Any:
     """Return the connections of ``topic``, checked against ``types``, or the only candidate."""
     conns = reader.connections
     listing = ', '.join(sorted({f'{c.topic} [{c.msgtype}]' for c in conns})) or 'none'

@@ -31,7 +31,7 @@ from rosbags.convert import convert, ConverterError
 from rosbags.highlevel import AnyReader, AnyReaderError
 from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
-from .bags import pick_connections, IMU_TYPE, TYPESTORE
+from .bags import IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
 from .modelfile import load_model
 from .online import DROP_CAUSES, OnlineDenoiser
@@ -49,7 +49,7 @@ def gyro_covariance(meta: dict[str, Any], stddev: float = -1.0) -> np.ndarray:
 
 
 def _ros2_source(src: Path, workdir: Path) -> Path:
-    """The bag itself if it is ROS 2, else its conversion into ``workdir``."""
+    """Return the bag itself if it is ROS 2, else its conversion into ``workdir``."""
     if src.suffix != '.bag':
         return src
     dst = workdir / 'converted'
