@@ -3,9 +3,12 @@
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-DATA ?= ../shared/data
 
 .PHONY: test demo venv clean
+
+# Keep DDS traffic on this machine, over UDP (no stale shared-memory files).
+ROS_ENV := ROS_DOMAIN_ID=$${ROS_DOMAIN_ID:-42} ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST \
+	FASTDDS_BUILTIN_TRANSPORTS=UDPv4
 
 $(VENV)/.installed: requirements.txt setup.py
 	$(PYTHON) -m venv $(VENV)
@@ -18,14 +21,15 @@ venv: $(VENV)/.installed
 
 # Unit, integration and lint tests (tests needing ../shared/data skip without it).
 test: venv
-	FASTDDS_BUILTIN_TRANSPORTS=UDPv4 ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST \
-		$(BIN)/python -m pytest test
+	$(ROS_ENV) $(BIN)/python -m pytest test
 
-# Offline correction + evaluation of the shipped EuRoC sample with the shipped model.
+# The bundled EuRoC test-sequence sample (90 s of V1_03): offline evaluation with the
+# shipped model, then the live run: gyro_denoiser + bag player + monitor over DDS.
 demo: venv
 	$(BIN)/denoise-imu eval --model euroc --data denoise_imu_ros/sample \
 		--sequences euroc_V1_03_90s --out demo_out
-	@echo "figures and tables in demo_out/"
+	$(ROS_ENV) $(BIN)/python -m denoise_imu_ros.demo --model euroc --out demo_out
+	@echo "tables and figures in demo_out/"
 
 clean:
 	rm -rf $(VENV) demo_out build install log

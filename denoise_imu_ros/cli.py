@@ -67,6 +67,11 @@ def _process_bag(args: argparse.Namespace) -> None:
     print(f'wrote {args.output}: ' + ', '.join(f'{k} {v}' for k, v in counts.items()))
 
 
+def _play(args: argparse.Namespace) -> None:
+    from .player import main as play
+    play(args.bag, args.imu_topic, args.topic, args.rate, args.clock)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser (exposed for tests and documentation)."""
     parser = argparse.ArgumentParser(prog='denoise-imu', description=__doc__.splitlines()[0])
@@ -128,6 +133,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
     p.add_argument('--fixed-frame', default='odom', help='frame_id of /imu/attitude')
     p.set_defaults(func=_process_bag)
+
+    p = sub.add_parser('play', parents=[topics],
+                       help="publish a bag's IMU in real time (ros2 bag play stand-in)")
+    p.add_argument('bag')
+    p.add_argument('--topic', default='imu/data_raw', help='topic to publish on')
+    p.add_argument('--rate', type=float, default=1.0, help='playback speed factor')
+    p.add_argument('--clock', action='store_true', help='also publish /clock')
+    p.set_defaults(func=_play)
     return parser
 
 

@@ -1,0 +1,126 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+``denoise-imu play``: publish a bag's IMU messages in real time (``ros2 bag play`` stand-in).
+
+Messages go out at their recorded pace (scaled by ``rate``), stamped as recorded; with
+``clock`` a ``/clock`` message carrying each IMU stamp precedes it, for ``use_sim_time``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+import time
+from typing import Any, Iterator
+
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosbags.highlevel import AnyReader, AnyReaderError
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Imu
+
+from .bags import IMU_TYPE, pick_connections, TYPESTORE
+from .errors import DatasetError
+
+
+def _to_ros(src: Any) -> Imu:
+    """Copy a rosbags Imu (ROS 1 or ROS 2 typestore) into an rclpy Imu."""
+    msg = Imu()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = src.header.stamp.sec, src.header.stamp.nanosec
+    msg.header.frame_id = src.header.frame_id
+    for name in ('orientation', 'angular_velocity', 'linear_acceleration'):
+        mine, theirs = getattr(msg, name), getattr(src, name)
+        for axis in ('x', 'y', 'z', 'w') if name == 'orientation' else ('x', 'y', 'z'):
+            setattr(mine, axis, float(getattr(theirs, axis)))
+    for name in ('orientation_covariance', 'angular_velocity_covariance',
+                 'linear_acceleration_covariance'):
+        setattr(msg, name, [float(v) for v in getattr(src, name)])
+    return msg
+
+
+def read_imu_messages(path: str | Path, imu_topic: str | None = None) -> list[Imu]:
+    """All IMU messages of a ROS 1 or ROS 2 bag, as rclpy messages, in bag order."""
+    path = Path(path)
+    if not path.exists():
+        raise DatasetError(f'{path}: bag not found')
+    try:
+        with AnyReader([path], default_typestore=TYPESTORE) as reader:
+            conns = pick_connections(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
+            return [_to_ros(reader.deserialize(raw, c.msgtype))
+                    for c, _, raw in reader.messages(connections=conns)]
+    except AnyReaderError as err:
+        raise DatasetError(f'{path}: cannot read bag: {err}') from err
+
+
+class Player(Node):
+    """Publishes a list of Imu messages at their recorded pace."""
+
+    def __init__(self, messages: list[Imu], topic: str = 'imu/data_raw', rate: float = 1.0,
+                 clock: bool = False, **kwargs: Any) -> None:
+        super().__init__('imu_player', **kwargs)
+        if rate <= 0:
+            raise DatasetError(f'playback rate must be positive, got {rate}')
+        self._messages, self._rate = messages, rate
+        # Reliable: reaches best-effort and reliable subscribers alike.
+        self._pub = self.create_publisher(Imu, topic, QoSProfile(
+            depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+        self._clock = self.create_publisher(Clock, '/clock', 10) if clock else None
+
+    def wait_for_subscribers(self, timeout_s: float = 10.0) -> bool:
+        """Give discovery a moment; True when the IMU topic has a subscriber."""
+        deadline = time.monotonic() + timeout_s
+        while self._pub.get_subscription_count() == 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        return self._pub.get_subscription_count() > 0
+
+    def play(self) -> Iterator[Imu]:
+        """Publish every message on schedule, yielding each one after it went out."""
+        if not self._messages:
+            return
+        stamp0 = _ns(self._messages[0])
+        wall0 = time.monotonic()
+        for msg in self._messages:
+            due = wall0 + (_ns(msg) - stamp0) * 1e-9 / self._rate
+            delay = due - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            if self._clock is not None:
+                self._clock.publish(Clock(clock=msg.header.stamp))
+            self._pub.publish(msg)
+            yield msg
+
+
+def _ns(msg: Imu) -> int:
+    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+
+
+def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool) -> int:
+    """Run ``denoise-imu play``: initialise rclpy, publish the bag, shut down."""
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    messages = read_imu_messages(bag, imu_topic)
+    rclpy.init()
+    player = None
+    try:
+        player = Player(messages, topic=topic, rate=rate, clock=clock)
+        player.wait_for_subscribers(timeout_s=2.0)
+        count = sum(1 for _ in player.play())
+        print(f'published {count} IMU messages from {bag} on {player.resolve_topic_name(topic)}')
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if player is not None:
+            player.destroy_node()
+        rclpy.try_shutdown()
+    return 0
