@@ -1,0 +1,143 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+gyro_denoiser over DDS loopback: added latency, CPU use, drops, highest sustained rate.
+
+Real EuRoC IMU samples are published on imu/data_raw at a fixed rate; imu/corrected is
+received in this process. Latency = receive time - publish time (same clock). The node
+runs as its own process; a pass-through relay (same QoS, no processing) is measured in
+the same run as the transport floor, so the node's figures read as "floor + cost".
+Run: .venv/bin/python bench/node_latency.py [--rates 200 1000] [--seconds 10]
+         [--sweep 2000 3000 4000]
+Needs ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST (set below if missing).
+"""
+
+import argparse
+import os
+from pathlib import Path
+import subprocess
+import sys
+import time
+
+os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+os.environ.setdefault('FASTDDS_BUILTIN_TRANSPORTS', 'UDPv4')
+os.environ.setdefault('ROS_DOMAIN_ID', '57')
+
+from denoise_imu_ros.dataset import load_imu  # noqa: E402
+import numpy as np  # noqa: E402
+import rclpy  # noqa: E402
+from rclpy.executors import SingleThreadedExecutor  # noqa: E402
+from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
+from sensor_msgs.msg import Imu  # noqa: E402
+
+DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc' / 'V1_01_easy'
+RELAY = """
+import rclpy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu
+rclpy.init()
+node = rclpy.create_node('relay')
+pub = node.create_publisher(Imu, 'imu/corrected', QoSProfile(
+    depth=100, reliability=ReliabilityPolicy.RELIABLE))
+node.create_subscription(Imu, 'imu/data_raw', pub.publish, QoSProfile(
+    depth=200, reliability=ReliabilityPolicy.BEST_EFFORT))
+try:
+    rclpy.spin(node)
+except Exception:
+    pass
+"""
+
+
+def cpu_seconds(pid):
+    """User + system CPU time of a process, from /proc."""
+    fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def run(kind, rates, seconds, imu):
+    """Start the node (or the relay); measure every rate; stop it."""
+    cmd = ([sys.executable, '-m', 'denoise_imu_ros.node', '--ros-args', '--log-level', 'error']
+           if kind == 'node' else [sys.executable, '-c', RELAY])
+    proc = subprocess.Popen(cmd)
+    rclpy.init()
+    bench = rclpy.create_node('latency_bench')
+    sent, got = {}, {}
+    pub = bench.create_publisher(Imu, 'imu/data_raw', QoSProfile(
+        depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+    bench.create_subscription(
+        Imu, 'imu/corrected',
+        lambda m: got.setdefault(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
+                                 time.perf_counter()),
+        QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE))
+    ex = SingleThreadedExecutor()
+    ex.add_node(bench)
+    while pub.get_subscription_count() == 0 or bench.count_publishers('imu/corrected') == 0:
+        ex.spin_once(timeout_sec=0.1)
+    results = []
+    stamp = 10**18
+    for rate in rates:
+        sent.clear()
+        got.clear()
+        n = int(rate * seconds)
+        period = 1.0 / rate
+        # a fresh recording for the node: a jump forward restarts its history
+        stamp += 10**10
+        cpu0, t0 = cpu_seconds(proc.pid), time.perf_counter()
+        for k in range(n):
+            due = t0 + k * period
+            while (now := time.perf_counter()) < due:
+                ex.spin_once(timeout_sec=0) if due - now > 2e-4 else None
+            msg = Imu()
+            stamp += int(1e9 / rate)
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 10**9)
+            row = imu[k % len(imu)]
+            (msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z) = row[:3]
+            (msg.linear_acceleration.x, msg.linear_acceleration.y,
+             msg.linear_acceleration.z) = row[3:]
+            sent[stamp] = time.perf_counter()
+            pub.publish(msg)
+        deadline = time.perf_counter() + 2.0
+        while len(got) < n and time.perf_counter() < deadline:
+            ex.spin_once(timeout_sec=0.01)
+        wall = time.perf_counter() - t0
+        cpu = (cpu_seconds(proc.pid) - cpu0) / wall
+        lat = np.array([got[s] - sent[s] for s in sent if s in got]) * 1e3
+        results.append((kind, rate, n, n - len(lat), np.percentile(lat, 50) if len(lat) else
+                        np.nan, np.percentile(lat, 99) if len(lat) else np.nan, cpu))
+    bench.destroy_node()
+    rclpy.try_shutdown()
+    proc.terminate()
+    proc.wait(timeout=10)
+    return results
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument('--rates', type=float, nargs='+', default=[200.0, 1000.0])
+    parser.add_argument('--sweep', type=float, nargs='*', default=[2000.0, 3000.0, 4000.0])
+    parser.add_argument('--seconds', type=float, default=10.0)
+    args = parser.parse_args()
+    imu = load_imu(DATA).imu
+    rows = run('relay', args.rates, args.seconds, imu)
+    rows += run('node', args.rates + args.sweep, args.seconds, imu)
+    print(f'{"":6s} {"rate Hz":>8s} {"sent":>7s} {"lost":>5s} {"p50 ms":>7s} {"p99 ms":>7s} '
+          f'{"CPU":>5s}')
+    for kind, rate, n, lost, p50, p99, cpu in rows:
+        print(f'{kind:6s} {rate:8.0f} {n:7d} {lost:5d} {p50:7.2f} {p99:7.2f} {cpu:5.0%}')
+    ok = [r[1] for r in rows if r[0] == 'node' and r[3] == 0]
+    print(f'highest input rate the node sustained without a drop: {max(ok, default=0):.0f} Hz')
+
+
+if __name__ == '__main__':
+    main()
