@@ -65,10 +65,10 @@ def cpu_seconds(pid):
     return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
-def run(kind, rates, seconds, imu):
+def run(kind, rates, seconds, imu, model='euroc'):
     """Start the node (or the relay); measure every rate; stop it."""
-    cmd = ([sys.executable, '-m', 'denoise_imu_ros.node', '--ros-args', '--log-level', 'error']
-           if kind == 'node' else [sys.executable, '-c', RELAY])
+    cmd = ([sys.executable, '-m', 'denoise_imu_ros.node', '--ros-args', '-p', f'model:={model}',
+            '--log-level', 'error'] if kind == 'node' else [sys.executable, '-c', RELAY])
     proc = subprocess.Popen(cmd)
     rclpy.init()
     bench = rclpy.create_node('latency_bench')
@@ -83,6 +83,8 @@ def run(kind, rates, seconds, imu):
     ex = SingleThreadedExecutor()
     ex.add_node(bench)
     while pub.get_subscription_count() == 0 or bench.count_publishers('imu/corrected') == 0:
+        if proc.poll() is not None:
+            sys.exit(f'{kind} exited with status {proc.returncode}')
         ex.spin_once(timeout_sec=0.1)
     results = []
     stamp = 10**18
@@ -115,6 +117,7 @@ def run(kind, rates, seconds, imu):
         lat = np.array([got[s] - sent[s] for s in sent if s in got]) * 1e3
         results.append((kind, rate, n, n - len(lat), np.percentile(lat, 50) if len(lat) else
                         np.nan, np.percentile(lat, 99) if len(lat) else np.nan, cpu))
+    ex.shutdown()
     bench.destroy_node()
     rclpy.try_shutdown()
     proc.terminate()
@@ -127,10 +130,11 @@ def main():
     parser.add_argument('--rates', type=float, nargs='+', default=[200.0, 1000.0])
     parser.add_argument('--sweep', type=float, nargs='*', default=[2000.0, 3000.0, 4000.0])
     parser.add_argument('--seconds', type=float, default=10.0)
+    parser.add_argument('--model', default='euroc')
     args = parser.parse_args()
     imu = load_imu(DATA).imu
     rows = run('relay', args.rates, args.seconds, imu)
-    rows += run('node', args.rates + args.sweep, args.seconds, imu)
+    rows += run('node', args.rates + args.sweep, args.seconds, imu, args.model)
     print(f'{"":6s} {"rate Hz":>8s} {"sent":>7s} {"lost":>5s} {"p50 ms":>7s} {"p99 ms":>7s} '
           f'{"CPU":>5s}')
     for kind, rate, n, lost, p50, p99, cpu in rows:
