@@ -30,6 +30,9 @@ from torch import nn
 import torch.nn.functional as F  # noqa: N812
 
 
+BN_EPS = 1e-5  # BatchNorm epsilon (torch's default), also used by the streaming engine
+
+
 @dataclass(frozen=True)
 class ModelConfig:
     """Architecture; defaults are the paper's network (77,052 trainable parameters)."""
@@ -96,7 +99,7 @@ class GyroNet(nn.Module):
         c_in = config.in_channels
         for c_out, k, d in zip(config.channels, config.kernels, config.dilations):
             layers += [nn.Conv1d(c_in, c_out, k, dilation=d),
-                       nn.BatchNorm1d(c_out, momentum=config.bn_momentum),
+                       nn.BatchNorm1d(c_out, eps=BN_EPS, momentum=config.bn_momentum),
                        nn.GELU(),
                        Dropout(config.dropout)]
             c_in = c_out

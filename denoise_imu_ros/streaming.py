@@ -29,9 +29,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.special import ndtr
 
-from .model import GyroNet
-
-BN_EPS = 1e-5  # torch.nn.BatchNorm1d default, used by GyroNet
+from .model import BN_EPS, GyroNet
 
 
 class _Layer(NamedTuple):
