@@ -4,9 +4,32 @@
 
 from pathlib import Path
 
+from denoise_imu_ros.model import GyroNet, ModelConfig
+from denoise_imu_ros.modelfile import save_model
 import pytest
+import torch
 
 DATA = Path(__file__).resolve().parents[1].parent / 'shared' / 'data'
+SAMPLE = Path(__file__).resolve().parents[1] / 'denoise_imu_ros' / 'sample' / 'euroc_V1_03_90s'
+
+
+def untrained_model(**config) -> GyroNet:
+    """Build a seeded, untrained eval-mode network with EuRoC-like input normalisation."""
+    torch.manual_seed(0)
+    model = GyroNet(ModelConfig(**config))
+    model.set_normalization(torch.tensor([0.0, 0.0, 0.0, 9.0, 0.0, -3.0]),
+                            torch.tensor([0.3, 0.3, 0.3, 1.0, 1.0, 1.0]))
+    return model.eval()
+
+
+@pytest.fixture()
+def model_file(tmp_path) -> Path:
+    """Write an untrained but complete 200 Hz model file with residual std figures."""
+    path = tmp_path / 'model.safetensors'
+    save_model(path, untrained_model(), {
+        'dataset': 'test', 'sample_rate_hz': 200.0,
+        'validation': {'gyro_residual_std': [0.01, 0.02, 0.03]}})
+    return path
 
 
 @pytest.fixture(scope='session')

@@ -64,8 +64,8 @@ def _check(seq):
     assert np.all(np.diff(seq.stamp_ns) == 5_000_000)
 
 
-def test_ros1_bag_with_transform_stamped_ground_truth(tmp_path):
-    path = tmp_path / 'euroc_like.bag'
+def _write_ros1(path):
+    """Write an EuRoC-like ROS 1 bag: Imu and Vicon-style TransformStamped."""
     with Writer1(path) as writer:
         conns = {}
         for topic, msgtype, stamp, msg in _msgs(ROS1, 'geometry_msgs/msg/TransformStamped',
@@ -73,7 +73,11 @@ def test_ros1_bag_with_transform_stamped_ground_truth(tmp_path):
             if topic not in conns:
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=ROS1)
             writer.write(conns[topic], stamp, ROS1.serialize_ros1(msg, msgtype))
-    _check(load_sequence(path))
+    return path
+
+
+def test_ros1_bag_with_transform_stamped_ground_truth(tmp_path):
+    _check(load_sequence(_write_ros1(tmp_path / 'euroc_like.bag')))
 
 
 @pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
@@ -117,22 +121,11 @@ def test_convert_refuses_an_existing_output(euroc, tmp_path, capsys):
     assert '\n' not in err
 
 
-def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path):
-    from denoise_imu_ros.model import GyroNet, ModelConfig
-    from denoise_imu_ros.modelfile import save_model
+def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path, model_file):
     from rosbags.highlevel import AnyReader
-    path = tmp_path / 'in.bag'
-    with Writer1(path) as writer:
-        conns = {}
-        for topic, msgtype, stamp, msg in _msgs(ROS1, 'geometry_msgs/msg/TransformStamped',
-                                                ros1=True):
-            if topic not in conns:
-                conns[topic] = writer.add_connection(topic, msgtype, typestore=ROS1)
-            writer.write(conns[topic], stamp, ROS1.serialize_ros1(msg, msgtype))
-    save_model(tmp_path / 'm.safetensors', GyroNet(ModelConfig()).eval(),
-               {'sample_rate_hz': 200.0})
+    path = _write_ros1(tmp_path / 'in.bag')
     assert main(['process-bag', str(path), str(tmp_path / 'out'), '--model',
-                 str(tmp_path / 'm.safetensors'), '--storage', 'sqlite3']) == 0
+                 str(model_file), '--storage', 'sqlite3']) == 0
     with AnyReader([tmp_path / 'out']) as reader:
         topics = {c.topic: c.msgcount for c in reader.connections}
     assert topics == {'/imu0': N, '/vicon/body': N, '/imu/corrected': N, '/imu/attitude': N}

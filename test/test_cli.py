@@ -3,33 +3,18 @@
 """denoise-imu correct / eval end to end, and one-line errors with exit code 1."""
 
 import json
-from pathlib import Path
 
+from conftest import SAMPLE
 from denoise_imu_ros import evaluate as evaluate_module
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.dataset import load_imu
 from denoise_imu_ros.evaluate import correct_gyro
-from denoise_imu_ros.model import GyroNet, ModelConfig
-from denoise_imu_ros.modelfile import load_model, save_model
+from denoise_imu_ros.modelfile import load_model
 import numpy as np
-import pytest
 from test_dataset import write_asl
 import torch
 
-SAMPLE_DIR = Path(__file__).parents[1] / 'denoise_imu_ros' / 'sample'
-SAMPLE = SAMPLE_DIR / 'euroc_V1_03_90s'
-
-
-@pytest.fixture()
-def model_file(tmp_path):
-    """Write an untrained but complete model file (200 Hz, EuRoC-like normalisation)."""
-    torch.manual_seed(0)
-    model = GyroNet(ModelConfig())
-    model.set_normalization(torch.tensor([0.0, 0.0, 0.0, 9.0, 0.0, -3.0]),
-                            torch.tensor([0.3, 0.3, 0.3, 1.0, 1.0, 1.0]))
-    path = tmp_path / 'model.safetensors'
-    save_model(path, model.eval(), {'dataset': 'test', 'sample_rate_hz': 200.0})
-    return path
+SAMPLE_DIR = SAMPLE.parent
 
 
 def _error(capsys):

@@ -7,10 +7,9 @@ from pathlib import Path
 import time
 
 from builtin_interfaces.msg import Time
+from conftest import SAMPLE
 from denoise_imu_ros.dataset import load_imu
 from denoise_imu_ros.evaluate import correct_gyro
-from denoise_imu_ros.model import GyroNet, ModelConfig
-from denoise_imu_ros.modelfile import save_model
 from denoise_imu_ros.node import GyroDenoiser, main, PARAMETERS
 from denoise_imu_ros.online import DROP_CAUSES
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -23,24 +22,9 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
-import torch
 
-SAMPLE = Path(__file__).parents[1] / 'denoise_imu_ros' / 'sample' / 'euroc_V1_03_90s'
 DOMAIN = 10 + os.getpid() % 90
 NODE_PARAMETERS = {name: default for name, default, _ in PARAMETERS}
-
-
-@pytest.fixture()
-def model_file(tmp_path):
-    """Write an untrained model file with EuRoC-like normalisation and residual std."""
-    torch.manual_seed(0)
-    net = GyroNet(ModelConfig())
-    net.set_normalization(torch.tensor([0.0, 0.0, 0.0, 9.0, 0.0, -3.0]),
-                          torch.tensor([0.3, 0.3, 0.3, 1.0, 1.0, 1.0]))
-    path = tmp_path / 'm.safetensors'
-    save_model(path, net.eval(), {'sample_rate_hz': 200.0,
-                                  'validation': {'gyro_residual_std': [0.01, 0.02, 0.03]}})
-    return path
 
 
 class Harness:

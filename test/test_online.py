@@ -2,20 +2,15 @@
 # Licensed under the Apache License, Version 2.0
 """The ROS-free online pipeline: equals offline integration, handles bad stamps."""
 
-from pathlib import Path
-
+from conftest import SAMPLE, untrained_model
 from denoise_imu_ros.dataset import load_sequence
 from denoise_imu_ros.evaluate import correct_gyro
 from denoise_imu_ros.metrics import integrate
-from denoise_imu_ros.model import GyroNet, ModelConfig
 from denoise_imu_ros.online import gravity_attitude, OnlineDenoiser, Output
 from denoise_imu_ros.streaming import StreamingCorrector
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-import torch
-
-SAMPLE = Path(__file__).parents[1] / 'denoise_imu_ros' / 'sample' / 'euroc_V1_03_90s'
 
 
 @pytest.fixture(scope='module')
@@ -26,12 +21,8 @@ def seq():
 
 @pytest.fixture()
 def model():
-    """Build an untrained eval-mode network with EuRoC-like normalisation."""
-    torch.manual_seed(0)
-    net = GyroNet(ModelConfig())
-    net.set_normalization(torch.tensor([0.0, 0.0, 0.0, 9.0, 0.0, -3.0]),
-                          torch.tensor([0.3, 0.3, 0.3, 1.0, 1.0, 1.0]))
-    return net.eval()
+    """Build an untrained eval-mode network."""
+    return untrained_model()
 
 
 def _run(denoiser, stamps, imu):

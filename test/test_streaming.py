@@ -2,18 +2,14 @@
 # Licensed under the Apache License, Version 2.0
 """The numpy streaming engine equals the batch network, from the first sample on."""
 
-from pathlib import Path
-
+from conftest import SAMPLE, untrained_model
 from denoise_imu_ros.dataset import load_imu
 from denoise_imu_ros.evaluate import correct_gyro
-from denoise_imu_ros.model import GyroNet, ModelConfig
 from denoise_imu_ros.modelfile import load_model
 from denoise_imu_ros.streaming import StreamingCorrector
 import numpy as np
 import pytest
 import torch
-
-SAMPLE = Path(__file__).parents[1] / 'denoise_imu_ros' / 'sample' / 'euroc_V1_03_90s'
 
 
 @pytest.fixture(scope='module')
@@ -24,10 +20,7 @@ def imu():
 
 def _random_model(calibration_only=False):
     """Build an eval-mode network with non-trivial BatchNorm statistics and calibration."""
-    torch.manual_seed(3)
-    model = GyroNet(ModelConfig(calibration_only=calibration_only))
-    model.set_normalization(torch.tensor([0.0, 0.0, 0.0, 9.0, 0.0, -3.0]),
-                            torch.tensor([0.3, 0.3, 0.3, 1.0, 1.0, 1.0]))
+    model = untrained_model(calibration_only=calibration_only)
     with torch.no_grad():
         model.delta.normal_(std=0.01)
         for mod in model.modules():
@@ -38,7 +31,7 @@ def _random_model(calibration_only=False):
                 mod.bias.normal_()
             if calibration_only:
                 model.bias.normal_()
-    return model.eval()
+    return model
 
 
 @pytest.mark.parametrize('calibration_only', [False, True])
