@@ -87,10 +87,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--model', default='euroc')
     parser.add_argument('--bag', default=str(SAMPLE))
     parser.add_argument('--rate', type=float, default=1.0, help='playback speed factor')
+    parser.add_argument('--seconds', type=float, help='play only this much of the bag')
     parser.add_argument('--out', default='demo_out')
     args = parser.parse_args(argv)
     seq = load_sequence(args.bag)
     messages = read_imu_messages(args.bag)
+    if args.seconds is not None:
+        t0 = messages[0].header.stamp.sec + messages[0].header.stamp.nanosec * 1e-9
+        messages = [m for m in messages
+                    if m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 - t0 < args.seconds]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
