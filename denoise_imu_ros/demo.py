@@ -74,6 +74,7 @@ def _plot(path: Path, t, raw, node, valid) -> None:
     ax.set_xlabel('time (s)')
     ax.set_ylabel('attitude error (deg)')
     ax.set_yscale('log')
+    ax.set_ylim(bottom=0.01)
     ax.grid(True, alpha=0.3)
     ax.legend()
     fig.tight_layout()

@@ -197,6 +197,7 @@ def _plot_sequence(path: Path, seq: Sequence, estimates: dict[str, Rotation]) ->
         ax.set_ylabel(name)
         ax.grid(True, alpha=0.3)
     axes[3].set_yscale('log')
+    axes[3].set_ylim(bottom=0.01)
     axes[3].set_xlabel('time (s)')
     axes[0].legend(loc='upper right', fontsize=8)
     axes[0].set_title(seq.name)
