@@ -263,3 +263,10 @@ def test_live_demo_runs_node_player_and_monitor(tmp_path, monkeypatch, capsys):
                  if line.strip().startswith(('raw gyro integration', 'gyro_denoiser ')))
     assert node < raw / 10
     assert (tmp_path / 'live_attitude_error.png').read_bytes()[:4] == b'\x89PNG'
+
+
+def test_qos_is_overridable_through_parameters(harness):
+    h = harness(**{'qos_overrides./imu/corrected.publisher.reliability': 'best_effort',
+                   'qos_overrides./imu/corrected.publisher.depth': 7})
+    assert h.node._pub_imu.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
+    assert h.node._pub_imu.qos_profile.depth == 7
