@@ -38,6 +38,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def time_steps(model, split, cfg, steps, threads):
     torch.set_num_threads(threads)
+    torch.set_flush_denormal(True)  # as the trainer does
     opt = torch.optim.Adam(model.parameters(), lr=1e-3, weight_decay=0.1)
     gen = torch.Generator().manual_seed(0)
     times = []
