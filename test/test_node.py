@@ -270,3 +270,20 @@ def test_qos_is_overridable_through_parameters(harness):
                    'qos_overrides./imu/corrected.publisher.depth': 7})
     assert h.node._pub_imu.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
     assert h.node._pub_imu.qos_profile.depth == 7
+
+
+def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, euroc):
+    import threading
+    from denoise_imu_ros.cli import main as cli
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(DOMAIN))
+    h = harness()
+    bag = tmp_path / 'short'
+    assert cli(['convert', str(euroc / 'V1_01_easy'), str(bag), '--duration', '2']) == 0
+    result = []
+    thread = threading.Thread(target=lambda: result.append(cli(['play', str(bag), '--rate', '2'])))
+    thread.start()
+    while thread.is_alive():
+        h.executor.spin_once(timeout_sec=0.01)
+    assert result == [0]
+    h.spin_until(lambda: len(h.corrected) == 400)
+    assert 'published 400 IMU messages' in capsys.readouterr().out
