@@ -220,7 +220,7 @@ class GyroDenoiser(Node):
                   'buffer_fill': f'{fill}/{self._denoiser.engine.receptive_field}',
                   'callback_time_p50_us': f'{np.median(infer) * 1e6:.1f}',
                   'callback_time_max_us': f'{infer.max() * 1e6:.1f}'}
-        values.update({f'{k}': str(v) for k, v in counts.items()})
+        values.update({k: str(v) for k, v in counts.items()})
         status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()
