@@ -18,8 +18,9 @@ Read top to bottom: configuration, data, model, optimiser, helpers, the loop. Th
 recipe (config/train_euroc.yaml) is the reference code's: every training sequence in
 one batch per step, an 80 s window per sequence at a random offset, noise augmentation,
 Adam with L2 weight decay and cosine warm restarts. Validation uses the tails of the
-training sequences (after the training window), never test sequences; the weights with
-the best validation loss are kept.
+training sequences (after the training window), never test sequences. The model kept
+is, per ``select``: the candidate (best-validation checkpoint, final weights, weight
+average) with the lowest validation loss, the final weights, or the weight average.
 """
 
 from __future__ import annotations
@@ -78,6 +79,7 @@ class TrainConfig:
     skip_blocks: int = 5               # warm-up blocks left out of the training loss
     val_every: int = 100               # steps between validations (and at the end)
     swa_start: int = 0                 # > 0: average weights from this step on (SWA)
+    select: str = 'best_validation'    # kept: best_validation (of all candidates), final, swa
     seed: int = 0
     threads: int = 2                   # torch intra-op threads
 
@@ -98,6 +100,15 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: window must be a multiple of {2 * BLOCK}')
     if not cfg.sequences:
         raise TrainingError(f'{path}: no training sequences')
+    if cfg.steps < 1:
+        raise TrainingError(f'{path}: steps must be at least 1')
+    if cfg.select not in ('best_validation', 'final', 'swa') or (
+            cfg.select == 'swa' and cfg.swa_start <= 0):
+        raise TrainingError(f'{path}: select must be best_validation, final or swa '
+                            '(swa needs swa_start > 0)')
+    if cfg.swa_start > cfg.steps:
+        raise TrainingError(f'{path}: swa_start {cfg.swa_start} is after the last step '
+                            f'{cfg.steps}')
     return cfg
 
 
@@ -200,9 +211,9 @@ def block_residual(omega: np.ndarray, s: Sequence, start: int) -> np.ndarray:
 def train(cfg: TrainConfig, progress: bool = True,
           candidates_dir: Path | None = None) -> tuple[GyroNet, dict[str, Any]]:
     """
-    Train per ``cfg``; return the best-validation model and its metadata.
+    Train per ``cfg``; return the selected model and its metadata.
 
-    With ``candidates_dir``, every candidate (best checkpoint, SWA) is also written there
+    With ``candidates_dir``, every candidate (best checkpoint, final, SWA) is written there
     as a model file, so that the choice validation made can be studied afterwards.
     """
     torch.manual_seed(cfg.seed)
@@ -262,26 +273,31 @@ def train(cfg: TrainConfig, progress: bool = True,
             if step > 0 and val['loss'] < best['loss']:
                 best = dict(val, step=step, state=copy.deepcopy(model.state_dict()))
 
-    candidates = {'best_checkpoint': {k: v for k, v in best.items() if k != 'state'}}
-    states = {'best_checkpoint': best['state']}
+    # Candidates: the best-validation checkpoint, the last weights, the weight average.
+    final_val = val  # the loop validates at the last step
+    candidates = {'best_checkpoint': best, 'final': dict(
+        final_val, step=cfg.steps, state=copy.deepcopy(model.state_dict()))}
     if swa is not None:
         # BatchNorm statistics of the averaged weights: recomputed on training windows.
         torch.optim.swa_utils.update_bn([batch(split, cfg, gen)[0] for _ in range(8)], swa)
         val = validate(swa.module, seqs, val_start, loss_cfg)
-        candidates['swa'] = dict(val, step=cfg.steps)
-        states['swa'] = swa.module.state_dict()
+        candidates['swa'] = dict(val, step=cfg.steps, state=swa.module.state_dict())
         bar.write(f'SWA from step {cfg.swa_start}: val {val["loss"]:.4g}  '
                   f'val AOE {val["aoe_mean_deg"]:.3f} deg')
-        if val['loss'] < best['loss']:
-            best = dict(val, step=cfg.steps, state=swa.module.state_dict())
-    model.load_state_dict(best.pop('state'))
+    if cfg.select == 'best_validation':
+        chosen = min(candidates, key=lambda name: candidates[name]['loss'])
+    else:
+        chosen = cfg.select
+    states = {name: c.pop('state') for name, c in candidates.items()}
+    model.load_state_dict(states[chosen])
     model.eval()
     meta = {
         'dataset': cfg.dataset,
         'sample_rate_hz': rate,
         'train_sequences': cfg.sequences,
         'train_config': asdict(cfg),
-        'validation': best,
+        'selected': chosen,
+        'validation': candidates[chosen],
         'candidates': candidates,
         'history': history,
         'train_seconds': time.monotonic() - t_start,

@@ -17,19 +17,20 @@ CONFIG = Path(__file__).parents[1] / 'config' / 'train_euroc.yaml'
 
 def _short(euroc, **changes):
     """Return the EuRoC recipe on two sequences with 10 s windows and a few steps."""
+    changes = {'swa_start': 12, **changes}
     return load_config(CONFIG, data=str(euroc), sequences=['MH_01_easy', 'V1_02_medium'],
                        window=2048, steps=24, val_every=12, restart_period=24, **changes)
 
 
 def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
-    model, meta = train(_short(euroc, swa_start=12), progress=False, candidates_dir=tmp_path)
+    model, meta = train(_short(euroc), progress=False, candidates_dir=tmp_path)
     history = meta['history']
     assert [h['step'] for h in history] == [0, 12, 24]
     assert history[-1]['val_loss'] < 0.5 * history[0]['val_loss']
     assert meta['validation']['step'] in (12, 24)
-    chosen = min(meta['candidates'].values(), key=lambda c: c['loss'])
-    assert meta['validation']['loss'] == chosen['loss']
-    for name in ('best_checkpoint', 'swa'):
+    assert meta['selected'] == 'swa'  # the recipe's choice
+    assert meta['validation'] == meta['candidates']['swa']
+    for name in ('best_checkpoint', 'final', 'swa'):
         cand = load_model(tmp_path / f'{name}.safetensors')
         assert cand.meta['validation']['loss'] == meta['candidates'][name]['loss']
     assert meta['train_sequences'] == ['MH_01_easy', 'V1_02_medium']
@@ -47,7 +48,7 @@ def test_non_finite_loss_stops_with_a_clear_message(euroc, monkeypatch):
 
 def test_calibration_baseline_trains_from_the_same_command(euroc, tmp_path):
     cfg = yaml.safe_load(CONFIG.read_text())
-    cfg.update(sequences=['MH_01_easy'], window=1024, steps=6, val_every=6)
+    cfg.update(sequences=['MH_01_easy'], window=1024, steps=6, val_every=6, swa_start=3)
     (tmp_path / 'c.yaml').write_text(yaml.safe_dump(cfg))
     out = tmp_path / 'calib.safetensors'
     assert main(['train', '--config', str(tmp_path / 'c.yaml'), '--data', str(euroc),
@@ -64,3 +65,9 @@ def test_config_typos_and_bad_windows_are_refused(tmp_path):
     (tmp_path / 'w.yaml').write_text('sequences: [a]\nwindow: 1000\n')
     with pytest.raises(TrainingError, match='multiple of 32'):
         load_config(tmp_path / 'w.yaml')
+    (tmp_path / 's.yaml').write_text('sequences: [a]\nselect: swa\nswa_start: 0\n')
+    with pytest.raises(TrainingError, match='swa needs swa_start > 0'):
+        load_config(tmp_path / 's.yaml')
+    (tmp_path / 'l.yaml').write_text('sequences: [a]\nsteps: 10\nswa_start: 20\n')
+    with pytest.raises(TrainingError, match='swa_start 20 is after the last step 10'):
+        load_config(tmp_path / 'l.yaml')
