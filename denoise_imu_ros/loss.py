@@ -18,12 +18,14 @@ With R_k the ground-truth attitude at sample k and gyro sample k driving k -> k 
 the increment over block m of j samples is R_{jm}^T R_{j(m+1)}; the prediction is the
 ordered product of exp(omega_hat_k dt_k) over the block, formed by a log2(j)-deep tree
 of batched products in float64. Blocks do not overlap. A block counts only if the
-ground truth is valid at every sample it spans.
+ground truth is valid at every sample it spans. The increment lengths are powers of two
+(16 and 32 in the paper); longer ones suit ground truth with more jitter per sample.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 
 import torch
 import torch.nn.functional as F  # noqa: N812
@@ -37,11 +39,21 @@ class LossConfig:
 
     huber_delta: float = 0.005   # rad, Huber threshold per log component
     scale: float = 1e6           # keeps losses O(1) for the optimiser
-    weight_32: float = 0.5       # weight of the 32-sample term (the reference code's)
+    increments: tuple[int, ...] = (16, 32)  # samples per increment, powers of two, rising
+    weights: tuple[float, ...] = (1.0, 0.5)  # per increment length (the reference code's)
     skip_blocks: int = 5         # first blocks of a window are warm-up (padded input)
 
+    def __post_init__(self) -> None:
+        """Check the increment lengths (user input through the training recipe)."""
+        levels = [math.log2(j) for j in self.increments]
+        if (len(self.weights) != len(self.increments) or not self.increments
+                or any(v != int(v) or v < 0 for v in levels) or sorted(set(levels)) != levels):
+            raise ValueError('increments must be rising powers of two, one weight each')
 
-BLOCK = 16  # samples per increment of the first term; the second uses 2 * BLOCK
+    @property
+    def span(self) -> int:
+        """Return the longest increment (samples): windows must be a multiple of it."""
+        return self.increments[-1]
 
 
 def _huber(residual: torch.Tensor, valid: torch.Tensor, cfg: LossConfig) -> torch.Tensor:
@@ -59,19 +71,22 @@ def increment_loss(omega_hat: torch.Tensor, dt: torch.Tensor, gt_quat: torch.Ten
     Return the scalar (float64) loss of corrected gyro against ground-truth attitude.
 
     omega_hat (B, T, 3) is the corrected angular velocity in rad/s, T a multiple of
-    2 * BLOCK; dt (B, T) the time from each sample to the next in s; gt_quat
+    cfg.span; dt (B, T) the time from each sample to the next in s; gt_quat
     (B, T + 1, 4) the xyzw ground-truth attitude at the T + 1 stamps; gt_valid
     (B, T + 1) whether ground truth is trusted at that stamp.
     """
     b, t, _ = omega_hat.shape
-    m = t // BLOCK
+    j = cfg.increments[0]
     q = quat_exp(omega_hat.double() * dt.double().unsqueeze(-1))     # (B, T, 4)
-    pred16 = tree_product(q, 4)                                      # (B, M, 4)
+    pred = tree_product(q, int(math.log2(j)))                        # (B, T / j, 4)
     gt = gt_quat.double()
-    gt16 = quat_mul(quat_conj(gt[:, :-1:BLOCK]), gt[:, BLOCK::BLOCK])  # (B, M, 4)
-    ok = gt_valid[:, :t].reshape(b, m, BLOCK).all(-1) & gt_valid[:, BLOCK::BLOCK]
-    loss16 = _huber(quat_log(quat_mul(quat_conj(pred16), gt16)), ok, cfg)
-    pred32, gt32 = tree_product(pred16, 1), tree_product(gt16, 1)    # (B, M / 2, 4)
-    ok32 = ok[:, 0::2] & ok[:, 1::2]
-    loss32 = _huber(quat_log(quat_mul(quat_conj(pred32), gt32)), ok32, cfg)
-    return loss16 + cfg.weight_32 * loss32
+    truth = quat_mul(quat_conj(gt[:, :-1:j]), gt[:, j::j])           # (B, T / j, 4)
+    ok = gt_valid[:, :t].reshape(b, t // j, j).all(-1) & gt_valid[:, j::j]
+    total = torch.zeros((), dtype=torch.float64)
+    for length, weight in zip(cfg.increments, cfg.weights):
+        while j < length:  # one tree level up: blocks twice as long
+            pred, truth = tree_product(pred, 1), tree_product(truth, 1)
+            ok = ok[:, 0::2] & ok[:, 1::2]
+            j *= 2
+        total = total + weight * _huber(quat_log(quat_mul(quat_conj(pred), truth)), ok, cfg)
+    return total

@@ -26,6 +26,7 @@ average) with the lowest validation loss, the final weights, or the weight avera
 from __future__ import annotations
 
 import copy
+import dataclasses
 from dataclasses import asdict, dataclass, field, fields
 import math
 from pathlib import Path
@@ -40,10 +41,13 @@ import yaml
 
 from .dataset import DEFAULT_MAX_GT_GAP_S, load_sequence, Sequence
 from .errors import TrainingError
-from .loss import BLOCK, increment_loss, LossConfig
+from .loss import increment_loss, LossConfig
 from .metrics import attitude_errors, integrate
 from .model import GyroNet, ModelConfig
 from .modelfile import code_version, save_model
+
+
+RESIDUAL_BLOCK = 16  # samples per block of the gyro residual estimate (validation)
 
 
 # ----------------------------------------------------------------------------------
@@ -75,7 +79,8 @@ class TrainConfig:
     gyro_bias: float = 1e-3            # rad/s, uniform +- per sequence and step
     accel_bias: float = 1e-3           # m/s^2
     huber_delta: float = 0.005         # rad
-    weight_32: float = 0.5             # weight of the 32-sample loss term
+    increments: list[int] = field(default_factory=lambda: [16, 32])  # loss increments
+    increment_weights: list[float] = field(default_factory=lambda: [1.0, 0.5])
     skip_blocks: int = 5               # warm-up blocks left out of the training loss
     val_every: int = 100               # steps between validations (and at the end)
     swa_start: int = 0                 # > 0: average weights from this step on (SWA)
@@ -96,8 +101,12 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: unknown keys {unknown}')
     raw.update({k: v for k, v in overrides.items() if v is not None})
     cfg = TrainConfig(**raw)
-    if cfg.window % (2 * BLOCK):
-        raise TrainingError(f'{path}: window must be a multiple of {2 * BLOCK}')
+    try:
+        span = loss_config(cfg).span
+    except ValueError as err:
+        raise TrainingError(f'{path}: {err}') from err
+    if cfg.window % span:
+        raise TrainingError(f'{path}: window must be a multiple of {span}')
     if not cfg.sequences:
         raise TrainingError(f'{path}: no training sequences')
     if cfg.steps < 1:
@@ -110,6 +119,12 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: swa_start {cfg.swa_start} is after the last step '
                             f'{cfg.steps}')
     return cfg
+
+
+def loss_config(cfg: TrainConfig) -> LossConfig:
+    """Build the loss constants of a recipe."""
+    return LossConfig(huber_delta=cfg.huber_delta, increments=tuple(cfg.increments),
+                      weights=tuple(cfg.increment_weights), skip_blocks=cfg.skip_blocks)
 
 
 # ----------------------------------------------------------------------------------
@@ -164,10 +179,10 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
     was_training = model.training
     model.eval()
     losses, aoes, residuals = [], {}, []
-    tail_cfg = LossConfig(loss_cfg.huber_delta, loss_cfg.scale, loss_cfg.weight_32, 0)
+    tail_cfg = dataclasses.replace(loss_cfg, skip_blocks=0)
     for s in seqs:
         omega = model(torch.tensor(s.imu, dtype=torch.float32)[None])[0].double()
-        n = (len(s) - 1 - start) // (2 * BLOCK) * (2 * BLOCK)
+        n = (len(s) - 1 - start) // loss_cfg.span * loss_cfg.span
         sl = slice(start, start + n)
         losses.append(float(increment_loss(
             omega[None, sl], torch.tensor(s.dt[sl])[None],
@@ -185,23 +200,24 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
             'aoe_mean_deg': float(np.mean(list(aoes.values()))),
             # per-sample gyro error std (rad/s) if the error were white: from the error of
             # 16-sample increments, whose std shrinks by sqrt(16) over a block
-            'gyro_residual_std': (res.std(axis=0) * math.sqrt(BLOCK)).tolist()}
+            'gyro_residual_std': (res.std(axis=0) * math.sqrt(RESIDUAL_BLOCK)).tolist()}
 
 
 def block_residual(omega: np.ndarray, s: Sequence, start: int) -> np.ndarray:
     """Mean angular-rate error (rad/s) over valid non-overlapping 16-sample blocks."""
-    m = (len(omega) - 1) // BLOCK
-    q = s.gt_quat[start:start + m * BLOCK + 1]
-    ok = s.gt_valid[start:start + m * BLOCK + 1]
-    dt = s.dt[start:start + m * BLOCK]
-    steps = Rotation.from_rotvec(omega[:m * BLOCK] * dt[:, None])
-    pred = [steps[i::BLOCK] for i in range(BLOCK)]
+    m = (len(omega) - 1) // RESIDUAL_BLOCK
+    q = s.gt_quat[start:start + m * RESIDUAL_BLOCK + 1]
+    ok = s.gt_valid[start:start + m * RESIDUAL_BLOCK + 1]
+    dt = s.dt[start:start + m * RESIDUAL_BLOCK]
+    steps = Rotation.from_rotvec(omega[:m * RESIDUAL_BLOCK] * dt[:, None])
+    pred = [steps[i::RESIDUAL_BLOCK] for i in range(RESIDUAL_BLOCK)]
     inc = pred[0]
     for p in pred[1:]:
         inc = inc * p
-    gt = Rotation.from_quat(q[:-1:BLOCK]).inv() * Rotation.from_quat(q[BLOCK::BLOCK])
-    res = (inc.inv() * gt).as_rotvec() / dt.reshape(m, BLOCK).sum(1)[:, None]
-    keep = ok[:-1].reshape(m, BLOCK).all(1) & ok[BLOCK::BLOCK]
+    gt = (Rotation.from_quat(q[:-1:RESIDUAL_BLOCK]).inv()
+          * Rotation.from_quat(q[RESIDUAL_BLOCK::RESIDUAL_BLOCK]))
+    res = (inc.inv() * gt).as_rotvec() / dt.reshape(m, RESIDUAL_BLOCK).sum(1)[:, None]
+    keep = ok[:-1].reshape(m, RESIDUAL_BLOCK).all(1) & ok[RESIDUAL_BLOCK::RESIDUAL_BLOCK]
     return res[keep]
 
 
@@ -227,7 +243,7 @@ def train(cfg: TrainConfig, progress: bool = True,
     model_cfg = ModelConfig(gyro_std=tuple(math.radians(d) for d in cfg.gyro_std_deg),
                             dropout=cfg.dropout, calibration_only=cfg.calibration_only)
     model = GyroNet(model_cfg)
-    min_len = cfg.window + cfg.max_offset + 1 + 4 * BLOCK  # a validation tail must remain
+    min_len = cfg.window + cfg.max_offset + 1 + 2 * loss_config(cfg).span  # a tail to validate on
     seqs = [load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
                           cfg.max_gt_gap_s, min_samples=max(min_len, model.receptive_field))
             for name in cfg.sequences]
@@ -239,8 +255,7 @@ def train(cfg: TrainConfig, progress: bool = True,
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     scheduler = torch.optim.lr_scheduler.CosineAnnealingWarmRestarts(
         optimizer, T_0=cfg.restart_period, T_mult=cfg.restart_mult, eta_min=cfg.lr_min)
-    loss_cfg = LossConfig(huber_delta=cfg.huber_delta, weight_32=cfg.weight_32,
-                          skip_blocks=cfg.skip_blocks)
+    loss_cfg = loss_config(cfg)
     val_start = cfg.window + cfg.max_offset
 
     swa = torch.optim.swa_utils.AveragedModel(model) if cfg.swa_start > 0 else None
