@@ -53,3 +53,18 @@ def test_skipped_warm_up_blocks_do_not_count():
     # level 16 skips samples < 80 and level 32 skips samples < 160: no effect at all
     assert increment_loss(bad_start, dt, quat, valid, cfg).item() < 1e-12
     assert increment_loss(bad_start, dt, quat, valid, LossConfig(skip_blocks=0)).item() > 1
+
+
+def test_increment_terms_add_up_and_bad_lengths_are_refused():
+    omega, dt, quat, valid = _truth()
+    omega = omega + 0.003
+    only16 = increment_loss(omega, dt, quat, valid, LossConfig(increments=(16,), weights=(1.0,)))
+    only32 = increment_loss(omega, dt, quat, valid, LossConfig(increments=(32,), weights=(1.0,)))
+    both = increment_loss(omega, dt, quat, valid)
+    assert both.item() == pytest.approx(only16.item() + 0.5 * only32.item())
+    long = increment_loss(omega, dt, quat, valid, LossConfig(increments=(64, 128),
+                                                             weights=(1.0, 1.0), skip_blocks=0))
+    assert long.item() > both.item()  # a bias error grows with the increment length
+    for bad in [(16, 24), (32, 16), ()]:
+        with pytest.raises(ValueError, match='powers of two'):
+            LossConfig(increments=bad, weights=(1.0,) * len(bad))
