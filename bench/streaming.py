@@ -43,6 +43,7 @@ def main():
                         help='samples timed for the window recompute (it is slow)')
     args = parser.parse_args()
     torch.set_num_threads(1)
+    torch.set_flush_denormal(True)  # as the denoise-imu command does
     model = load_model(args.model).model
     imu = load_imu(DATA / args.sequence).imu
     stream = StreamingCorrector(model)

@@ -42,7 +42,14 @@ class _Layer(NamedTuple):
 
 
 def _gelu(x: np.ndarray) -> np.ndarray:
-    return x * ndtr(x)  # exact GELU: x * Phi(x), one ufunc instead of erf arithmetic
+    """
+    GELU, x * Phi(x), with Phi held at Phi(-10) ~ 7.6e-24 below x = -10.
+
+    The exact tail (|GELU| < 1e-22 there) underflows to denormal floats, which made every
+    following product ~10x slower on this CPU; the clamp keeps values normal and changes
+    the output by less than 1e-20.
+    """
+    return x * ndtr(np.maximum(x, -10.0))
 
 
 def _layers(model: GyroNet) -> list[_Layer]:
