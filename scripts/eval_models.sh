@@ -15,12 +15,12 @@ ev() {  # model, out, dataset args...
 }
 for m in "$runs"/euroc_s*.safetensors "$runs"/euroc_s*.candidates/*.safetensors; do
   [ -f "$m" ] || continue
-  ev "$m" "${m%.safetensors}.eval" --baseline "$runs/euroc_calibrated.safetensors" \
+  ev "$m" "${m%.safetensors}.eval" --baseline euroc_calibrated \
     --data "$data/euroc" --sequences "${euroc_test[@]}" --no-plots
 done
 for m in "$runs"/tumvi_s*.safetensors "$runs"/tumvi_s*.candidates/*.safetensors; do
   [ -f "$m" ] || continue
-  ev "$m" "${m%.safetensors}.eval" --baseline "$runs/tumvi_calibrated.safetensors" \
+  ev "$m" "${m%.safetensors}.eval" --baseline tumvi_calibrated \
     --data "$data/tumvi" --sequences "${tumvi_rooms[@]}" --start-sample 16032 --no-plots
 done
 for ds in euroc tumvi; do
