@@ -33,7 +33,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
 from .bags import IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
-from .modelfile import load_model
+from .modelfile import load_model, sample_rate
 from .online import DROP_CAUSES, OnlineDenoiser
 from .streaming import StreamingCorrector
 
@@ -70,7 +70,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     if not src.exists():
         raise DatasetError(f'{src}: bag not found')
     loaded = load_model(model_spec)
-    den = OnlineDenoiser(StreamingCorrector(loaded.model), float(loaded.meta['sample_rate_hz']))
+    den = OnlineDenoiser(StreamingCorrector(loaded.model), sample_rate(loaded))
     cov = gyro_covariance(loaded.meta)
     t = TYPESTORE.types
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3

@@ -49,6 +49,14 @@ class LoadedModel(NamedTuple):
     path: Path
 
 
+def sample_rate(loaded: LoadedModel) -> float:
+    """IMU rate (Hz) the model was trained at; online use needs it."""
+    rate = loaded.meta.get('sample_rate_hz')
+    if not isinstance(rate, (int, float)) or not rate > 0:
+        raise ModelFileError(f'{loaded.path}: model file has no valid sample rate')
+    return float(rate)
+
+
 def shipped_models() -> list[str]:
     """Names accepted by ``--model`` besides paths."""
     return sorted(p.stem for p in SHIPPED_DIR.glob('*.safetensors'))

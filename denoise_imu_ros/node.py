@@ -39,7 +39,7 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
 from .errors import DenoiseError
-from .modelfile import load_model
+from .modelfile import load_model, sample_rate
 from .online import OnlineDenoiser
 from .streaming import StreamingCorrector
 
@@ -95,11 +95,8 @@ class GyroDenoiser(Node):
         self.declare_parameters('', PARAMETERS)
         p = self.get_parameter
         loaded = load_model(p('model').value)  # raises DenoiseError: handled in main()
-        self._model_rate = float(loaded.meta['sample_rate_hz'])
-        self._denoiser = OnlineDenoiser(
-            StreamingCorrector(loaded.model), self._model_rate,
-            max_gap_factor=p('max_gap_factor').value,
-            time_jump_s=p('time_jump_threshold').value)
+        self._model_rate = sample_rate(loaded)
+        self._denoiser = OnlineDenoiser(StreamingCorrector(loaded.model), self._model_rate)
         self._residual_std = np.asarray(
             loaded.meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3))
         self._fixed_frame = p('fixed_frame').value

@@ -7,9 +7,10 @@ from pathlib import Path
 import time
 
 from builtin_interfaces.msg import Time
-from conftest import SAMPLE
+from conftest import SAMPLE, untrained_model
 from denoise_imu_ros.dataset import load_imu
 from denoise_imu_ros.evaluate import correct_gyro
+from denoise_imu_ros.modelfile import load_model, save_model
 from denoise_imu_ros.node import GyroDenoiser, main, PARAMETERS
 from denoise_imu_ros.online import DROP_CAUSES
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -104,7 +105,6 @@ def imu_msg(stamp_ns, gyro, accel, frame='imu4'):
 
 
 def test_corrected_imu_copies_headers_and_matches_the_batch_network(harness, model_file):
-    from denoise_imu_ros.modelfile import load_model
     rec = load_imu(SAMPLE)
     n = 700
     h = harness(fixed_frame='world')
@@ -189,6 +189,9 @@ def test_missing_or_corrupt_model_exits_non_zero_with_one_line(tmp_path, capsys)
     (tmp_path / 'bad.safetensors').write_bytes(b'x' * 100)
     assert main(['--ros-args', '-p', f'model:={tmp_path / "bad.safetensors"}']) == 1
     assert 'bad.safetensors: corrupt' in capsys.readouterr().err
+    save_model(tmp_path / 'norate.safetensors', untrained_model(), {})
+    assert main(['--ros-args', '-p', f'model:={tmp_path / "norate.safetensors"}']) == 1
+    assert 'norate.safetensors: model file has no valid sample rate' in capsys.readouterr().err
 
 
 def test_launch_file_compiles_and_config_is_keyed_for_any_node_name():
