@@ -45,9 +45,9 @@ def _gelu(x: np.ndarray) -> np.ndarray:
     """
     GELU, x * Phi(x), with Phi held at Phi(-10) ~ 7.6e-24 below x = -10.
 
-    The exact tail (|GELU| < 1e-22 there) underflows to denormal floats, which made every
-    following product ~10x slower on this CPU; the clamp keeps values normal and changes
-    the output by less than 1e-20.
+    The exact tail underflows to denormal floats, which are ~10x slower to multiply on
+    this CPU; the clamp changes the output by less than 1e-20. Callers that own the
+    process (the node) also flush denormals to zero, for products of tiny weights.
     """
     return x * ndtr(np.maximum(x, -10.0))
 
