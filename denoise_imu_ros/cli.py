@@ -54,8 +54,9 @@ def _correct(args: argparse.Namespace) -> None:
 
 def _convert(args: argparse.Namespace) -> None:
     from .bags import write_bag
-    from .dataset import crop, read_asl
-    rec = crop(read_asl(args.asl_dir), args.start, args.duration)
+    from .dataset import crop, overlap, read_asl
+    rec = read_asl(args.asl_dir)
+    rec = crop(overlap(rec) if args.overlap else rec, args.start, args.duration)
     write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress)
     print(f'wrote {args.out_bag}')
 
@@ -84,6 +85,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--start', type=float, default=0.0, help='s after the first IMU sample')
     p.add_argument('--duration', type=float, help='s to keep (default: all)')
     p.add_argument('--compress', action='store_true', help='zstd compression')
+    p.add_argument('--overlap', action='store_true',
+                   help='keep only the span both IMU and ground truth cover')
     p.set_defaults(func=_convert)
 
     p = sub.add_parser('train', help='train a model from a YAML recipe')

@@ -174,6 +174,18 @@ def crop(rec: Recording, start_s: float = 0.0, duration_s: float | None = None) 
                      rec.gt_stamp_ns[gt], rec.gt_quat[gt], rec.gt_pos[gt])
 
 
+def overlap(rec: Recording) -> Recording:
+    """Keep only the time span both the IMU and the ground truth cover."""
+    start = max(rec.imu_stamp_ns[0], rec.gt_stamp_ns[0])
+    end = min(rec.imu_stamp_ns[-1], rec.gt_stamp_ns[-1])
+    imu = (rec.imu_stamp_ns >= start) & (rec.imu_stamp_ns <= end)
+    gt = (rec.gt_stamp_ns >= start) & (rec.gt_stamp_ns <= end)
+    if not imu.any():
+        raise DatasetError(f'{rec.source}: IMU and ground truth do not overlap in time')
+    return Recording(rec.name, rec.source, rec.imu_stamp_ns[imu], rec.imu[imu],
+                     rec.gt_stamp_ns[gt], rec.gt_quat[gt], rec.gt_pos[gt])
+
+
 def align(rec: Recording, max_gt_gap_s: float = DEFAULT_MAX_GT_GAP_S,
           min_samples: int = 1) -> Sequence:
     """
