@@ -162,28 +162,27 @@ def check_recording(rec: Recording, imu_file: object = None, gt_file: object = N
                            f'quaternions (norm {norms.min():.3g}..{norms.max():.3g})')
 
 
-def crop(rec: Recording, start_s: float = 0.0, duration_s: float | None = None) -> Recording:
-    """Cut a recording to ``duration_s`` from ``start_s`` after its first IMU stamp."""
-    t0 = rec.imu_stamp_ns[0] + int(start_s * 1e9)
-    t1 = np.iinfo(np.int64).max if duration_s is None else t0 + int(duration_s * 1e9)
-    imu = (rec.imu_stamp_ns >= t0) & (rec.imu_stamp_ns < t1)
-    gt = (rec.gt_stamp_ns >= t0) & (rec.gt_stamp_ns < t1)
+def _between(rec: Recording, t0: int, t1: int) -> Recording:
+    """Return the samples of both streams with t0 <= stamp <= t1 (ns)."""
+    imu = (rec.imu_stamp_ns >= t0) & (rec.imu_stamp_ns <= t1)
+    gt = (rec.gt_stamp_ns >= t0) & (rec.gt_stamp_ns <= t1)
     if not imu.any():
         raise DatasetError(f'{rec.source}: no IMU samples in the requested time range')
     return Recording(rec.name, rec.source, rec.imu_stamp_ns[imu], rec.imu[imu],
                      rec.gt_stamp_ns[gt], rec.gt_quat[gt], rec.gt_pos[gt])
 
 
+def crop(rec: Recording, start_s: float = 0.0, duration_s: float | None = None) -> Recording:
+    """Cut a recording to ``duration_s`` from ``start_s`` after its first IMU stamp."""
+    t0 = rec.imu_stamp_ns[0] + int(start_s * 1e9)
+    t1 = np.iinfo(np.int64).max if duration_s is None else t0 + int(duration_s * 1e9) - 1
+    return _between(rec, t0, t1)
+
+
 def overlap(rec: Recording) -> Recording:
     """Keep only the time span both the IMU and the ground truth cover."""
-    start = max(rec.imu_stamp_ns[0], rec.gt_stamp_ns[0])
-    end = min(rec.imu_stamp_ns[-1], rec.gt_stamp_ns[-1])
-    imu = (rec.imu_stamp_ns >= start) & (rec.imu_stamp_ns <= end)
-    gt = (rec.gt_stamp_ns >= start) & (rec.gt_stamp_ns <= end)
-    if not imu.any():
-        raise DatasetError(f'{rec.source}: IMU and ground truth do not overlap in time')
-    return Recording(rec.name, rec.source, rec.imu_stamp_ns[imu], rec.imu[imu],
-                     rec.gt_stamp_ns[gt], rec.gt_quat[gt], rec.gt_pos[gt])
+    return _between(rec, max(rec.imu_stamp_ns[0], rec.gt_stamp_ns[0]),
+                    min(rec.imu_stamp_ns[-1], rec.gt_stamp_ns[-1]))
 
 
 def align(rec: Recording, max_gt_gap_s: float = DEFAULT_MAX_GT_GAP_S,
