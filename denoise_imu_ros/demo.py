@@ -123,6 +123,11 @@ def main(argv: list[str] | None = None) -> int:
             if node_proc.poll() is not None:
                 return node_proc.returncode or 1
             executor.spin_once(timeout_sec=0.1)
+        # Matching is seen from this side first; give the node's writers time to match the
+        # monitor too, or its first (reliable) outputs go nowhere.
+        settle = time.monotonic() + 1.0
+        while time.monotonic() < settle:
+            executor.spin_once(timeout_sec=0.05)
         done = threading.Event()
         threading.Thread(target=lambda: (sum(1 for _ in player.play()), done.set()),
                          daemon=True).start()
