@@ -118,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     executor.add_node(monitor)
     try:
         print(f'waiting for gyro_denoiser (model {args.model}) ...', flush=True)
-        while player._pub.get_subscription_count() == 0 or monitor.count_publishers(
+        while not player.has_subscribers() or monitor.count_publishers(
                 'imu/attitude') == 0:
             if node_proc.poll() is not None:
                 return node_proc.returncode or 1

@@ -77,12 +77,16 @@ class Player(Node):
             depth=1000, reliability=ReliabilityPolicy.RELIABLE))
         self._clock = self.create_publisher(Clock, '/clock', 10) if clock else None
 
+    def has_subscribers(self) -> bool:
+        """Whether a subscriber of the IMU topic has matched this publisher."""
+        return self._pub.get_subscription_count() > 0
+
     def wait_for_subscribers(self, timeout_s: float = 10.0) -> bool:
         """Give discovery a moment; True when the IMU topic has a subscriber."""
         deadline = time.monotonic() + timeout_s
-        while self._pub.get_subscription_count() == 0 and time.monotonic() < deadline:
+        while not self.has_subscribers() and time.monotonic() < deadline:
             time.sleep(0.05)
-        return self._pub.get_subscription_count() > 0
+        return self.has_subscribers()
 
     def play(self) -> Iterator[Imu]:
         """Publish every message on schedule, yielding each one after it went out."""
