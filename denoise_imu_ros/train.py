@@ -74,6 +74,9 @@ class TrainConfig:
     restart_mult: int = 2              # each cycle this many times longer
     window: int = 16000                # training samples per sequence (80 s at 200 Hz)
     max_offset: int = 32               # window start drawn in [0, max_offset)
+    # True: draw each window anywhere in its whole sequence instead (more data, but the
+    # validation tails are then training data and validation figures are in-sample).
+    whole_sequences: bool = False
     gyro_noise: float = 8e-5           # rad/s, white noise added to the gyro input
     accel_noise: float = 1e-3          # m/s^2
     gyro_bias: float = 1e-3            # rad/s, uniform +- per sequence and step
@@ -132,28 +135,43 @@ def loss_config(cfg: TrainConfig) -> LossConfig:
 
 @dataclass
 class Split:
-    """Stacked training windows' source arrays (S sequences, L = window + offset + 1)."""
+    """
+    Training windows' source arrays, stacked (S sequences of L samples).
 
-    imu: torch.Tensor      # (S, L, 6) float32
-    dt: torch.Tensor       # (S, L - 1) float64
-    quat: torch.Tensor     # (S, L, 4) float64
-    valid: torch.Tensor    # (S, L) bool
+    Shorter sequences are zero-padded at the end (padding is never drawn: valid=False).
+    """
+
+    imu: torch.Tensor        # (S, L, 6) float32
+    dt: torch.Tensor         # (S, L - 1) float64
+    quat: torch.Tensor       # (S, L, 4) float64
+    valid: torch.Tensor      # (S, L) bool
+    max_start: torch.Tensor  # (S,) int64: window starts are drawn in [0, max_start)
 
 
 def training_split(seqs: list[Sequence], cfg: TrainConfig) -> Split:
-    """Stack the first window + max_offset + 1 samples of each sequence."""
-    n = cfg.window + cfg.max_offset + 1
+    """Stack the samples windows may be drawn from: the head of each sequence, or all."""
+    head = cfg.window + cfg.max_offset  # the window may end at sample head - 1
+    lengths = [len(s) if cfg.whole_sequences else head for s in seqs]
+    n = max(lengths)
+
+    def stack(arrays: list[np.ndarray], length: int) -> np.ndarray:
+        out = np.zeros((len(arrays), length) + arrays[0].shape[1:], arrays[0].dtype)
+        for row, a in zip(out, arrays):
+            row[:min(len(a), length)] = a[:length]
+        return out
+
     return Split(
-        imu=torch.tensor(np.stack([s.imu[:n] for s in seqs]), dtype=torch.float32),
-        dt=torch.tensor(np.stack([s.dt[:n - 1] for s in seqs])),
-        quat=torch.tensor(np.stack([s.gt_quat[:n] for s in seqs])),
-        valid=torch.tensor(np.stack([s.gt_valid[:n] for s in seqs])))
+        imu=torch.tensor(stack([s.imu for s in seqs], n), dtype=torch.float32),
+        dt=torch.tensor(stack([s.dt for s in seqs], n - 1)),
+        quat=torch.tensor(stack([s.gt_quat for s in seqs], n)),
+        valid=torch.tensor(stack([s.gt_valid[:m] for s, m in zip(seqs, lengths)], n)),
+        max_start=torch.tensor([m - cfg.window for m in lengths]))
 
 
 def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.Tensor, ...]:
     """One window per sequence at a random offset, with noise and bias augmentation."""
     s, w = split.imu.shape[0], cfg.window
-    n0 = torch.randint(0, cfg.max_offset, (s,), generator=gen)
+    n0 = (torch.rand(s, generator=gen, dtype=torch.float64) * split.max_start).long()
     idx = n0[:, None] + torch.arange(w + 1)[None]                 # (S, W + 1)
     rows = torch.arange(s)[:, None]
     u = split.imu[rows, idx[:, :-1]]                              # (S, W, 6)

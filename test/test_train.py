@@ -4,6 +4,8 @@
 
 from pathlib import Path
 
+import numpy as np
+
 from denoise_imu_ros import train as train_module
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.errors import TrainingError
@@ -71,3 +73,28 @@ def test_config_typos_and_bad_windows_are_refused(tmp_path):
     (tmp_path / 'l.yaml').write_text('sequences: [a]\nsteps: 10\nswa_start: 20\n')
     with pytest.raises(TrainingError, match='swa_start 20 is after the last step 10'):
         load_config(tmp_path / 'l.yaml')
+
+
+@pytest.mark.parametrize('whole', [False, True])
+def test_windows_are_drawn_from_the_head_or_the_whole_of_each_sequence(euroc, whole):
+    import torch
+    from denoise_imu_ros.dataset import load_sequence
+    from denoise_imu_ros.train import batch, training_split
+    cfg = _short(euroc, whole_sequences=whole)
+    seqs = [load_sequence(euroc / name) for name in cfg.sequences]
+    split = training_split(seqs, cfg)
+    gen = torch.Generator().manual_seed(0)
+    last_stamp_seen = [0] * len(seqs)
+    for _ in range(300):
+        u, dt, quat, valid = batch(split, cfg, gen)
+        assert u.shape == (2, cfg.window, 6) and quat.shape == (2, cfg.window + 1, 4)
+        assert bool(valid.all()) and bool((dt > 0).all())  # never the zero padding
+        for i, s in enumerate(seqs):
+            # find where this window ends in the sequence from its last quaternion
+            end = int(np.flatnonzero((s.gt_quat == quat[i, -1].numpy()).all(1))[0])
+            last_stamp_seen[i] = max(last_stamp_seen[i], end)
+    for s, end in zip(seqs, last_stamp_seen):
+        if whole:
+            assert end > len(s) - 2000  # windows reach the end of every sequence
+        else:
+            assert end < cfg.window + cfg.max_offset
