@@ -24,6 +24,7 @@ ground truth is valid at every sample it spans. The increment lengths are powers
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 import math
 
@@ -56,24 +57,32 @@ class LossConfig:
         return self.increments[-1]
 
 
-def _huber(residual: torch.Tensor, valid: torch.Tensor, cfg: LossConfig) -> torch.Tensor:
+Count = Callable[[torch.Tensor], torch.Tensor]
+
+
+def _huber(residual: torch.Tensor, valid: torch.Tensor, cfg: LossConfig,
+           reduce_count: Count) -> torch.Tensor:
     """Masked mean of the component-wise Huber loss of (B, M, 3) residuals."""
     residual, valid = residual[:, cfg.skip_blocks:], valid[:, cfg.skip_blocks:]
     per = F.huber_loss(residual, torch.zeros_like(residual), reduction='none',
                        delta=cfg.huber_delta).sum(-1)
-    count = 3 * valid.sum()
+    count = reduce_count(3 * valid.sum())
     return cfg.scale * (per * valid).sum() / count.clamp(min=1)
 
 
 def increment_loss(omega_hat: torch.Tensor, dt: torch.Tensor, gt_quat: torch.Tensor,
-                   gt_valid: torch.Tensor, cfg: LossConfig = LossConfig()) -> torch.Tensor:
+                   gt_valid: torch.Tensor, cfg: LossConfig = LossConfig(),
+                   reduce_count: Count = lambda count: count) -> torch.Tensor:
     """
     Return the scalar (float64) loss of corrected gyro against ground-truth attitude.
 
     omega_hat (B, T, 3) is the corrected angular velocity in rad/s, T a multiple of
     cfg.span; dt (B, T) the time from each sample to the next in s; gt_quat
     (B, T + 1, 4) the xyzw ground-truth attitude at the T + 1 stamps; gt_valid
-    (B, T + 1) whether ground truth is trusted at that stamp.
+    (B, T + 1) whether ground truth is trusted at that stamp. reduce_count maps this
+    batch's count of valid terms to the count the means divide by: in data-parallel
+    training, the sum over processes, so that the losses of all processes add up to the
+    loss of the whole batch.
     """
     b, t, _ = omega_hat.shape
     j = cfg.increments[0]
@@ -88,5 +97,6 @@ def increment_loss(omega_hat: torch.Tensor, dt: torch.Tensor, gt_quat: torch.Ten
             pred, truth = tree_product(pred, 1), tree_product(truth, 1)
             ok = ok[:, 0::2] & ok[:, 1::2]
             j *= 2
-        total = total + weight * _huber(quat_log(quat_mul(quat_conj(pred), truth)), ok, cfg)
+        total = total + weight * _huber(quat_log(quat_mul(quat_conj(pred), truth)), ok, cfg,
+                                        reduce_count)
     return total

@@ -36,9 +36,11 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 import torch
+import torch.distributed as dist
 from tqdm import tqdm
 import yaml
 
+from . import parallel
 from .dataset import DEFAULT_MAX_GT_GAP_S, load_sequence, Sequence
 from .errors import TrainingError
 from .loss import increment_loss, LossConfig
@@ -48,6 +50,7 @@ from .modelfile import code_version, save_model
 
 
 RESIDUAL_BLOCK = 16  # samples per block of the gyro residual estimate (validation)
+RANK_SEED_STRIDE = 7919  # data-parallel process r draws its batches from seed + r * this
 
 
 # ----------------------------------------------------------------------------------
@@ -89,7 +92,8 @@ class TrainConfig:
     swa_start: int = 0                 # > 0: average weights from this step on (SWA)
     select: str = 'best_validation'    # kept: best_validation (of all candidates), final, swa
     seed: int = 0
-    threads: int = 2                   # torch intra-op threads
+    threads: int = 2                   # torch intra-op threads, shared by the workers
+    workers: int = 1                   # data-parallel processes (parallel.py), <= sequences
 
 
 def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
@@ -114,6 +118,8 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: no training sequences')
     if cfg.steps < 1:
         raise TrainingError(f'{path}: steps must be at least 1')
+    if not 1 <= cfg.workers <= len(cfg.sequences):
+        raise TrainingError(f'{path}: workers must be between 1 and the number of sequences')
     if cfg.select not in ('best_validation', 'final', 'swa') or (
             cfg.select == 'swa' and cfg.swa_start <= 0):
         raise TrainingError(f'{path}: select must be best_validation, final or swa '
@@ -248,14 +254,49 @@ def train(cfg: TrainConfig, progress: bool = True,
     Train per ``cfg``; return the selected model and its metadata.
 
     With ``candidates_dir``, every candidate (best checkpoint, final, SWA) is written there
-    as a model file, so that the choice validation made can be studied afterwards.
+    as a model file, so that the choice validation made can be studied afterwards. With
+    ``cfg.workers`` > 1 the batch is shared by that many processes (see parallel.py); this
+    process is the first of them and the only one that validates and reports.
     """
-    torch.manual_seed(cfg.seed)
-    torch.set_num_threads(cfg.threads)
+    if cfg.workers == 1:
+        return _run(cfg, 0, progress, candidates_dir)
+    store = parallel.serve(cfg.workers)
+    workers = [parallel.spawn(_worker, (cfg, rank, store.port))
+               for rank in range(1, cfg.workers)]
+    try:
+        parallel.join(0, cfg.workers, store)
+        result = _run(cfg, 0, progress, candidates_dir)
+    finally:
+        if dist.is_initialized():
+            dist.destroy_process_group()
+        for proc in workers:
+            proc.join(timeout=10)
+            if proc.is_alive():  # this process failed: nobody will talk to it any more
+                proc.terminate()
+    failed = [proc.exitcode for proc in workers if proc.exitcode]
+    if failed:
+        raise TrainingError(f'a training worker process failed (exit code {failed[0]})')
+    return result
+
+
+def _worker(cfg: TrainConfig, rank: int, port: int) -> None:
+    """Entry point of the data-parallel processes other than the first."""
+    parallel.join(rank, cfg.workers, port)
+    try:
+        _run(cfg, rank, False, None)
+    finally:
+        dist.destroy_process_group()
+
+
+def _run(cfg: TrainConfig, rank: int, progress: bool,
+         candidates_dir: Path | None) -> tuple[GyroNet, dict[str, Any]]:
+    """Train as process ``rank`` of ``cfg.workers``; the first one returns the result."""
+    world = cfg.workers
+    torch.manual_seed(cfg.seed)  # the same initial weights in every process
+    torch.set_num_threads(max(1, cfg.threads // world))
     # Tiny gradients (e.g. through GELU far in its negative tail) become denormal floats,
     # which made convolutions up to 50x slower on this CPU as training went on.
     torch.set_flush_denormal(True)
-    gen = torch.Generator().manual_seed(cfg.seed)
     t_start = time.monotonic()
 
     model_cfg = ModelConfig(gyro_std=tuple(math.radians(d) for d in cfg.gyro_std_deg),
@@ -269,6 +310,11 @@ def train(cfg: TrainConfig, progress: bool = True,
     flat = split.imu.reshape(-1, 6)
     model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
     rate = float(np.mean([s.rate_hz for s in seqs]))
+    if world > 1:
+        parallel.sync_batch_norm(model)
+        split = training_split(seqs[rank::world], cfg)  # this process's share
+        torch.manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)  # its own dropout masks
+    gen = torch.Generator().manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)
 
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     scheduler = torch.optim.lr_scheduler.CosineAnnealingWarmRestarts(
@@ -284,19 +330,22 @@ def train(cfg: TrainConfig, progress: bool = True,
     for step in bar:
         if step > 0:
             u, dt, quat, valid = batch(split, cfg, gen)
-            loss = increment_loss(model(u), dt, quat, valid, loss_cfg)
+            loss = increment_loss(model(u), dt, quat, valid, loss_cfg,
+                                  parallel.sum_over_processes)
+            optimizer.zero_grad(set_to_none=True)
+            loss.backward()
+            if world > 1:
+                loss = parallel.all_reduce_grads(list(model.parameters()), loss)
             if not torch.isfinite(loss):
                 raise TrainingError(f'non-finite training loss at step {step} (lr '
                                     f'{scheduler.get_last_lr()[0]:.3g}); lower the learning '
                                     'rate or check the data')
-            optimizer.zero_grad(set_to_none=True)
-            loss.backward()
             optimizer.step()
             scheduler.step()
             bar.set_postfix(loss=f'{loss.item():.4g}')
             if swa is not None and step >= cfg.swa_start:
                 swa.update_parameters(model)
-        if step % cfg.val_every == 0 or step == cfg.steps:  # step 0: the untrained baseline
+        if rank == 0 and (step % cfg.val_every == 0 or step == cfg.steps):  # 0: untrained
             val = validate(model, seqs, val_start, loss_cfg)
             history.append({'step': step, 'train_loss': loss.item() if step else None,
                             'val_loss': val['loss'],
@@ -306,13 +355,15 @@ def train(cfg: TrainConfig, progress: bool = True,
             if step > 0 and val['loss'] < best['loss']:
                 best = dict(val, step=step, state=copy.deepcopy(model.state_dict()))
 
-    # Candidates: the best-validation checkpoint, the last weights, the weight average.
-    final_val = val  # the loop validates at the last step
-    candidates = {'best_checkpoint': best, 'final': dict(
-        final_val, step=cfg.steps, state=copy.deepcopy(model.state_dict()))}
     if swa is not None:
         # BatchNorm statistics of the averaged weights: recomputed on training windows.
         torch.optim.swa_utils.update_bn([batch(split, cfg, gen)[0] for _ in range(8)], swa)
+    if rank > 0:
+        return None
+    # Candidates: the best-validation checkpoint, the last weights, the weight average.
+    candidates = {'best_checkpoint': best, 'final': dict(
+        val, step=cfg.steps, state=copy.deepcopy(model.state_dict()))}
+    if swa is not None:
         val = validate(swa.module, seqs, val_start, loss_cfg)
         candidates['swa'] = dict(val, step=cfg.steps, state=swa.module.state_dict())
         bar.write(f'SWA from step {cfg.swa_start}: val {val["loss"]:.4g}  '
@@ -322,6 +373,7 @@ def train(cfg: TrainConfig, progress: bool = True,
     else:
         chosen = cfg.select
     states = {name: c.pop('state') for name, c in candidates.items()}
+    model = GyroNet(model_cfg)  # plain BatchNorm again, whatever trained it
     model.load_state_dict(states[chosen])
     model.eval()
     meta = {
