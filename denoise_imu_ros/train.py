@@ -93,7 +93,7 @@ class TrainConfig:
     select: str = 'best_validation'    # kept: best_validation (of all candidates), final, swa
     seed: int = 0
     threads: int = 2                   # torch intra-op threads, shared by the workers
-    workers: int = 1                   # data-parallel processes (parallel.py), <= sequences
+    workers: int = 1                   # data-parallel processes (parallel.py)
 
 
 def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
@@ -118,8 +118,9 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: no training sequences')
     if cfg.steps < 1:
         raise TrainingError(f'{path}: steps must be at least 1')
-    if not 1 <= cfg.workers <= len(cfg.sequences):
-        raise TrainingError(f'{path}: workers must be between 1 and the number of sequences')
+    if cfg.workers < 1:
+        raise TrainingError(f'{path}: workers must be at least 1')
+    cfg.workers = min(cfg.workers, len(cfg.sequences))  # each worker needs a sequence
     if cfg.select not in ('best_validation', 'final', 'swa') or (
             cfg.select == 'swa' and cfg.swa_start <= 0):
         raise TrainingError(f'{path}: select must be best_validation, final or swa '
