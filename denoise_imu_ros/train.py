@@ -259,14 +259,23 @@ def train(cfg: TrainConfig, progress: bool = True,
     ``cfg.workers`` > 1 the batch is shared by that many processes (see parallel.py); this
     process is the first of them and the only one that validates and reports.
     """
+    seqs = load_sequences(cfg)  # here, so that bad input fails before any process starts
     if cfg.workers == 1:
-        return _run(cfg, 0, progress, candidates_dir)
+        return _run(cfg, 0, seqs, progress, candidates_dir)
     store = parallel.serve(cfg.workers)
     workers = [parallel.spawn(_worker, (cfg, rank, store.port))
                for rank in range(1, cfg.workers)]
     try:
         parallel.join(0, cfg.workers, store)
-        result = _run(cfg, 0, progress, candidates_dir)
+        return _run(cfg, 0, seqs, progress, candidates_dir)
+    except RuntimeError as err:  # the process group broke: was it a worker?
+        for proc in workers:
+            proc.join(timeout=10)
+        failed = [proc.exitcode for proc in workers if proc.exitcode]
+        if failed:
+            raise TrainingError(f'a training worker process failed (exit code {failed[0]}); '
+                                'its error is printed above') from err
+        raise
     finally:
         if dist.is_initialized():
             dist.destroy_process_group()
@@ -274,23 +283,28 @@ def train(cfg: TrainConfig, progress: bool = True,
             proc.join(timeout=10)
             if proc.is_alive():  # this process failed: nobody will talk to it any more
                 proc.terminate()
-    failed = [proc.exitcode for proc in workers if proc.exitcode]
-    if failed:
-        raise TrainingError(f'a training worker process failed (exit code {failed[0]})')
-    return result
 
 
 def _worker(cfg: TrainConfig, rank: int, port: int) -> None:
     """Entry point of the data-parallel processes other than the first."""
     parallel.join(rank, cfg.workers, port)
     try:
-        _run(cfg, rank, False, None)
+        _run(cfg, rank, load_sequences(cfg), False, None)
     finally:
         dist.destroy_process_group()
 
 
-def _run(cfg: TrainConfig, rank: int, progress: bool,
-         candidates_dir: Path | None) -> tuple[GyroNet, dict[str, Any]]:
+def load_sequences(cfg: TrainConfig) -> list[Sequence]:
+    """Load and check the training sequences (each needs a window and a tail to validate)."""
+    min_len = cfg.window + cfg.max_offset + 1 + 2 * loss_config(cfg).span
+    receptive_field = GyroNet(ModelConfig(calibration_only=cfg.calibration_only)).receptive_field
+    return [load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
+                          cfg.max_gt_gap_s, min_samples=max(min_len, receptive_field))
+            for name in cfg.sequences]
+
+
+def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
+         candidates_dir: Path | None) -> tuple[GyroNet, dict[str, Any]] | None:
     """Train as process ``rank`` of ``cfg.workers``; the first one returns the result."""
     world = cfg.workers
     torch.manual_seed(cfg.seed)  # the same initial weights in every process
@@ -303,10 +317,6 @@ def _run(cfg: TrainConfig, rank: int, progress: bool,
     model_cfg = ModelConfig(gyro_std=tuple(math.radians(d) for d in cfg.gyro_std_deg),
                             dropout=cfg.dropout, calibration_only=cfg.calibration_only)
     model = GyroNet(model_cfg)
-    min_len = cfg.window + cfg.max_offset + 1 + 2 * loss_config(cfg).span  # a tail to validate on
-    seqs = [load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
-                          cfg.max_gt_gap_s, min_samples=max(min_len, model.receptive_field))
-            for name in cfg.sequences]
     split = training_split(seqs, cfg)
     flat = split.imu.reshape(-1, 6)
     model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
