@@ -34,8 +34,8 @@ import os
 from typing import Any
 
 import torch
-import torch.distributed as dist
 from torch import nn
+import torch.distributed as dist
 import torch.nn.functional as F  # noqa: N812
 
 HOST = '127.0.0.1'

@@ -26,11 +26,10 @@ Usage: .venv/bin/python scripts/gt_check.py SEQUENCE_DIR_OR_BAG [...]
 
 import sys
 
+from denoise_imu_ros.dataset import load_sequence
 import numpy as np
 from scipy.linalg import polar
 from scipy.spatial.transform import Rotation
-
-from denoise_imu_ros.dataset import load_sequence
 
 BLOCK = 20      # samples per block (0.1 s at 200 Hz)
 STRETCH = 4000  # samples per bias stretch (20 s at 200 Hz)

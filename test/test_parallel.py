@@ -4,13 +4,12 @@
 
 from pathlib import Path
 
-import numpy as np
-
 from denoise_imu_ros import parallel
 from denoise_imu_ros.dataset import load_sequence
 from denoise_imu_ros.loss import increment_loss, LossConfig
 from denoise_imu_ros.model import GyroNet, ModelConfig
 from denoise_imu_ros.train import load_config, train
+import numpy as np
 import torch
 import torch.distributed as dist
 

@@ -4,14 +4,15 @@
 
 from pathlib import Path
 
-import numpy as np
-
 from denoise_imu_ros import train as train_module
 from denoise_imu_ros.cli import main
+from denoise_imu_ros.dataset import load_sequence
 from denoise_imu_ros.errors import TrainingError
 from denoise_imu_ros.modelfile import load_model
-from denoise_imu_ros.train import load_config, train
+from denoise_imu_ros.train import batch, load_config, train, training_split
+import numpy as np
 import pytest
+import torch
 import yaml
 
 CONFIG = Path(__file__).parents[1] / 'config' / 'train_euroc.yaml'
@@ -77,9 +78,6 @@ def test_config_typos_and_bad_windows_are_refused(tmp_path):
 
 @pytest.mark.parametrize('whole', [False, True])
 def test_windows_are_drawn_from_the_head_or_the_whole_of_each_sequence(euroc, whole):
-    import torch
-    from denoise_imu_ros.dataset import load_sequence
-    from denoise_imu_ros.train import batch, training_split
     cfg = _short(euroc, whole_sequences=whole)
     seqs = [load_sequence(euroc / name) for name in cfg.sequences]
     split = training_split(seqs, cfg)
