@@ -14,9 +14,9 @@
 """
 Data-parallel training on one CPU: processes that share a batch and one set of weights.
 
-One process with two threads runs a training step slower than two single-threaded
-processes that each take half of the sequences (small tensors scale badly over threads).
-This module keeps the split exact, so that it changes speed only:
+One process with two threads runs a EuRoC training step in 0.53 s, two single-threaded
+processes that each take half of the sequences in 0.45 s (bench/train_speed.py). This
+module keeps the split exact, so that it changes speed only:
   - BatchNorm statistics and their gradients are summed over processes (``SyncBatchNorm``),
     so every process normalises with the statistics of the whole batch;
   - the loss divides by the whole batch's block count (``increment_loss(reduce_count=...)``)
@@ -96,7 +96,8 @@ class _SyncBatchNormFn(torch.autograd.Function):
         mean, var = torch.batch_norm_update_stats(x, None, None, 0.0)  # var: biased
         n = x.shape[0] * x.shape[2]
         mean64 = mean.double()
-        # per-channel sums of x and x^2 in float64 (no cancellation), and the count
+        # per-channel sums of x and x^2, and the count, in float64: the cancellation in
+        # E[x^2] - mean^2 below then costs nothing at float32 precision
         local = torch.cat([n * mean64, n * (var.double() + mean64 ** 2),
                            torch.tensor([float(n)], dtype=torch.float64)])
         total = sum_over_processes(local)

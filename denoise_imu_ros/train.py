@@ -372,7 +372,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
     if rank > 0:
         return None
     # Candidates: the best-validation checkpoint, the last weights, the weight average.
-    candidates = {'best_checkpoint': best, 'final': dict(
+    candidates = {'best_checkpoint': best, 'final': dict(  # the loop validated the last step
         val, step=cfg.steps, state=copy.deepcopy(model.state_dict()))}
     if swa is not None:
         val = validate(swa.module, seqs, val_start, loss_cfg)
