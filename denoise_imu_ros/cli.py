@@ -31,7 +31,8 @@ def _train(args: argparse.Namespace) -> None:
     from .train import load_config, train
     cfg = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps,
                       calibration_only=True if args.calibration_only else None,
-                      whole_sequences=True if args.whole_sequences else None)
+                      whole_sequences=True if args.whole_sequences else None,
+                      workers=args.workers)
     model, meta = train(cfg, progress=not args.quiet, candidates_dir=args.candidates_dir)
     save_model(args.out, model, meta)
     val = meta['validation']
@@ -98,6 +99,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--steps', type=int, help='overrides the recipe step count')
     p.add_argument('--calibration-only', action='store_true',
                    help='train the 12-parameter "calibrated IMU" baseline')
+    p.add_argument('--workers', type=int,
+                   help='overrides the recipe: data-parallel processes (1 = one process)')
     p.add_argument('--whole-sequences', action='store_true',
                    help='draw training windows from the whole sequences, validation tails '
                         'included (validation figures become in-sample)')

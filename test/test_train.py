@@ -74,6 +74,10 @@ def test_config_typos_and_bad_windows_are_refused(tmp_path):
     (tmp_path / 'l.yaml').write_text('sequences: [a]\nsteps: 10\nswa_start: 20\n')
     with pytest.raises(TrainingError, match='swa_start 20 is after the last step 10'):
         load_config(tmp_path / 'l.yaml')
+    (tmp_path / 'p.yaml').write_text('sequences: [a, b]\nworkers: 0\n')
+    with pytest.raises(TrainingError, match='workers must be at least 1'):
+        load_config(tmp_path / 'p.yaml')
+    assert load_config(tmp_path / 'p.yaml', workers=8).workers == 2  # one per sequence
 
 
 @pytest.mark.parametrize('whole', [False, True])
