@@ -33,6 +33,7 @@ from rosbags.typesys import get_typestore, Stores
 
 from .dataset import check_recording, Recording
 from .errors import DatasetError
+from .online import stamp_ns
 
 IMU_TYPE = 'sensor_msgs/msg/Imu'
 POSE_TYPES = ('geometry_msgs/msg/PoseStamped', 'geometry_msgs/msg/TransformStamped',
@@ -42,10 +43,6 @@ IMU_TOPIC = '/imu0'
 POSE_TOPIC = '/groundtruth/pose'
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
-
-
-def _stamp_ns(header: Any) -> int:
-    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
 
 
 def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
@@ -98,11 +95,11 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
                 msg = reader.deserialize(raw, conn.msgtype)
                 if conn.msgtype == IMU_TYPE:
                     w, a = msg.angular_velocity, msg.linear_acceleration
-                    imu_t.append(_stamp_ns(msg.header))
+                    imu_t.append(stamp_ns(msg.header))
                     imu.append((w.x, w.y, w.z, a.x, a.y, a.z))
                 else:
                     p, q = _pose(msg, conn.msgtype)
-                    gt_t.append(_stamp_ns(msg.header))
+                    gt_t.append(stamp_ns(msg.header))
                     gt.append((q.x, q.y, q.z, q.w, p.x, p.y, p.z))
     except AnyReaderError as err:
         raise DatasetError(f'{path}: cannot read bag: {err}') from err

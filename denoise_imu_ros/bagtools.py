@@ -24,7 +24,6 @@ from __future__ import annotations
 
 from pathlib import Path
 import tempfile
-from typing import Any
 
 import numpy as np
 from rosbags.convert import convert, ConverterError
@@ -33,19 +32,13 @@ from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
 from .bags import IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
-from .modelfile import load_model, sample_rate
+from .modelfile import gyro_covariance, load_model, sample_rate
 from .online import DROP_CAUSES, OnlineDenoiser
 from .streaming import StreamingCorrector
 
 CORRECTED_TOPIC = '/imu/corrected'
 ATTITUDE_TOPIC = '/imu/attitude'
 ATTITUDE_TYPE = 'geometry_msgs/msg/QuaternionStamped'
-
-
-def gyro_covariance(meta: dict[str, Any], stddev: float = -1.0) -> np.ndarray:
-    """angular_velocity_covariance: diagonal from ``stddev`` or the model's residual std."""
-    std = meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3)
-    return np.diag(np.asarray(std if stddev < 0 else [stddev] * 3, float) ** 2).ravel()
 
 
 def _ros2_source(src: Path, workdir: Path) -> Path:
@@ -71,8 +64,11 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
         raise DatasetError(f'{src}: bag not found')
     loaded = load_model(model_spec)
     den = OnlineDenoiser(StreamingCorrector(loaded.model), sample_rate(loaded))
-    cov = gyro_covariance(loaded.meta)
+    cov = np.array(gyro_covariance(loaded))
+    no_orientation = np.zeros(9)
+    no_orientation[0] = -1.0  # REP-145: orientation not provided
     t = TYPESTORE.types
+    vec = t['geometry_msgs/msg/Vector3']
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with tempfile.TemporaryDirectory() as tmp:
         try:
@@ -89,15 +85,9 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                     if conn.id not in imu_ids:
                         continue
                     msg = rd.deserialize(raw, conn.msgtype)
-                    w, a = msg.angular_velocity, msg.linear_acceleration
-                    stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-                    res = den.process(stamp_ns, np.array([w.x, w.y, w.z]),
-                                      np.array([a.x, a.y, a.z]))
+                    res = den.process_imu(msg)
                     if isinstance(res, str):
                         continue
-                    no_orientation = np.zeros(9)
-                    no_orientation[0] = -1.0
-                    vec = t['geometry_msgs/msg/Vector3']
                     corrected = t[IMU_TYPE](
                         header=msg.header, orientation=msg.orientation,
                         orientation_covariance=no_orientation,

@@ -43,6 +43,7 @@ from scipy.spatial.transform import Rotation
 
 from .dataset import load_sequence
 from .metrics import integrate
+from .online import stamp_ns
 from .player import Player, read_imu_messages
 
 SAMPLE = Path(__file__).parent / 'sample' / 'euroc_V1_03_90s'
@@ -94,9 +95,9 @@ def main(argv: list[str] | None = None) -> int:
     seq = load_sequence(args.bag)
     messages = read_imu_messages(args.bag)
     if args.seconds is not None:
-        t0 = messages[0].header.stamp.sec + messages[0].header.stamp.nanosec * 1e-9
+        t0 = stamp_ns(messages[0].header)
         messages = [m for m in messages
-                    if m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 - t0 < args.seconds]
+                    if (stamp_ns(m.header) - t0) * 1e-9 < args.seconds]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
@@ -109,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     monitor = rclpy.create_node('attitude_monitor')
     monitor.create_subscription(
         QuaternionStamped, 'imu/attitude',
-        lambda m: received.append((m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec,
+        lambda m: received.append((stamp_ns(m.header),
                                    (m.quaternion.x, m.quaternion.y, m.quaternion.z,
                                     m.quaternion.w))),
         QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE))

@@ -57,6 +57,18 @@ def sample_rate(loaded: LoadedModel) -> float:
     return float(rate)
 
 
+def gyro_covariance(loaded: LoadedModel, stddev: float = -1.0) -> list[float]:
+    """
+    Row-major 3x3 angular_velocity_covariance for corrected gyro messages.
+
+    Diagonal, from ``stddev`` (rad/s) when >= 0, else from the per-axis residual std the
+    model measured on its validation data (zero if the file has none).
+    """
+    std = loaded.meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3)
+    std = [stddev] * 3 if stddev >= 0 else [float(v) for v in std]
+    return [std[i] ** 2 if i == j else 0.0 for i in range(3) for j in range(3)]
+
+
 def shipped_models() -> list[str]:
     """Names accepted by ``--model`` besides paths."""
     return sorted(p.stem for p in SHIPPED_DIR.glob('*.safetensors'))

@@ -39,8 +39,8 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
 from .errors import DenoiseError
-from .modelfile import load_model, sample_rate
-from .online import OnlineDenoiser
+from .modelfile import gyro_covariance, load_model, sample_rate
+from .online import OnlineDenoiser, stamp_ns
 from .streaming import StreamingCorrector
 
 
@@ -97,8 +97,7 @@ class GyroDenoiser(Node):
         loaded = load_model(p('model').value)  # raises DenoiseError: handled in main()
         self._model_rate = sample_rate(loaded)
         self._denoiser = OnlineDenoiser(StreamingCorrector(loaded.model), self._model_rate)
-        self._residual_std = np.asarray(
-            loaded.meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3))
+        self._loaded = loaded
         self._fixed_frame = p('fixed_frame').value
         self.add_post_set_parameters_callback(self._on_parameters)
 
@@ -130,10 +129,9 @@ class GyroDenoiser(Node):
     def _apply_parameters(self) -> None:
         p = self.get_parameter
         self._embed = p('embed_attitude').value
-        self._orientation_var = p('orientation_stddev').value ** 2
-        std = p('angular_velocity_stddev').value
-        stds = self._residual_std if std < 0 else np.full(3, std)
-        self._gyro_cov = np.diag(stds ** 2).ravel().tolist()
+        var = p('orientation_stddev').value ** 2
+        self._orientation_cov = [var, 0.0, 0.0, 0.0, var, 0.0, 0.0, 0.0, var]
+        self._gyro_cov = gyro_covariance(self._loaded, p('angular_velocity_stddev').value)
         self._denoiser.max_gap_factor = p('max_gap_factor').value
         self._denoiser.time_jump_s = p('time_jump_threshold').value
         self._rate_tolerance = p('rate_tolerance').value
@@ -147,10 +145,7 @@ class GyroDenoiser(Node):
             self._waiting_timer.cancel()
             self._waiting_timer = None
         t0 = time.perf_counter()
-        w, a = msg.angular_velocity, msg.linear_acceleration
-        stamp_ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        out = self._denoiser.process(stamp_ns, np.array([w.x, w.y, w.z]),
-                                     np.array([a.x, a.y, a.z]))
+        out = self._denoiser.process_imu(msg)
         if isinstance(out, str):
             self.get_logger().warning(f'dropped an IMU message: {out.replace("_", " ")}',
                                       throttle_duration_sec=5.0)
@@ -158,9 +153,9 @@ class GyroDenoiser(Node):
         if out.event in ('gap', 'time_jump'):
             self.get_logger().warning(
                 f'{"stamp gap" if out.event == "gap" else "backward time jump"} before '
-                f'{stamp_ns} ns: network history restarted'
+                f'{stamp_ns(msg.header)} ns: network history restarted'
                 + (', attitude re-initialised' if out.event == 'time_jump' else ''))
-        self._stamps.append(stamp_ns)
+        self._stamps.append(stamp_ns(msg.header))
 
         corrected = Imu(header=msg.header, linear_acceleration=msg.linear_acceleration,
                         linear_acceleration_covariance=msg.linear_acceleration_covariance,
@@ -174,9 +169,7 @@ class GyroDenoiser(Node):
         q.x, q.y, q.z, q.w = (float(v) for v in out.attitude)
         if self._embed:
             corrected.orientation = q
-            corrected.orientation_covariance = [self._orientation_var, 0.0, 0.0,
-                                                0.0, self._orientation_var, 0.0,
-                                                0.0, 0.0, self._orientation_var]
+            corrected.orientation_covariance = self._orientation_cov
         else:
             corrected.orientation_covariance[0] = -1.0
         self._pub_imu.publish(corrected)

@@ -30,12 +30,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple, TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .streaming import StreamingCorrector
+if TYPE_CHECKING:  # the engine is passed in: no torch import for bag tools
+    from .streaming import StreamingCorrector
 
 DROP_CAUSES = ('non_finite', 'zero_stamp', 'duplicate_stamp', 'out_of_order')
 
@@ -46,6 +47,11 @@ class Output(NamedTuple):
     gyro: np.ndarray        # (3,) corrected angular velocity, rad/s
     attitude: np.ndarray    # (4,) xyzw, IMU frame to the fixed frame
     event: str | None       # 'start', 'gap', 'time_jump' when state was reset, else None
+
+
+def stamp_ns(header: Any) -> int:
+    """Nanoseconds of a ROS header stamp (rclpy or rosbags message)."""
+    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
 
 
 def gravity_attitude(accel: np.ndarray) -> Rotation:
@@ -78,6 +84,12 @@ class OnlineDenoiser:
     def _drop(self, cause: str) -> str:
         self.counts[cause] += 1
         return cause
+
+    def process_imu(self, msg: Any) -> Output | str:
+        """Correct one sensor_msgs/Imu (rclpy or rosbags message); see :meth:`process`."""
+        w, a = msg.angular_velocity, msg.linear_acceleration
+        return self.process(stamp_ns(msg.header), np.array([w.x, w.y, w.z]),
+                            np.array([a.x, a.y, a.z]))
 
     def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray) -> Output | str:
         """Correct one sample; returns an :class:`Output` or the cause of a drop."""

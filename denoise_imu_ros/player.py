@@ -32,6 +32,7 @@ from sensor_msgs.msg import Imu
 
 from .bags import IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
+from .online import stamp_ns
 
 
 def _to_ros(src: Any) -> Imu:
@@ -92,10 +93,10 @@ class Player(Node):
         """Publish every message on schedule, yielding each one after it went out."""
         if not self._messages:
             return
-        stamp0 = _ns(self._messages[0])
+        stamp0 = stamp_ns(self._messages[0].header)
         wall0 = time.monotonic()
         for msg in self._messages:
-            due = wall0 + (_ns(msg) - stamp0) * 1e-9 / self._rate
+            due = wall0 + (stamp_ns(msg.header) - stamp0) * 1e-9 / self._rate
             delay = due - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
@@ -103,10 +104,6 @@ class Player(Node):
                 self._clock.publish(Clock(clock=msg.header.stamp))
             self._pub.publish(msg)
             yield msg
-
-
-def _ns(msg: Imu) -> int:
-    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
 
 
 def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool) -> int:
