@@ -35,6 +35,7 @@ os.environ.setdefault('FASTDDS_BUILTIN_TRANSPORTS', 'UDPv4')
 os.environ.setdefault('ROS_DOMAIN_ID', '57')
 
 from denoise_imu_ros.dataset import load_imu  # noqa: E402
+from denoise_imu_ros.online import stamp_ns  # noqa: E402
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
@@ -77,8 +78,7 @@ def run(kind, rates, seconds, imu, model='euroc'):
         depth=1000, reliability=ReliabilityPolicy.RELIABLE))
     bench.create_subscription(
         Imu, 'imu/corrected',
-        lambda m: got.setdefault(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec,
-                                 time.perf_counter()),
+        lambda m: got.setdefault(stamp_ns(m.header), time.perf_counter()),
         QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE))
     ex = SingleThreadedExecutor()
     ex.add_node(bench)
