@@ -19,7 +19,9 @@ difference per step, which leaves out loading and validation. Variants, side by 
 the same run so that ratios are meaningful on a shared machine:
   - one process with 2 threads;
   - 2 data-parallel worker processes with 1 thread each (the recipe's setting).
-Prints seconds per step and the projected time of the full recipe.
+Prints seconds per step and the projected time of the full recipe, and a floor: the
+recipe's convolution arithmetic (forward and backward) at the speed this machine
+multiplies large float32 matrices, one core per worker, nothing else counted.
 Run: .venv/bin/python bench/train_speed.py [--steps N]
 """
 
@@ -27,7 +29,9 @@ import argparse
 from pathlib import Path
 import time
 
+from denoise_imu_ros.model import GyroNet, ModelConfig
 from denoise_imu_ros.train import load_config, train
+import torch
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -46,6 +50,30 @@ def seconds_per_step(workers: int, steps: int) -> float:
     return (times[1] - times[0]) / steps
 
 
+def conv_macs_per_step(sequences: int, window: int) -> float:
+    """Multiply-adds of the convolutions in one step: forward, input and weight gradients."""
+    model = GyroNet(ModelConfig())
+    convs = [m for m in model.net if isinstance(m, torch.nn.Conv1d)]
+    length = window + model.receptive_field - 1  # the padded input of the first layer
+    total = 0.0
+    for i, conv in enumerate(convs):
+        length -= conv.dilation[0] * (conv.kernel_size[0] - 1)
+        forward = sequences * length * conv.in_channels * conv.out_channels * conv.kernel_size[0]
+        total += forward * (2 if i == 0 else 3)  # no input gradient for the first layer
+    return total
+
+
+def gemm_macs_per_second(size: int = 2048, repeats: int = 5) -> float:
+    """Float32 matrix-product speed of one thread (the best case for a convolution)."""
+    torch.set_num_threads(1)
+    a, b = torch.randn(size, size), torch.randn(size, size)
+    torch.mm(a, b)
+    t = time.perf_counter()
+    for _ in range(repeats):
+        torch.mm(a, b)
+    return size ** 3 * repeats / (time.perf_counter() - t)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument('--steps', type=int, default=40, help='steps timed per variant')
@@ -57,6 +85,11 @@ def main() -> None:
     print(f'{"variant":36s} {"s/step":>8s} {f"{full} steps":>11s} {"ratio":>6s}')
     for name, t in rows:
         print(f'{name:36s} {t:8.3f} {t * full / 60:7.1f} min {t / base:6.2f}')
+    cfg = load_config(ROOT / 'config' / 'train_euroc.yaml')
+    macs = conv_macs_per_step(len(cfg.sequences), cfg.window)
+    floor = macs / (cfg.workers * gemm_macs_per_second())
+    print(f'floor: {macs / 1e9:.1f} GMAC of convolutions per step at the float32 GEMM speed '
+          f'of {cfg.workers} cores: {floor:.3f} s/step, {floor * full / 60:.1f} min')
 
 
 if __name__ == '__main__':
