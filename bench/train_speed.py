@@ -78,18 +78,18 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument('--steps', type=int, default=40, help='steps timed per variant')
     args = parser.parse_args()
-    full = load_config(ROOT / 'config' / 'train_euroc.yaml').steps
+    recipe = load_config(ROOT / 'config' / 'train_euroc.yaml')
+    full = recipe.steps
     rows = [('1 process, 2 threads', seconds_per_step(1, args.steps)),
             ('2 worker processes, 1 thread each', seconds_per_step(2, args.steps))]
     base = rows[0][1]
     print(f'{"variant":36s} {"s/step":>8s} {f"{full} steps":>11s} {"ratio":>6s}')
     for name, t in rows:
         print(f'{name:36s} {t:8.3f} {t * full / 60:7.1f} min {t / base:6.2f}')
-    cfg = load_config(ROOT / 'config' / 'train_euroc.yaml')
-    macs = conv_macs_per_step(len(cfg.sequences), cfg.window)
-    floor = macs / (cfg.workers * gemm_macs_per_second())
+    macs = conv_macs_per_step(len(recipe.sequences), recipe.window)
+    floor = macs / (recipe.workers * gemm_macs_per_second())
     print(f'floor: {macs / 1e9:.1f} GMAC of convolutions per step at the float32 GEMM speed '
-          f'of {cfg.workers} cores: {floor:.3f} s/step, {floor * full / 60:.1f} min')
+          f'of {recipe.workers} cores: {floor:.3f} s/step, {floor * full / 60:.1f} min')
 
 
 if __name__ == '__main__':
