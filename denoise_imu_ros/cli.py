@@ -21,6 +21,7 @@ turns the package's exceptions into a one-line message and exit code 1.
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 import sys
 
 from .errors import DenoiseError
@@ -32,12 +33,24 @@ def _train(args: argparse.Namespace) -> None:
     cfg = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps,
                       calibration_only=True if args.calibration_only else None,
                       whole_sequences=True if args.whole_sequences else None,
-                      workers=args.workers)
+                      workers=args.workers, device=args.device)
     model, meta = train(cfg, progress=not args.quiet, candidates_dir=args.candidates_dir)
     save_model(args.out, model, meta)
     val = meta['validation']
     print(f'saved {args.out}: best validation step {val["step"]}, loss {val["loss"]:.4g}, '
           f'tail AOE {val["aoe_mean_deg"]:.3f} deg, {meta["train_seconds"]:.0f} s')
+
+
+def _crossval(args: argparse.Namespace) -> None:
+    from .crossval import crossval, markdown
+    from .modelfile import add_metadata
+    report = crossval(args.config, args.folds, args.out, progress=not args.quiet,
+                      seed=args.seed, data=args.data, steps=args.steps, workers=args.workers,
+                      device=args.device)
+    sys.stdout.write(markdown(report))
+    for path in args.attach or []:
+        add_metadata(path, crossval=report)
+        print(f'stored the cross-recording figures in {path}')
 
 
 def _eval(args: argparse.Namespace) -> None:
@@ -101,12 +114,28 @@ def build_parser() -> argparse.ArgumentParser:
                    help='train the 12-parameter "calibrated IMU" baseline')
     p.add_argument('--workers', type=int,
                    help='overrides the recipe: data-parallel processes (1 = one process)')
+    p.add_argument('--device', help='cpu or cuda[:N] (default: cuda when torch sees a GPU)')
     p.add_argument('--whole-sequences', action='store_true',
                    help='draw training windows from the whole sequences, validation tails '
                         'included (validation figures become in-sample)')
     p.add_argument('--candidates-dir', help='also write every candidate model here')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=_train)
+
+    p = sub.add_parser('crossval', help='train leave-recording-out folds of a recipe and '
+                       'score the held-out recordings: network vs calibrated IMU vs raw')
+    p.add_argument('--config', required=True, help='training recipe (its recordings are split)')
+    p.add_argument('--folds', type=int, help='number of folds (default: one per recording)')
+    p.add_argument('--out', type=Path, help='write the fold models and crossval.json here')
+    p.add_argument('--seed', type=int, help='overrides the recipe seed')
+    p.add_argument('--data', help='overrides the recipe data folder')
+    p.add_argument('--steps', type=int, help='overrides the recipe step count')
+    p.add_argument('--workers', type=int, help='overrides the recipe worker count')
+    p.add_argument('--device', help='cpu or cuda[:N] (default: cuda when torch sees a GPU)')
+    p.add_argument('--attach', nargs='+', metavar='MODEL',
+                   help='store the report in these model files (trained with this recipe)')
+    p.add_argument('--quiet', action='store_true', help='no progress bar')
+    p.set_defaults(func=_crossval)
 
     topics = argparse.ArgumentParser(add_help=False)
     topics.add_argument('--imu-topic', help='bags: IMU topic (default: the only one)')

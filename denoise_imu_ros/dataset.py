@@ -28,14 +28,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation, RotationSpline, Slerp
 
 from .errors import DatasetError
 
-# A ground-truth sample at an IMU instant is trusted only if the ground-truth samples
-# around it are at most this far apart (s). TUM-VI mocap runs at 120 Hz with holes of
-# up to 3 s; interpolating across a hole would invent ground truth.
-DEFAULT_MAX_GT_GAP_S = 0.02
+# Ground truth at an IMU instant is trusted only if the ground-truth samples around it
+# are at most this many of the ground truth's own (median) periods apart: 20.8 ms for
+# TUM-VI's 120 Hz mocap (holes of up to 3 s), 125 ms for V1_01's corrected 20 Hz poses,
+# 250 ms for a 10 Hz VIO trajectory. Interpolating across a hole would invent ground truth.
+GT_GAP_FACTOR = 2.5
 
 
 @dataclass(frozen=True)
@@ -185,16 +186,28 @@ def overlap(rec: Recording) -> Recording:
                     min(rec.imu_stamp_ns[-1], rec.gt_stamp_ns[-1]))
 
 
-def align(rec: Recording, max_gt_gap_s: float = DEFAULT_MAX_GT_GAP_S,
+def gt_gap_limit(gt_stamp_ns: np.ndarray, max_gt_gap_s: float | None = None) -> float:
+    """Spacing (s) above which two ground-truth samples bracket a hole, not a step."""
+    if max_gt_gap_s is not None:
+        return max_gt_gap_s
+    return GT_GAP_FACTOR * float(np.median(np.diff(gt_stamp_ns))) * 1e-9
+
+
+def align(rec: Recording, max_gt_gap_s: float | None = None,
           min_samples: int = 1) -> Sequence:
     """
     Crop to the IMU/ground-truth overlap and interpolate ground truth to IMU stamps.
 
-    Orientation is slerped, position linearly interpolated; IMU instants whose
-    bracketing ground-truth samples are more than ``max_gt_gap_s`` apart are marked
-    invalid (their interpolated values are kept, never trusted).
+    IMU instants whose bracketing ground-truth samples are further apart than
+    :func:`gt_gap_limit` (by default relative to the ground truth's own rate) are marked
+    invalid; their values are filled by slerp and never trusted. Between trusted samples
+    orientation follows a cubic rotation spline fitted to each hole-free stretch
+    (measured on EuRoC poses thinned to 10-30 Hz: 10-25 % smaller increment error than
+    slerp; identical at the ground-truth stamps), position is linear.
     """
     t_imu, t_gt = rec.imu_stamp_ns, rec.gt_stamp_ns
+    if len(t_gt) < 2:
+        raise DatasetError(f'{rec.source}: {len(t_gt)} ground-truth samples, need at least 2')
     start, end = max(t_imu[0], t_gt[0]), min(t_imu[-1], t_gt[-1])
     if start >= end:
         raise DatasetError(f'{rec.source}: IMU and ground truth do not overlap in time')
@@ -203,15 +216,29 @@ def align(rec: Recording, max_gt_gap_s: float = DEFAULT_MAX_GT_GAP_S,
         raise DatasetError(f'{rec.source}: {keep.sum()} IMU samples overlap the ground '
                            f'truth, need at least {max(min_samples, 2)}')
     t = t_imu[keep]
+    limit = gt_gap_limit(t_gt, max_gt_gap_s)
     # Relative float seconds: exact enough (ns resolution for 100 days), unlike raw ns.
     rel = (t - t_gt[0]) * 1e-9
     rel_gt = (t_gt - t_gt[0]) * 1e-9
-    quat = Slerp(rel_gt, Rotation.from_quat(rec.gt_quat))(rel).as_quat()
+    rot_gt = Rotation.from_quat(rec.gt_quat)
+    quat = Slerp(rel_gt, rot_gt)(rel).as_quat()
     pos = np.stack([np.interp(rel, rel_gt, rec.gt_pos[:, i]) for i in range(3)], axis=1)
     after = np.clip(np.searchsorted(t_gt, t, side='left'), 1, len(t_gt) - 1)
     gap = (t_gt[after] - t_gt[after - 1]) * 1e-9
     exact = t_gt[after - 1] == t  # sitting on a ground-truth sample needs no neighbour
-    valid = (gap <= max_gt_gap_s) | exact | (t_gt[after] == t)
+    valid = (gap <= limit) | exact | (t_gt[after] == t)
+    if not valid.any():
+        raise DatasetError(
+            f'{rec.source}: ground truth is never trusted at an IMU stamp (its samples are '
+            f'{np.median(np.diff(t_gt)) * 1e-6:.1f} ms apart, the hole limit is '
+            f'{limit * 1e3:.1f} ms)')
+    # One spline per hole-free stretch of ground truth, so that no hole bends it.
+    breaks = np.flatnonzero(np.diff(t_gt) * 1e-9 > limit) + 1
+    for lo, hi in zip(np.r_[0, breaks], np.r_[breaks, len(t_gt)]):
+        inside = valid & (rel >= rel_gt[lo]) & (rel <= rel_gt[hi - 1])
+        if hi - lo >= 3 and inside.any():
+            spline = RotationSpline(rel_gt[lo:hi], rot_gt[lo:hi])
+            quat[inside] = spline(rel[inside]).as_quat()
     return Sequence(name=rec.name, stamp_ns=t, imu=rec.imu[keep], gt_quat=quat,
                     gt_pos=pos, gt_valid=valid)
 
@@ -234,7 +261,7 @@ def load_imu(path: str | Path, imu_topic: str | None = None) -> Recording:
 
 def load_sequence(path: str | Path, imu_topic: str | None = None,
                   pose_topic: str | None = None,
-                  max_gt_gap_s: float = DEFAULT_MAX_GT_GAP_S,
+                  max_gt_gap_s: float | None = None,
                   min_samples: int = 1) -> Sequence:
     """Read an ASL folder or a bag and align it; topics are auto-detected when None."""
     if is_bag(path):

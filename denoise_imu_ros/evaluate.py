@@ -97,6 +97,12 @@ def _errors(seq: Sequence, gyro: np.ndarray) -> tuple[Rotation, AttitudeErrors]:
                                 seq.gt_valid)
 
 
+def score(seq: Sequence, gyro: np.ndarray) -> dict[str, float]:
+    """AOE 3-D and yaw (deg) of one method's gyro integrated over a whole sequence."""
+    err = _errors(seq, gyro)[1]
+    return {'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw}
+
+
 def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
              baseline: str | None = None, imu_topic: str | None = None,
              pose_topic: str | None = None, plots: bool = True,
@@ -148,8 +154,15 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
               'conventions': 'R_{k+1} = R_k Exp(w_k dt_k) from ground truth at the first '
                              'stamp; AOE = RMS error angle; yaw = rotation about world z of '
                              'R_est R_gt^T; ROE = median over start stamps; GT holes skipped'}
+    crossval = loaded.meta.get('crossval')
+    if isinstance(crossval, dict) and 'verdict' in crossval:
+        report['crossval'] = crossval
     (out_dir / 'results.json').write_text(json.dumps(report, indent=2))
     table = markdown_table(results, average)
+    if 'crossval' in report:
+        from .crossval import markdown
+        table += '\nThe recipe on recordings it never saw (stored in the model file):\n\n'
+        table += markdown(crossval)
     (out_dir / 'results.md').write_text(table)
     if plots:
         _plot_roe(out_dir / 'roe.png', roe_all)

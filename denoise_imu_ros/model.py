@@ -75,7 +75,8 @@ class Dropout(nn.Module):
         if not self.training or self.p == 0:
             return x
         n = x.numel()
-        words = torch.randint(-2**63, 2**63 - 1, ((n + 3) // 4,), dtype=torch.int64)
+        words = torch.randint(-2**63, 2**63 - 1, ((n + 3) // 4,), dtype=torch.int64,
+                              device=x.device)
         keep = (words.view(torch.int16)[:n] >= self.threshold).view(x.shape)
         # one float mask, 0 or 1 / (1 - p): a single multiply forward and backward
         return x * torch.where(keep, 1.0 / (1.0 - self.p), 0.0).to(x.dtype)

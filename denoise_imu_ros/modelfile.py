@@ -95,6 +95,22 @@ def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:
     save_file(tensors, str(path), metadata=header)
 
 
+def add_metadata(path: str | Path, **meta: Any) -> None:
+    """
+    Add or replace metadata entries of an existing model file (weights untouched).
+
+    Used to store figures measured after training (cross-recording validation). The file
+    is rewritten under a temporary name and renamed, so a failure leaves it intact.
+    """
+    loaded = load_model(path)
+    with safe_open(str(loaded.path), framework='pt') as f:
+        header = f.metadata() or {}
+    header.update({k: json.dumps(v) for k, v in meta.items()})
+    tmp = loaded.path.with_name(loaded.path.name + '.tmp')
+    save_file(load_file(str(loaded.path)), str(tmp), metadata=header)
+    tmp.replace(loaded.path)
+
+
 def resolve(spec: str | Path) -> Path:
     """Find a shipped model by name (``euroc``, ``tumvi``, ...) or a model file by path."""
     shipped = SHIPPED_DIR / f'{spec}.safetensors'

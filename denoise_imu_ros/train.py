@@ -41,7 +41,7 @@ from tqdm import tqdm
 import yaml
 
 from . import parallel
-from .dataset import DEFAULT_MAX_GT_GAP_S, load_sequence, Sequence
+from .dataset import load_sequence, Sequence
 from .errors import TrainingError
 from .loss import increment_loss, LossConfig
 from .metrics import attitude_errors, integrate
@@ -65,7 +65,8 @@ class TrainConfig:
     sequences: list[str] = field(default_factory=list)  # ASL folders or bags in `data`
     imu_topic: str | None = None       # bags only; None = the only Imu topic
     pose_topic: str | None = None      # bags only; None = the only pose topic
-    max_gt_gap_s: float = DEFAULT_MAX_GT_GAP_S  # ground-truth holes longer are masked
+    # ground-truth holes longer than this (s) are masked; None: 2.5 of its own periods
+    max_gt_gap_s: float | None = None
     gyro_std_deg: list[float] = field(default_factory=lambda: [1.0, 2.0, 5.0])  # sigma_g
     dropout: float = 0.1
     calibration_only: bool = False     # the 12-parameter "calibrated IMU" baseline
@@ -93,7 +94,8 @@ class TrainConfig:
     select: str = 'best_validation'    # kept: best_validation (of all candidates), final, swa
     seed: int = 0
     threads: int = 2                   # torch intra-op threads, shared by the workers
-    workers: int = 1                   # data-parallel processes (parallel.py)
+    workers: int = 1                   # data-parallel processes (parallel.py), CPU only
+    device: str | None = None          # cpu or cuda[:N]; None: cuda when available
 
 
 def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
@@ -121,6 +123,9 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
     if cfg.workers < 1:
         raise TrainingError(f'{path}: workers must be at least 1')
     cfg.workers = min(cfg.workers, len(cfg.sequences))  # each worker needs a sequence
+    cfg.device = resolve_device(cfg.device)
+    if cfg.device != 'cpu':
+        cfg.workers = 1  # one GPU process holds the whole batch
     if cfg.select not in ('best_validation', 'final', 'swa') or (
             cfg.select == 'swa' and cfg.swa_start <= 0):
         raise TrainingError(f'{path}: select must be best_validation, final or swa '
@@ -129,6 +134,21 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: swa_start {cfg.swa_start} is after the last step '
                             f'{cfg.steps}')
     return cfg
+
+
+def resolve_device(device: str | None) -> str:
+    """Check a ``--device`` value; None picks cuda when torch sees a GPU, else cpu."""
+    if device is None:
+        return 'cuda' if torch.cuda.is_available() else 'cpu'
+    try:
+        dev = torch.device(device)
+    except (RuntimeError, TypeError) as err:
+        raise TrainingError(f'device {device!r}: not a torch device (use cpu or cuda)') from err
+    if dev.type == 'cuda' and not torch.cuda.is_available():
+        raise TrainingError(f'device {device!r}: torch sees no CUDA GPU on this machine')
+    if dev.type not in ('cpu', 'cuda'):
+        raise TrainingError(f'device {device!r}: only cpu and cuda are supported')
+    return str(dev)
 
 
 def loss_config(cfg: TrainConfig) -> LossConfig:
@@ -205,8 +225,10 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
     model.eval()
     losses, aoes, residuals = [], {}, []
     tail_cfg = dataclasses.replace(loss_cfg, skip_blocks=0)
+    device = next(model.parameters()).device
     for s in seqs:
-        omega = model(torch.tensor(s.imu, dtype=torch.float32)[None])[0].double()
+        imu = torch.tensor(s.imu, dtype=torch.float32, device=device)
+        omega = model(imu[None])[0].double().cpu()
         n = (len(s) - 1 - start) // loss_cfg.span * loss_cfg.span
         sl = slice(start, start + n)
         losses.append(float(increment_loss(
@@ -295,12 +317,38 @@ def _worker(cfg: TrainConfig, rank: int, port: int) -> None:
 
 
 def load_sequences(cfg: TrainConfig) -> list[Sequence]:
-    """Load and check the training sequences (each needs a window and a tail to validate)."""
+    """
+    Load and check the training sequences: each needs a window and a tail to validate.
+
+    A sequence whose training window or validation tail holds no increment of the loss
+    with trusted ground truth at every sample would train (or validate) on nothing, with
+    a loss of exactly 0: that is an error naming it.
+    """
     min_len = cfg.window + cfg.max_offset + 1 + 2 * loss_config(cfg).span
     receptive_field = GyroNet(ModelConfig(calibration_only=cfg.calibration_only)).receptive_field
-    return [load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
-                          cfg.max_gt_gap_s, min_samples=max(min_len, receptive_field))
-            for name in cfg.sequences]
+    seqs = []
+    for name in cfg.sequences:
+        seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
+                            cfg.max_gt_gap_s, min_samples=max(min_len, receptive_field))
+        head = cfg.window + cfg.max_offset
+        for part, valid in (('training window', seq.gt_valid[:head + 1]),
+                            ('validation tail', seq.gt_valid[head:])):
+            if valid_increments(valid, cfg.increments[0]) == 0:
+                raise TrainingError(
+                    f'{Path(cfg.data) / name}: no {cfg.increments[0]}-sample increment with '
+                    f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
+                    'IMU stamps have trusted ground truth): nothing to supervise the loss')
+        seqs.append(seq)
+    return seqs
+
+
+def valid_increments(valid: np.ndarray, length: int) -> int:
+    """Count non-overlapping increments of ``length`` samples trusted at every stamp."""
+    m = (len(valid) - 1) // length
+    if m == 0:
+        return 0
+    ok = valid[:m * length].reshape(m, length).all(1) & valid[length:m * length + 1:length]
+    return int(ok.sum())
 
 
 def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
@@ -320,6 +368,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
     split = training_split(seqs, cfg)
     flat = split.imu.reshape(-1, 6)
     model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
+    model.to(cfg.device)
     rate = float(np.mean([s.rate_hz for s in seqs]))
     if world > 1:
         parallel.sync_batch_norm(model)
@@ -340,7 +389,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
     bar = tqdm(range(0, cfg.steps + 1), disable=not progress, desc='train', unit='step')
     for step in bar:
         if step > 0:
-            u, dt, quat, valid = batch(split, cfg, gen)
+            u, dt, quat, valid = (x.to(cfg.device) for x in batch(split, cfg, gen))
             loss = increment_loss(model(u), dt, quat, valid, loss_cfg,
                                   parallel.sum_over_processes)
             optimizer.zero_grad(set_to_none=True)
@@ -368,7 +417,8 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
 
     if swa is not None:
         # BatchNorm statistics of the averaged weights: recomputed on training windows.
-        torch.optim.swa_utils.update_bn([batch(split, cfg, gen)[0] for _ in range(8)], swa)
+        torch.optim.swa_utils.update_bn(
+            [batch(split, cfg, gen)[0].to(cfg.device) for _ in range(8)], swa)
     if rank > 0:
         return None
     # Candidates: the best-validation checkpoint, the last weights, the weight average.
@@ -383,7 +433,8 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
         chosen = min(candidates, key=lambda name: candidates[name]['loss'])
     else:
         chosen = cfg.select
-    states = {name: c.pop('state') for name, c in candidates.items()}
+    states = {name: {k: v.cpu() for k, v in c.pop('state').items()}
+              for name, c in candidates.items()}
     model = GyroNet(model_cfg)  # plain BatchNorm again, whatever trained it
     model.load_state_dict(states[chosen])
     model.eval()

@@ -14,15 +14,15 @@ T0 = 1_403_636_579_758_555_648  # a real EuRoC stamp: too big for a float64 pars
 
 
 def write_asl(root: Path, n_imu=1000, imu_rate=200.0, gt_rate=200.0, gt_offset_s=0.0,
-              gt_dir='state_groundtruth_estimate0', yaw_rate=0.3, gt_hole=None):
-    """Write a synthetic ASL folder: constant yaw rate, ground truth in w,x,y,z order."""
+              gt_dir='state_groundtruth_estimate0', yaw_rate=0.3, gt_hole=None, gyro_bias=0.0):
+    """Write a synthetic ASL folder: constant yaw rate (+ z bias), ground truth w,x,y,z."""
     (root / 'mav0' / 'imu0').mkdir(parents=True)
     (root / 'mav0' / gt_dir).mkdir(parents=True)
     t_imu = T0 + np.round(np.arange(n_imu) / imu_rate * 1e9).astype(np.int64)
     with open(root / 'mav0' / 'imu0' / 'data.csv', 'w') as f:
         f.write('#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n')
         for t in t_imu:
-            f.write(f'{t},0.0,0.0,{yaw_rate},0.0,0.0,9.81\n')
+            f.write(f'{t},0.0,0.0,{yaw_rate + gyro_bias},0.0,0.0,9.81\n')
     duration = n_imu / imu_rate
     t_gt = T0 + np.round((gt_offset_s + np.arange(int(duration * gt_rate)) / gt_rate)
                          * 1e9).astype(np.int64)
@@ -72,6 +72,51 @@ def test_ground_truth_hole_is_masked_and_only_the_hole(tmp_path):
     inside = (rel > 3.0) & (rel < 4.5)
     assert not seq.gt_valid[inside].any()
     assert seq.gt_valid[(rel < 2.99) | (rel > 4.51)].all()
+
+
+@pytest.mark.parametrize('gt_rate', [20.0, 10.0])
+def test_low_rate_ground_truth_on_its_own_clock_is_trusted_between_its_samples(
+        tmp_path, gt_rate):
+    # VIO poses at 10-20 Hz, 3.7 ms off the IMU clock: holes are judged by their own spacing
+    seq = load_sequence(write_asl(tmp_path / 's', n_imu=2000, gt_rate=gt_rate,
+                                  gt_offset_s=0.0037, gt_hole=(4.0, 6.0)))
+    rel = (seq.stamp_ns - T0) * 1e-9
+    assert seq.gt_valid[rel < 3.9].all() and seq.gt_valid[rel > 6.1].all()
+    assert not seq.gt_valid[(rel > 4.2) & (rel < 5.8)].any()
+    yaw = 0.3 * rel
+    ok = seq.gt_valid
+    np.testing.assert_allclose(seq.gt_quat[ok, 2], np.sin(yaw[ok] / 2), atol=1e-9)
+
+
+def test_ten_hz_poses_give_the_aoe_of_the_200_hz_ground_truth(euroc):
+    import dataclasses
+    from denoise_imu_ros.dataset import align, read_asl
+    from denoise_imu_ros.evaluate import score
+    from scipy.spatial.transform import Rotation, RotationSpline
+    rec = read_asl(euroc / 'V1_03_difficult')
+    gyro = rec.imu[:, :3] - np.radians([-0.13, 1.21, 4.39])  # a fixed ADIS16448 bias
+    full = align(rec)
+    reference = score(full, gyro[np.searchsorted(rec.imu_stamp_ns, full.stamp_ns)])
+    # 10 Hz poses on a clock 3.7 ms off the IMU's (sampled from the 200 Hz ground truth)
+    rel = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
+    t = rec.gt_stamp_ns[5::20][:-1] + 3_700_000
+    spline = RotationSpline(rel, Rotation.from_quat(rec.gt_quat))
+    t_rel = (t - rec.gt_stamp_ns[0]) * 1e-9
+    pos = np.stack([np.interp(t_rel, rel, rec.gt_pos[:, i]) for i in range(3)], axis=1)
+    slow = align(dataclasses.replace(rec, gt_stamp_ns=t, gt_quat=spline(t_rel).as_quat(),
+                                     gt_pos=pos))
+    assert slow.gt_valid.all()
+    result = score(slow, gyro[np.searchsorted(rec.imu_stamp_ns, slow.stamp_ns)])
+    assert 1.0 < reference['aoe_deg'] < 10.0
+    assert result['aoe_deg'] == pytest.approx(reference['aoe_deg'], rel=0.1)
+    assert result['aoe_yaw_deg'] == pytest.approx(reference['aoe_yaw_deg'], rel=0.1)
+
+
+def test_ground_truth_never_trusted_is_an_error(tmp_path):
+    from denoise_imu_ros.dataset import align, read_asl
+    rec = read_asl(write_asl(tmp_path / 's', gt_rate=20.0, gt_offset_s=0.0037))
+    with pytest.raises(DatasetError, match='ground truth is never trusted'):
+        align(rec, max_gt_gap_s=0.01)
 
 
 def _break(path: Path, line: int, text: str):

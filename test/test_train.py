@@ -20,9 +20,9 @@ CONFIG = Path(__file__).parents[1] / 'config' / 'train_euroc.yaml'
 
 def _short(euroc, **changes):
     """Return the EuRoC recipe on two sequences with 10 s windows and a few steps."""
-    changes = {'swa_start': 12, **changes}
-    return load_config(CONFIG, data=str(euroc), sequences=['MH_01_easy', 'V1_02_medium'],
-                       window=2048, steps=24, val_every=12, restart_period=24, **changes)
+    changes = {'swa_start': 12, 'sequences': ['MH_01_easy', 'V1_02_medium'], 'steps': 24,
+               'val_every': 12, **changes}
+    return load_config(CONFIG, data=str(euroc), window=2048, restart_period=24, **changes)
 
 
 def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
@@ -39,6 +39,24 @@ def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
     assert meta['train_sequences'] == ['MH_01_easy', 'V1_02_medium']
     assert 199 < meta['sample_rate_hz'] < 201
     assert len(meta['validation']['gyro_residual_std']) == 3
+
+
+def test_twenty_hz_ground_truth_trains_with_a_finite_falling_loss(euroc, tmp_path):
+    # V1_01's corrected ground truth (OpenVINS) is a 20 Hz trajectory
+    cfg = _short(euroc, sequences=['V1_01_easy'], val_every=6, swa_start=0,
+                 select='final')
+    _, meta = train(cfg, progress=False)
+    losses = [h['train_loss'] for h in meta['history'][1:]]
+    assert all(np.isfinite(v) and v > 0 for v in losses)
+    assert losses[-1] < 0.5 * losses[0]
+    assert meta['history'][-1]['val_loss'] < 0.5 * meta['history'][0]['val_loss']
+
+
+def test_a_recording_that_cannot_supervise_the_loss_is_named(euroc, tmp_path):
+    cfg = _short(euroc, sequences=['MH_01_easy', 'V1_01_easy'], max_gt_gap_s=0.02)
+    with pytest.raises(TrainingError, match='V1_01_easy: no 16-sample increment with trusted '
+                                            'ground truth in its training window'):
+        train(cfg, progress=False)
 
 
 def test_non_finite_loss_stops_with_a_clear_message(euroc, monkeypatch):
@@ -78,6 +96,14 @@ def test_config_typos_and_bad_windows_are_refused(tmp_path):
     with pytest.raises(TrainingError, match='workers must be at least 1'):
         load_config(tmp_path / 'p.yaml')
     assert load_config(tmp_path / 'p.yaml', workers=8).workers == 2  # one per sequence
+    (tmp_path / 'd.yaml').write_text('sequences: [a, b]\n')
+    assert load_config(tmp_path / 'd.yaml', device='cpu').device == 'cpu'
+    with pytest.raises(TrainingError, match="device 'tpu': not a torch device"):
+        load_config(tmp_path / 'd.yaml', device='tpu')
+    if not torch.cuda.is_available():
+        with pytest.raises(TrainingError, match='torch sees no CUDA GPU'):
+            load_config(tmp_path / 'd.yaml', device='cuda')
+        assert load_config(tmp_path / 'd.yaml').device == 'cpu'  # the default without a GPU
 
 
 @pytest.mark.parametrize('whole', [False, True])

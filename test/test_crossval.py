@@ -1,0 +1,70 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""Cross-recording validation: folds by recording, scores of unseen ones, the verdict."""
+
+import json
+
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.crossval import folds, summarize
+from denoise_imu_ros.errors import TrainingError
+from denoise_imu_ros.modelfile import load_model
+import pytest
+from test_dataset import write_asl
+import yaml
+
+
+def _figures(net, calib, raw):
+    return {m: {'aoe_deg': v, 'aoe_yaw_deg': v / 2}
+            for m, v in (('network', net), ('calibrated', calib), ('raw', raw))}
+
+
+def test_folds_hold_every_recording_out_exactly_once():
+    names = ['a', 'b', 'c', 'd', 'e']
+    assert folds(names) == [['a'], ['b'], ['c'], ['d'], ['e']]
+    assert sorted(sum(folds(names, 2), [])) == names and len(folds(names, 2)) == 2
+    with pytest.raises(TrainingError, match='folds must be between 2 and 5'):
+        folds(names, 1)
+
+
+def test_verdict_follows_the_figures():
+    wins = summarize({'a': _figures(1.0, 2.0, 9.0), 'b': _figures(1.5, 2.0, 9.0),
+                      'c': _figures(3.0, 2.0, 9.0)})
+    assert wins['mean']['network']['aoe_deg'] == pytest.approx(5.5 / 3)
+    assert wins['verdict'] == ('the network beats the calibrated IMU on 2 of 3 unseen '
+                               'recordings, by 8 % in mean AOE: deploy the network')
+    loses = summarize({'a': _figures(1.0, 2.0, 9.0), 'b': _figures(4.0, 2.0, 9.0)})
+    assert loses['verdict'].endswith('(1 of 2, -25 % in mean AOE): deploy the calibration')
+    # an IMU calibrated already: plain integration is the bar, not a refitted calibration
+    plain = summarize({'a': _figures(1.2, 3.0, 1.0), 'b': _figures(1.1, 3.0, 1.0)})
+    assert plain['verdict'].startswith('the network does not beat plain integration')
+    assert plain['verdict'].endswith('deploy no correction')
+
+
+def test_crossval_command_trains_folds_scores_and_stores_the_report(
+        tmp_path, model_file, capsys):
+    data = tmp_path / 'data'
+    for i, bias in enumerate((0.010, 0.012, 0.011)):  # one z gyro bias per "day"
+        write_asl(data / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=bias)
+    recipe = {'dataset': 'synthetic', 'data': str(data), 'sequences': ['rec0', 'rec1', 'rec2'],
+              'window': 1024, 'steps': 30, 'val_every': 10, 'swa_start': 20, 'select': 'swa',
+              'restart_period': 30, 'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1}
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
+    out = tmp_path / 'cv'
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+                 '--quiet', '--attach', str(model_file)]) == 0
+    report = json.loads((out / 'crossval.json').read_text())
+    assert list(report['recordings']) == ['rec0', 'rec1', 'rec2']
+    assert report['folds'] == [['rec0'], ['rec1'], ['rec2']]
+    for name, figures in report['recordings'].items():
+        # the bias is a constant of every day: the fitted calibration removes most of it
+        assert figures['calibrated']['aoe_deg'] < 0.5 * figures['raw']['aoe_deg']
+    for i in range(3):
+        trained_on = load_model(out / f'fold{i}' / 'network.safetensors').meta['train_sequences']
+        assert f'rec{i}' not in trained_on and len(trained_on) == 2
+    printed = capsys.readouterr().out
+    assert report['verdict'] in printed and 'rec2' in printed
+    assert load_model(model_file).meta['crossval'] == report
+    assert main(['eval', '--model', str(model_file), '--data', str(data), '--sequences',
+                 'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0
+    assert json.loads((tmp_path / 'ev' / 'results.json').read_text())['crossval'] == report
+    assert report['verdict'] in (tmp_path / 'ev' / 'results.md').read_text()
