@@ -53,6 +53,17 @@ def _crossval(args: argparse.Namespace) -> None:
         print(f'stored the cross-recording figures in {path}')
 
 
+def _check_data(args: argparse.Namespace) -> None:
+    import json
+    from .dataset import align, load_recording
+    from .quality import check_sequence, markdown
+    rec = load_recording(args.input, args.imu_topic, args.pose_topic)
+    report = check_sequence(align(rec), rec.gt_stamp_ns)
+    sys.stdout.write(markdown(report))
+    if args.json:
+        print(json.dumps(report))
+
+
 def _eval(args: argparse.Namespace) -> None:
     from .evaluate import evaluate
     evaluate(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
@@ -154,6 +165,12 @@ def build_parser() -> argparse.ArgumentParser:
                         'training recipe); the network still sees the samples before')
     p.add_argument('--no-plots', action='store_true')
     p.set_defaults(func=_eval)
+
+    p = sub.add_parser('check-data', parents=[topics],
+                       help='data quality of one recording: rates, pose holes, label noise')
+    p.add_argument('input', help='ASL sequence folder or bag with IMU and poses')
+    p.add_argument('--json', action='store_true', help='also print one JSON line at the end')
+    p.set_defaults(func=_check_data)
 
     p = sub.add_parser('correct', parents=[topics],
                        help='write the corrected gyro of every IMU sample as CSV')

@@ -259,16 +259,21 @@ def load_imu(path: str | Path, imu_topic: str | None = None) -> Recording:
     return read_asl(path, with_gt=False)
 
 
+def load_recording(path: str | Path, imu_topic: str | None = None,
+                   pose_topic: str | None = None) -> Recording:
+    """Read an ASL folder or a bag (IMU and poses); topics are auto-detected when None."""
+    if is_bag(path):
+        from .bags import read_bag  # bags builds on this module's records
+        return read_bag(path, imu_topic=imu_topic, pose_topic=pose_topic)
+    if not Path(path).exists():
+        raise DatasetError(f'{path}: no such sequence folder or bag')
+    return read_asl(path)
+
+
 def load_sequence(path: str | Path, imu_topic: str | None = None,
                   pose_topic: str | None = None,
                   max_gt_gap_s: float | None = None,
                   min_samples: int = 1) -> Sequence:
     """Read an ASL folder or a bag and align it; topics are auto-detected when None."""
-    if is_bag(path):
-        from .bags import read_bag  # bags builds on this module's records
-        rec = read_bag(path, imu_topic=imu_topic, pose_topic=pose_topic)
-    elif Path(path).exists():
-        rec = read_asl(path)
-    else:
-        raise DatasetError(f'{path}: no such sequence folder or bag')
-    return align(rec, max_gt_gap_s=max_gt_gap_s, min_samples=min_samples)
+    return align(load_recording(path, imu_topic, pose_topic), max_gt_gap_s=max_gt_gap_s,
+                 min_samples=min_samples)
