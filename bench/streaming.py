@@ -17,8 +17,11 @@ Streaming engine vs recomputing the window, side by side, on a real EuRoC test s
 Prints, for the same model and samples: the median and p99 per-sample cost of the
 numpy streaming engine, of the batch torch network recomputing the last 511 samples for
 every new sample, their ratio, and the largest difference between the streaming output
-over the whole sequence and the batch output.
+over the whole sequence and the batch output. With --members K, the same for an
+ensemble of K networks (the model's weights K times over: the cost does not depend on
+the weights), timed in the same run, and the ensemble/single cost ratio.
 Run: .venv/bin/python bench/streaming.py [--model euroc] [--sequence V1_01_easy]
+     [--members 5]
 """
 
 import argparse
@@ -27,6 +30,7 @@ import time
 
 from denoise_imu_ros.dataset import load_imu
 from denoise_imu_ros.evaluate import correct_gyro
+from denoise_imu_ros.model import merge
 from denoise_imu_ros.modelfile import load_model
 from denoise_imu_ros.streaming import StreamingCorrector
 import numpy as np
@@ -41,19 +45,14 @@ def main():
     parser.add_argument('--sequence', default='V1_01_easy')
     parser.add_argument('--window-samples', type=int, default=2000,
                         help='samples timed for the window recompute (it is slow)')
+    parser.add_argument('--members', type=int, default=1,
+                        help='also time an ensemble of this many networks')
     args = parser.parse_args()
     torch.set_num_threads(1)
     torch.set_flush_denormal(True)  # as the denoise-imu command does
     model = load_model(args.model).model
     imu = load_imu(DATA / args.sequence).imu
-    stream = StreamingCorrector(model)
-
-    costs = np.empty(len(imu))
-    out = np.empty((len(imu), 3))
-    for n, row in enumerate(imu):
-        t = time.perf_counter()
-        out[n] = stream.step(row)
-        costs[n] = time.perf_counter() - t
+    costs, out = stream(model, imu)
     batch = correct_gyro(model, imu)
 
     rf = model.receptive_field
@@ -73,6 +72,26 @@ def main():
           f'p99 {np.percentile(window_costs, 99) * 1e6:7.1f} us per sample (torch, 1 thread)')
     print(f'speed-up (median): {np.median(window_costs) / np.median(costs):.1f}x')
     print(f'max |streaming - batch| over the sequence: {np.abs(out - batch).max():.2e} rad/s')
+    if args.members > 1:
+        ensemble = merge([model] * args.members)
+        ens_costs, ens_out = stream(ensemble, imu)
+        print(f'ensemble of {args.members}   : median {np.median(ens_costs) * 1e6:7.1f} us  '
+              f'p99 {np.percentile(ens_costs, 99) * 1e6:7.1f} us per sample, '
+              f'{np.median(ens_costs) / np.median(costs):.2f}x the single network; '
+              f'max |streaming - batch| '
+              f'{np.abs(ens_out - correct_gyro(ensemble, imu)).max():.2e} rad/s')
+
+
+def stream(model, imu):
+    """Per-sample cost (s) and output of the streaming engine over ``imu``."""
+    engine = StreamingCorrector(model)
+    costs = np.empty(len(imu))
+    out = np.empty((len(imu), 3))
+    for n, row in enumerate(imu):
+        t = time.perf_counter()
+        out[n] = engine.step(row)
+        costs[n] = time.perf_counter() - t
+    return costs, out
 
 
 if __name__ == '__main__':

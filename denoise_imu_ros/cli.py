@@ -53,6 +53,12 @@ def _crossval(args: argparse.Namespace) -> None:
         print(f'stored the cross-recording figures in {path}')
 
 
+def _ensemble(args: argparse.Namespace) -> None:
+    from .modelfile import save_ensemble
+    loaded = save_ensemble(args.out, args.models)
+    print(f'wrote {args.out}: the mean of {loaded.model.config.members} networks')
+
+
 def _check_data(args: argparse.Namespace) -> None:
     import json
     from .dataset import align, load_recording
@@ -147,6 +153,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help='store the report in these model files (trained with this recipe)')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=_crossval)
+
+    p = sub.add_parser('ensemble', help='one model file averaging the outputs of trained '
+                       'models of one recipe (run in one pass online and offline)')
+    p.add_argument('models', nargs='+', help='model files (shipped names or paths)')
+    p.add_argument('--out', required=True, help='model file to write')
+    p.set_defaults(func=_ensemble)
 
     topics = argparse.ArgumentParser(add_help=False)
     topics.add_argument('--imu-topic', help='bags: IMU topic (default: the only one)')

@@ -18,10 +18,16 @@ The gyro-correcting network of Brossard et al. (RA-L 2020), shared by every path
 
 f is a causal dilated 1-D CNN over the normalised IMU signal u = [gyro, accel]; the
 output at sample n depends on samples n - 510 ... n only (receptive field 511).
+
+An ensemble of K such networks trained alike (same data, so the same input
+normalisation) is one network of K groups (grouped convolutions, K times wider), whose
+f is the mean of the members' and whose Delta is the mean of theirs: exactly the mean
+of the members' outputs, in one pass (:func:`merge`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 import math
 
@@ -47,11 +53,15 @@ class ModelConfig:
     gyro_std: tuple[float, float, float] = tuple(math.radians(d) for d in (1.0, 2.0, 5.0))
     # The paper's "calibrated IMU" baseline: no network, only I + Delta and a bias (12).
     calibration_only: bool = False
+    members: int = 1                             # ensemble size (networks averaged)
 
     def __post_init__(self) -> None:
         """Reject inconsistent layer lists early (config files are user input)."""
         if not len(self.channels) == len(self.kernels) == len(self.dilations):
             raise ValueError('channels, kernels and dilations must have the same length')
+        if not isinstance(self.members, int) or self.members < 1 or (
+                self.calibration_only and self.members > 1):
+            raise ValueError('members must be a positive integer (1 for calibration_only)')
         if len(self.gyro_std) != 3 or min(self.gyro_std) <= 0:
             raise ValueError('gyro_std must be three positive values (rad/s)')
 
@@ -98,14 +108,15 @@ class GyroNet(nn.Module):
             self.bias = nn.Parameter(torch.zeros(3))  # in units of gyro_std
             return
         layers: list[nn.Module] = []
-        c_in = config.in_channels
+        m = config.members  # the first layer reads the shared input; later ones per member
+        c_in, groups = config.in_channels, 1
         for c_out, k, d in zip(config.channels, config.kernels, config.dilations):
-            layers += [nn.Conv1d(c_in, c_out, k, dilation=d),
-                       nn.BatchNorm1d(c_out, eps=BN_EPS, momentum=config.bn_momentum),
+            layers += [nn.Conv1d(c_in * groups, c_out * m, k, dilation=d, groups=groups),
+                       nn.BatchNorm1d(c_out * m, eps=BN_EPS, momentum=config.bn_momentum),
                        nn.GELU(),
                        Dropout(config.dropout)]
-            c_in = c_out
-        layers.append(nn.Conv1d(c_in, 3, 1))
+            c_in, groups = c_out, m
+        layers.append(nn.Conv1d(c_in * m, 3 * m, 1, groups=m))
         self.net = nn.Sequential(*layers)
 
     @property
@@ -131,7 +142,10 @@ class GyroNet(nn.Module):
             return self.bias.expand(u.shape[0], u.shape[1], 3)
         x = ((u - self.input_mean) / self.input_std).transpose(1, 2)  # (B, 6, T)
         x = F.pad(x, (self.receptive_field - 1, 0), mode='replicate')  # (B, 6, T + 510)
-        return self.net(x).transpose(1, 2)  # (B, T, 3)
+        out = self.net(x)                                               # (B, 3 K, T)
+        if self.config.members > 1:
+            out = out.unflatten(1, (self.config.members, 3)).mean(1)
+        return out.transpose(1, 2)  # (B, T, 3)
 
     def forward(self, u: torch.Tensor) -> torch.Tensor:
         """Corrected angular velocity (B, T, 3) in rad/s from raw IMU samples (B, T, 6)."""
@@ -141,3 +155,34 @@ class GyroNet(nn.Module):
     def num_trainable(self) -> int:
         """Trainable parameters (the paper's count: 77,052)."""
         return sum(p.numel() for p in self.parameters() if p.requires_grad)
+
+
+def merge(members: list[GyroNet]) -> GyroNet:
+    """
+    One eval-mode network whose output is the mean of ``members``' outputs, exactly.
+
+    The members must share architecture, input normalisation and gyro_std (trainings of
+    one recipe differing only in their seed).
+    """
+    first = members[0]
+    base = dataclasses.replace(first.config, members=1)
+    for other in members[1:]:
+        if dataclasses.replace(other.config, members=1) != base:
+            raise ValueError('ensemble members differ in architecture')
+        for name in ('input_mean', 'input_std', 'gyro_std'):
+            if not torch.equal(getattr(other, name), getattr(first, name)):
+                raise ValueError(f'ensemble members differ in {name} (trained on other data?)')
+    if any(m.config.members != 1 or m.config.calibration_only for m in members):
+        raise ValueError('ensemble members must be single trained networks')
+    merged = GyroNet(dataclasses.replace(base, members=len(members)))
+    states = [m.state_dict() for m in members]
+    state = {}
+    for key, value in states[0].items():
+        if key.startswith('net.') and not key.endswith('num_batches_tracked'):
+            state[key] = torch.cat([s[key] for s in states])
+        elif key == 'delta':
+            state[key] = torch.stack([s[key] for s in states]).mean(0)
+        else:
+            state[key] = value
+    merged.load_state_dict(state)
+    return merged.eval()

@@ -26,15 +26,17 @@ from dataclasses import asdict
 import json
 from pathlib import Path
 import subprocess
+import time
 from typing import Any, NamedTuple
 
+import numpy as np
 from safetensors import safe_open, SafetensorError
 from safetensors.torch import load_file, save_file
 import torch
 
 from . import __version__
 from .errors import ModelFileError
-from .model import GyroNet, ModelConfig
+from .model import GyroNet, merge, ModelConfig
 
 FORMAT = 'denoise_imu_ros.gyro_model'
 FORMAT_VERSION = 1
@@ -109,6 +111,42 @@ def add_metadata(path: str | Path, **meta: Any) -> None:
     tmp = loaded.path.with_name(loaded.path.name + '.tmp')
     save_file(load_file(str(loaded.path)), str(tmp), metadata=header)
     tmp.replace(loaded.path)
+
+
+def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
+    """
+    Write one model file averaging the outputs of trained model files (see model.merge).
+
+    The metadata keeps each member's seed and validation figures; the residual std the
+    node publishes as covariance is the members' mean (the ensemble's own is lower).
+    """
+    members = [load_model(spec) for spec in specs]
+    if len(members) < 2:
+        raise ModelFileError('an ensemble needs at least two model files')
+    rates = [m.meta.get('sample_rate_hz') for m in members]
+    rate = sample_rate(members[0])
+    if any(not isinstance(r, (int, float)) or abs(r / rate - 1) > 1e-3 for r in rates):
+        raise ModelFileError(f'ensemble members were trained at different rates: {rates}')
+    try:
+        model = merge([m.model for m in members])
+    except ValueError as err:
+        raise ModelFileError(f'cannot average {", ".join(map(str, specs))}: {err}') from err
+    first = members[0].meta
+    residual = np.mean([m.meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3)
+                        for m in members], axis=0)
+    meta = {
+        'dataset': first.get('dataset'), 'sample_rate_hz': rate,
+        'train_sequences': first.get('train_sequences'),
+        'train_config': first.get('train_config'),
+        'validation': {'gyro_residual_std': residual.tolist()},
+        'members': [{'file': str(m.path), 'seed': m.meta.get('train_config', {}).get('seed'),
+                     'validation': m.meta.get('validation'),
+                     'code_version': m.meta.get('code_version')} for m in members],
+        'code_version': code_version(),
+        'created': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
+    }
+    save_model(path, model, meta)
+    return load_model(path)
 
 
 def resolve(spec: str | Path) -> Path:

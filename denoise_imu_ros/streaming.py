@@ -33,12 +33,22 @@ from .model import BN_EPS, GyroNet
 
 
 class _Layer(NamedTuple):
-    weight: np.ndarray   # (c_out, k * c_in), taps ordered oldest first
+    weight: np.ndarray   # (groups, c_out / groups, k * c_in / groups), taps oldest first
     summed: np.ndarray   # (c_out, c_in): sum over taps, the response to a constant input
     bias: np.ndarray     # (c_out,)
     kernel: int
     dilation: int
     gelu: bool
+
+    @property
+    def groups(self) -> int:
+        """Ensemble members this layer computes side by side (1: one shared matrix)."""
+        return self.weight.shape[0]
+
+    @property
+    def in_channels(self) -> int:
+        """Width of the layer's input (all groups)."""
+        return self.summed.shape[1]
 
 
 def _gelu(x: np.ndarray) -> np.ndarray:
@@ -64,17 +74,21 @@ def _layers(model: GyroNet) -> list[_Layer]:
     cfg = model.config
     layers = []
     for i, d in enumerate((*cfg.dilations, 1)):
-        w, b = state[f'net.{4 * i}.weight'], state[f'net.{4 * i}.bias']  # (c_out, c_in, k)
+        groups = model.net[4 * i].groups
+        w, b = state[f'net.{4 * i}.weight'], state[f'net.{4 * i}.bias']  # (c_out, c_in/g, k)
         hidden = i < len(cfg.dilations)
         if hidden:  # conv, BatchNorm, GELU, Dropout: four modules per hidden block
             bn = f'net.{4 * i + 1}.'
             scale = state[bn + 'weight'] / np.sqrt(state[bn + 'running_var'] + BN_EPS)
             w = w * scale[:, None, None]
             b = (b - state[bn + 'running_mean']) * scale + state[bn + 'bias']
-        c_out = w.shape[0]
-        flat = np.ascontiguousarray(w.transpose(0, 2, 1)).reshape(c_out, -1)
-        layers.append(_Layer(weight=flat.astype(np.float32),
-                             summed=w.sum(axis=2).astype(np.float32),
+        c_out, c_group, k = w.shape
+        flat = np.ascontiguousarray(w.transpose(0, 2, 1)).reshape(groups, c_out // groups, -1)
+        summed = np.zeros((c_out, c_group * groups))  # block-diagonal over the groups
+        for g in range(groups):
+            rows = slice(g * c_out // groups, (g + 1) * c_out // groups)
+            summed[rows, g * c_group:(g + 1) * c_group] = w[rows].sum(axis=2)
+        layers.append(_Layer(weight=flat.astype(np.float32), summed=summed.astype(np.float32),
                              bias=b.astype(np.float32), kernel=w.shape[2], dilation=d,
                              gelu=hidden))
     return layers
@@ -100,8 +114,9 @@ class StreamingCorrector:
         # History of each layer's input, stored twice over (at i and i + span) so the
         # last `span` entries are always one contiguous slice: no modulo per tap.
         self._span = [(ly.kernel - 1) * ly.dilation + 1 for ly in self._layers]
-        self._hist = [np.zeros((2 * s, ly.weight.shape[1] // ly.kernel), np.float32)
+        self._hist = [np.zeros((2 * s, ly.in_channels), np.float32)
                       for s, ly in zip(self._span, self._layers)]
+        self._members = model.config.members
         self._pos = 0
         self.samples = 0
 
@@ -129,11 +144,18 @@ class StreamingCorrector:
             hist[i] = x
             hist[i + span] = x
             taps = hist[i + 1:i + span + 1:ly.dilation]     # (k, c_in), oldest first
-            x = ly.weight @ taps.reshape(-1) + ly.bias
+            if ly.groups == 1:
+                x = ly.weight[0] @ taps.reshape(-1) + ly.bias
+            else:  # one matrix-vector product per ensemble member, batched
+                per = taps.reshape(ly.kernel, ly.groups, -1).transpose(1, 0, 2)
+                x = (ly.weight @ per.reshape(ly.groups, -1, 1)).reshape(-1) + ly.bias
             if ly.gelu:
                 x = _gelu(x)
         self._pos += 1
-        correction = self._gyro_std * x.astype(np.float64) if self._layers else self._const
+        if self._layers:
+            correction = self._gyro_std * x.reshape(self._members, 3).astype(np.float64).mean(0)
+        else:
+            correction = self._const
         return self._calib @ imu[:3] + correction
 
     def process(self, imu: np.ndarray) -> np.ndarray:

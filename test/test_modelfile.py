@@ -7,6 +7,7 @@ import json
 from denoise_imu_ros.errors import ModelFileError
 from denoise_imu_ros.model import GyroNet, ModelConfig
 from denoise_imu_ros.modelfile import load_model, save_model, shipped_models
+import numpy as np
 import pytest
 from safetensors.torch import save_file
 import torch
@@ -78,3 +79,32 @@ def test_other_format_version_and_mismatched_weights_are_refused(tmp_path):
     save_file(tensors, str(tmp_path / 'partial.safetensors'), metadata=meta)
     with pytest.raises(ModelFileError, match='inconsistent model file'):
         load_model(tmp_path / 'partial.safetensors')
+
+
+def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_path):
+    from conftest import untrained_model
+    from denoise_imu_ros.cli import main
+    from denoise_imu_ros.evaluate import correct_gyro
+    second = untrained_model()
+    with torch.no_grad():
+        for p in second.parameters():
+            p.add_(0.01 * torch.randn_like(p))
+    save_model(tmp_path / 'b.safetensors', second, {
+        'dataset': 'test', 'sample_rate_hz': 200.0, 'train_config': {'seed': 7},
+        'validation': {'gyro_residual_std': [0.03, 0.02, 0.01]}})
+    out = tmp_path / 'ens.safetensors'
+    assert main(['ensemble', str(model_file), str(tmp_path / 'b.safetensors'),
+                 '--out', str(out)]) == 0
+    ens = load_model(out)
+    assert ens.model.config.members == 2 and ens.model.receptive_field == 511
+    assert [m['seed'] for m in ens.meta['members']] == [None, 7]
+    assert ens.meta['validation']['gyro_residual_std'] == pytest.approx([0.02] * 3)
+    u = np.random.default_rng(0).normal(0, 1, (800, 6))
+    mean = (correct_gyro(load_model(model_file).model, u) + correct_gyro(second, u)) / 2
+    np.testing.assert_allclose(correct_gyro(ens.model, u), mean, rtol=0, atol=1e-6)
+    other = untrained_model()
+    other.set_normalization(torch.zeros(6), torch.full((6,), 2.0))
+    save_model(tmp_path / 'c.safetensors', other, {'sample_rate_hz': 200.0})
+    assert main(['ensemble', str(model_file), str(tmp_path / 'c.safetensors'),
+                 '--out', str(tmp_path / 'x.safetensors')]) == 1
+    assert not (tmp_path / 'x.safetensors').exists()

@@ -64,3 +64,25 @@ def test_outputs_never_depend_on_future_samples(imu):
     changed = imu[:800].copy()
     changed[700:] += 5.0
     assert np.array_equal(stream.process(changed)[:700], first)
+
+
+def test_an_ensemble_is_the_mean_of_its_members_in_batch_and_streaming(imu):
+    from denoise_imu_ros.model import merge
+    members = []
+    for seed in range(3):
+        member = _random_model()
+        torch.manual_seed(seed + 10)  # members differ in every weight and in Delta
+        with torch.no_grad():
+            member.delta.normal_(std=0.01)
+            for mod in member.modules():
+                if isinstance(mod, torch.nn.Conv1d):
+                    mod.weight.normal_(std=0.05)
+        members.append(member)
+    ensemble = merge(members)
+    mean = np.mean([correct_gyro(m, imu[:1500]) for m in members], axis=0)
+    batch = correct_gyro(ensemble, imu[:1500])
+    # the members do differ ...
+    assert np.abs(np.array([correct_gyro(m, imu[:1500]) for m in members]) - mean).max() > 1e-3
+    np.testing.assert_allclose(batch, mean, rtol=0, atol=1e-6)  # ... and average exactly
+    np.testing.assert_allclose(StreamingCorrector(ensemble).process(imu[:1500]), batch,
+                               rtol=0, atol=1e-6)
