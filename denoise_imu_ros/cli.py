@@ -21,6 +21,7 @@ turns the package's exceptions into a one-line message and exit code 1.
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 import sys
 
@@ -28,17 +29,30 @@ from .errors import DenoiseError
 
 
 def _train(args: argparse.Namespace) -> None:
-    from .modelfile import save_model
     from .train import load_config, train
     cfg = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps,
                       calibration_only=True if args.calibration_only else None,
                       whole_sequences=True if args.whole_sequences else None,
                       workers=args.workers, device=args.device)
-    model, meta = train(cfg, progress=not args.quiet, candidates_dir=args.candidates_dir)
-    save_model(args.out, model, meta)
-    val = meta['validation']
-    print(f'saved {args.out}: best validation step {val["step"]}, loss {val["loss"]:.4g}, '
-          f'tail AOE {val["aoe_mean_deg"]:.3f} deg, {meta["train_seconds"]:.0f} s')
+    for folder in (Path(args.out).parent, args.candidates_dir):
+        _check_writable(folder)  # before the training, not after it
+    result = train(cfg, progress=not args.quiet)
+    result.save(args.out, args.candidates_dir)
+    val = result.meta['validation']
+    print(f'saved {args.out}: {result.meta["selected"]} weights (step {val["step"]}), '
+          f'validation loss {val["loss"]:.4g}, tail AOE {val["aoe_mean_deg"]:.3f} deg, '
+          f'{result.meta["train_seconds"]:.0f} s')
+
+
+def _check_writable(folder: str | Path | None) -> None:
+    if folder is None:
+        return
+    try:
+        Path(folder).mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise DenoiseError(f'{folder}: cannot create the output folder ({err.strerror})') from err
+    if not os.access(folder, os.W_OK):
+        raise DenoiseError(f'{folder}: output folder is not writable')
 
 
 def _crossval(args: argparse.Namespace) -> None:

@@ -34,7 +34,6 @@ import numpy as np
 from .dataset import load_sequence
 from .errors import TrainingError
 from .evaluate import correct_gyro, score
-from .modelfile import save_model
 from .train import load_config, train
 
 METHODS = ('raw', 'calibrated', 'network')
@@ -65,17 +64,17 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
         print(f'fold {i + 1}/{len(fold_list)}: training on {", ".join(train_on)}',
               file=sys.stderr)
         cfg = load_config(config, **overrides, sequences=train_on)
-        network, net_meta = train(cfg, progress=progress)
-        calib, calib_meta = train(load_config(config, **overrides, sequences=train_on,
-                                              calibration_only=True), progress=False)
+        net = train(cfg, progress=progress)
+        calib = train(load_config(config, **overrides, sequences=train_on,
+                                  calibration_only=True), progress=False)
         if out is not None:
-            save_model(out / f'fold{i}' / 'network.safetensors', network, net_meta)
-            save_model(out / f'fold{i}' / 'calibrated.safetensors', calib, calib_meta)
+            net.save(out / f'fold{i}' / 'network.safetensors')
+            calib.save(out / f'fold{i}' / 'calibrated.safetensors')
         for name in held_out:
             seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
-                                cfg.max_gt_gap_s, min_samples=network.receptive_field)
-            gyros = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib, seq.imu),
-                     'network': correct_gyro(network, seq.imu)}
+                                cfg.max_gt_gap_s, min_samples=net.model.receptive_field)
+            gyros = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib.model, seq.imu),
+                     'network': correct_gyro(net.model, seq.imu)}
             per_recording[name] = {m: score(seq, g) for m, g in gyros.items()}
     report = summarize(per_recording)
     report.update(recipe=str(config), folds=fold_list, seed=recipe.seed, steps=recipe.steps)

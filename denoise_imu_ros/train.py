@@ -56,9 +56,17 @@ RANK_SEED_STRIDE = 7919  # data-parallel process r draws its batches from seed +
 # ----------------------------------------------------------------------------------
 # Configuration (defaults = the reference EuRoC recipe)
 
+RUN_KEYS = ('data', 'threads', 'workers', 'device')  # where it runs, not what it learns
+
+
 @dataclass
 class TrainConfig:
-    """Everything a training run depends on; stored in the model file."""
+    """
+    Everything a training run depends on.
+
+    The recipe (all but RUN_KEYS) is stored in the model file; the run environment (the
+    local data folder, threads, workers, device) is stored apart, as how it was made.
+    """
 
     dataset: str = 'euroc'             # name of the data family (picks eval baselines)
     data: str = '../shared/data/euroc'  # folder holding the sequences (or bags)
@@ -97,6 +105,24 @@ class TrainConfig:
     workers: int = 1                   # data-parallel processes (parallel.py), CPU only
     device: str | None = None          # cpu or cuda[:N]; None: cuda when available
 
+    def model_config(self) -> ModelConfig:
+        """Return the network this recipe trains."""
+        return ModelConfig(gyro_std=tuple(math.radians(d) for d in self.gyro_std_deg),
+                           dropout=self.dropout, calibration_only=self.calibration_only)
+
+    def loss_config(self) -> LossConfig:
+        """Return the loss constants of this recipe."""
+        return LossConfig(huber_delta=self.huber_delta, increments=tuple(self.increments),
+                          weights=tuple(self.increment_weights), skip_blocks=self.skip_blocks)
+
+    def recipe(self) -> dict[str, Any]:
+        """Return what the model learns from: every key but the run environment."""
+        return {k: v for k, v in asdict(self).items() if k not in RUN_KEYS}
+
+    def run_environment(self) -> dict[str, Any]:
+        """Return where and how this run was made (data folder, threads, workers, device)."""
+        return {k: getattr(self, k) for k in RUN_KEYS}
+
 
 def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
     """Read a YAML recipe; unknown keys are errors (a typo must not train silently)."""
@@ -111,7 +137,7 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
     raw.update({k: v for k, v in overrides.items() if v is not None})
     cfg = TrainConfig(**raw)
     try:
-        span = loss_config(cfg).span
+        span = cfg.loss_config().span
     except ValueError as err:
         raise TrainingError(f'{path}: {err}') from err
     if cfg.window % span:
@@ -149,12 +175,6 @@ def resolve_device(device: str | None) -> str:
     if dev.type not in ('cpu', 'cuda'):
         raise TrainingError(f'device {device!r}: only cpu and cuda are supported')
     return str(dev)
-
-
-def loss_config(cfg: TrainConfig) -> LossConfig:
-    """Build the loss constants of a recipe."""
-    return LossConfig(huber_delta=cfg.huber_delta, increments=tuple(cfg.increments),
-                      weights=tuple(cfg.increment_weights), skip_blocks=cfg.skip_blocks)
 
 
 # ----------------------------------------------------------------------------------
@@ -271,25 +291,46 @@ def block_residual(omega: np.ndarray, s: Sequence, start: int) -> np.ndarray:
 # ----------------------------------------------------------------------------------
 # The run
 
-def train(cfg: TrainConfig, progress: bool = True,
-          candidates_dir: Path | None = None) -> tuple[GyroNet, dict[str, Any]]:
-    """
-    Train per ``cfg``; return the selected model and its metadata.
+@dataclass
+class TrainResult:
+    """The selected model, its metadata, and every candidate the run produced."""
 
-    With ``candidates_dir``, every candidate (best checkpoint, final, SWA) is written there
-    as a model file, so that the choice validation made can be studied afterwards. With
-    ``cfg.workers`` > 1 the batch is shared by that many processes (see parallel.py); this
-    process is the first of them and the only one that validates and reports.
+    model: GyroNet                                # eval mode, on the CPU
+    meta: dict[str, Any]                          # what its model file records
+    candidates: dict[str, tuple[GyroNet, dict[str, Any]]]  # name -> (model, figures)
+
+    def save(self, path: str | Path, candidates_dir: str | Path | None = None) -> None:
+        """Write the chosen model, and with ``candidates_dir`` every candidate beside it."""
+        save_model(path, self.model, self.meta)
+        for name, (model, figures) in self.candidates.items():
+            if candidates_dir is not None:
+                save_model(Path(candidates_dir) / f'{name}.safetensors', model,
+                           dict(self.meta, selected=name, validation=figures))
+
+
+def select(candidates: dict[str, dict[str, Any]], rule: str) -> str:
+    """Name of the candidate ``rule`` keeps: best_validation (lowest loss), final or swa."""
+    if rule == 'best_validation':
+        return min(candidates, key=lambda name: candidates[name]['loss'])
+    return rule
+
+
+def train(cfg: TrainConfig, progress: bool = True) -> TrainResult:
+    """
+    Train per ``cfg``; return the selected model, its metadata and the candidates.
+
+    With ``cfg.workers`` > 1 the batch is shared by that many processes (see parallel.py);
+    this process is the first of them and the only one that validates and reports.
     """
     seqs = load_sequences(cfg)  # here, so that bad input fails before any process starts
     if cfg.workers == 1:
-        return _run(cfg, 0, seqs, progress, candidates_dir)
+        return _run(cfg, 0, seqs, progress)
     store = parallel.serve(cfg.workers)
     workers = [parallel.spawn(_worker, (cfg, rank, store.port))
                for rank in range(1, cfg.workers)]
     try:
         parallel.join(0, cfg.workers, store)
-        return _run(cfg, 0, seqs, progress, candidates_dir)
+        return _run(cfg, 0, seqs, progress)
     except RuntimeError as err:  # the process group broke: was it a worker?
         for proc in workers:
             proc.join(timeout=10)
@@ -311,7 +352,7 @@ def _worker(cfg: TrainConfig, rank: int, port: int) -> None:
     """Entry point of the data-parallel processes other than the first."""
     parallel.join(rank, cfg.workers, port)
     try:
-        _run(cfg, rank, load_sequences(cfg), False, None)
+        _run(cfg, rank, load_sequences(cfg), False)
     finally:
         dist.destroy_process_group()
 
@@ -324,8 +365,8 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
     with trusted ground truth at every sample would train (or validate) on nothing, with
     a loss of exactly 0: that is an error naming it.
     """
-    min_len = cfg.window + cfg.max_offset + 1 + 2 * loss_config(cfg).span
-    receptive_field = GyroNet(ModelConfig(calibration_only=cfg.calibration_only)).receptive_field
+    min_len = cfg.window + cfg.max_offset + 1 + 2 * cfg.loss_config().span
+    receptive_field = GyroNet(cfg.model_config()).receptive_field
     seqs = []
     for name in cfg.sequences:
         seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
@@ -351,38 +392,38 @@ def valid_increments(valid: np.ndarray, length: int) -> int:
     return int(ok.sum())
 
 
-def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
-         candidates_dir: Path | None) -> tuple[GyroNet, dict[str, Any]] | None:
+def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
+         progress: bool) -> TrainResult | None:
     """Train as process ``rank`` of ``cfg.workers``; the first one returns the result."""
+    # process: the same initial weights everywhere, threads shared, no denormal floats
+    # (tiny gradients far in GELU's tail made convolutions up to 50x slower on the CPU)
     world = cfg.workers
-    torch.manual_seed(cfg.seed)  # the same initial weights in every process
+    torch.manual_seed(cfg.seed)
     torch.set_num_threads(max(1, cfg.threads // world))
-    # Tiny gradients (e.g. through GELU far in its negative tail) become denormal floats,
-    # which made convolutions up to 50x slower on this CPU as training went on.
     torch.set_flush_denormal(True)
     t_start = time.monotonic()
 
-    model_cfg = ModelConfig(gyro_std=tuple(math.radians(d) for d in cfg.gyro_std_deg),
-                            dropout=cfg.dropout, calibration_only=cfg.calibration_only)
-    model = GyroNet(model_cfg)
+    # model, normalised on all training windows; data: this process's share
+    model = GyroNet(cfg.model_config())
     split = training_split(seqs, cfg)
     flat = split.imu.reshape(-1, 6)
     model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
     model.to(cfg.device)
-    rate = float(np.mean([s.rate_hz for s in seqs]))
     if world > 1:
         parallel.sync_batch_norm(model)
-        split = training_split(seqs[rank::world], cfg)  # this process's share
+        split = training_split(seqs[rank::world], cfg)
         torch.manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)  # its own dropout masks
     gen = torch.Generator().manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)
 
+    # optimiser, schedule, weight average, loss
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     scheduler = torch.optim.lr_scheduler.CosineAnnealingWarmRestarts(
         optimizer, T_0=cfg.restart_period, T_mult=cfg.restart_mult, eta_min=cfg.lr_min)
-    loss_cfg = loss_config(cfg)
+    swa = torch.optim.swa_utils.AveragedModel(model) if cfg.swa_start > 0 else None
+    loss_cfg = cfg.loss_config()
     val_start = cfg.window + cfg.max_offset
 
-    swa = torch.optim.swa_utils.AveragedModel(model) if cfg.swa_start > 0 else None
+    # the loop (step 0 only validates the untrained network)
     best: dict[str, Any] = {'loss': math.inf}
     history = []
     loss = torch.tensor(0.0)
@@ -405,7 +446,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
             bar.set_postfix(loss=f'{loss.item():.4g}')
             if swa is not None and step >= cfg.swa_start:
                 swa.update_parameters(model)
-        if rank == 0 and (step % cfg.val_every == 0 or step == cfg.steps):  # 0: untrained
+        if rank == 0 and (step % cfg.val_every == 0 or step == cfg.steps):
             val = validate(model, seqs, val_start, loss_cfg)
             history.append({'step': step, 'train_loss': loss.item() if step else None,
                             'val_loss': val['loss'],
@@ -414,35 +455,33 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
                       f'val AOE {val["aoe_mean_deg"]:.3f} deg')
             if step > 0 and val['loss'] < best['loss']:
                 best = dict(val, step=step, state=copy.deepcopy(model.state_dict()))
-
     if swa is not None:
         # BatchNorm statistics of the averaged weights: recomputed on training windows.
         torch.optim.swa_utils.update_bn(
             [batch(split, cfg, gen)[0].to(cfg.device) for _ in range(8)], swa)
     if rank > 0:
         return None
-    # Candidates: the best-validation checkpoint, the last weights, the weight average.
-    candidates = {'best_checkpoint': best, 'final': dict(  # the loop validated the last step
-        val, step=cfg.steps, state=copy.deepcopy(model.state_dict()))}
+
+    # candidates (the loop validated the final weights at its last step), selection
+    candidates = {'best_checkpoint': best,
+                  'final': dict(val, step=cfg.steps, state=copy.deepcopy(model.state_dict()))}
     if swa is not None:
         val = validate(swa.module, seqs, val_start, loss_cfg)
         candidates['swa'] = dict(val, step=cfg.steps, state=swa.module.state_dict())
         bar.write(f'SWA from step {cfg.swa_start}: val {val["loss"]:.4g}  '
                   f'val AOE {val["aoe_mean_deg"]:.3f} deg')
-    if cfg.select == 'best_validation':
-        chosen = min(candidates, key=lambda name: candidates[name]['loss'])
-    else:
-        chosen = cfg.select
-    states = {name: {k: v.cpu() for k, v in c.pop('state').items()}
-              for name, c in candidates.items()}
-    model = GyroNet(model_cfg)  # plain BatchNorm again, whatever trained it
-    model.load_state_dict(states[chosen])
-    model.eval()
+    models = {}
+    for name, figures in candidates.items():
+        models[name] = GyroNet(cfg.model_config())  # plain BatchNorm, whatever trained it
+        models[name].load_state_dict({k: v.cpu() for k, v in figures.pop('state').items()})
+        models[name].eval()
+    chosen = select(candidates, cfg.select)
     meta = {
         'dataset': cfg.dataset,
-        'sample_rate_hz': rate,
+        'sample_rate_hz': float(np.mean([s.rate_hz for s in seqs])),
         'train_sequences': cfg.sequences,
-        'train_config': asdict(cfg),
+        'train_config': cfg.recipe(),
+        'run': cfg.run_environment(),
         'selected': chosen,
         'validation': candidates[chosen],
         'candidates': candidates,
@@ -451,10 +490,5 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence], progress: bool,
         'code_version': code_version(),
         'created': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
     }
-    if candidates_dir is not None:
-        for name, state in states.items():
-            candidate = GyroNet(model_cfg)
-            candidate.load_state_dict(state)
-            save_model(Path(candidates_dir) / f'{name}.safetensors', candidate.eval(),
-                       dict(meta, validation=candidates[name]))
-    return model, meta
+    return TrainResult(models[chosen], meta,
+                       {name: (m, candidates[name]) for name, m in models.items()})

@@ -71,9 +71,10 @@ def test_two_processes_give_the_whole_batch_gradient_and_statistics(euroc, tmp_p
 def test_a_two_process_run_trains_and_returns_a_plain_model(euroc, tmp_path):
     cfg = load_config(CONFIG, data=str(euroc), sequences=SEQUENCES[:2], window=N,
                       steps=24, val_every=12, restart_period=24, swa_start=12, workers=2)
-    model, meta = train(cfg, progress=False)
+    result = train(cfg, progress=False)
+    model, meta = result.model, result.meta
     history = meta['history']
     assert history[-1]['val_loss'] < 0.5 * history[0]['val_loss']
     assert not any(isinstance(m, parallel.SyncBatchNorm) for m in model.modules())
     assert not dist.is_initialized()
-    assert meta['train_config']['workers'] == 2
+    assert meta['run']['workers'] == 2 and 'workers' not in meta['train_config']

@@ -26,7 +26,9 @@ def _short(euroc, **changes):
 
 
 def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
-    model, meta = train(_short(euroc), progress=False, candidates_dir=tmp_path)
+    result = train(_short(euroc), progress=False)
+    result.save(tmp_path / 'chosen.safetensors', candidates_dir=tmp_path)
+    meta = result.meta
     history = meta['history']
     assert [h['step'] for h in history] == [0, 12, 24]
     assert history[-1]['val_loss'] < 0.5 * history[0]['val_loss']
@@ -45,7 +47,7 @@ def test_twenty_hz_ground_truth_trains_with_a_finite_falling_loss(euroc, tmp_pat
     # V1_01's corrected ground truth (OpenVINS) is a 20 Hz trajectory
     cfg = _short(euroc, sequences=['V1_01_easy'], val_every=6, swa_start=0,
                  select='final')
-    _, meta = train(cfg, progress=False)
+    meta = train(cfg, progress=False).meta
     losses = [h['train_loss'] for h in meta['history'][1:]]
     assert all(np.isfinite(v) and v > 0 for v in losses)
     assert losses[-1] < 0.5 * losses[0]
@@ -126,3 +128,12 @@ def test_windows_are_drawn_from_the_head_or_the_whole_of_each_sequence(euroc, wh
             assert end > len(s) - 2000  # windows reach the end of every sequence
         else:
             assert end < cfg.window + cfg.max_offset
+
+
+def test_an_unwritable_output_is_refused_before_training(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(train_module, 'load_sequences', lambda cfg: pytest.fail('trained'))
+    (tmp_path / 'file').write_text('')
+    assert main(['train', '--config', str(CONFIG), '--out',
+                 str(tmp_path / 'file' / 'model.safetensors')]) == 1
+    err = capsys.readouterr().err
+    assert 'cannot create the output folder' in err and len(err.splitlines()) == 1
