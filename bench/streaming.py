@@ -84,7 +84,7 @@ def main():
 
 def stream(model, imu):
     """Per-sample cost (s) and output of the streaming engine over ``imu``."""
-    engine = StreamingCorrector(model)
+    engine = StreamingCorrector.from_module(model)
     costs = np.empty(len(imu))
     out = np.empty((len(imu), 3))
     for n, row in enumerate(imu):

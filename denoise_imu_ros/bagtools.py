@@ -32,9 +32,8 @@ from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
 from .bags import IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
-from .modelfile import gyro_covariance, load_model, sample_rate
+from .modelfile import gyro_covariance, read_model_file
 from .online import DROP_CAUSES, OnlineDenoiser
-from .streaming import StreamingCorrector
 
 CORRECTED_TOPIC = '/imu/corrected'
 ATTITUDE_TOPIC = '/imu/attitude'
@@ -62,8 +61,8 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     src = Path(src)
     if not src.exists():
         raise DatasetError(f'{src}: bag not found')
-    loaded = load_model(model_spec)
-    den = OnlineDenoiser(StreamingCorrector(loaded.model), sample_rate(loaded))
+    loaded = read_model_file(model_spec)
+    den = OnlineDenoiser.from_model_file(loaded)
     cov = np.array(gyro_covariance(loaded))
     no_orientation = np.zeros(9)
     no_orientation[0] = -1.0  # REP-145: orientation not provided

@@ -27,6 +27,10 @@ import sys
 
 from .errors import DenoiseError
 
+# Commands that run the torch network; the others (process-bag, play, check-data,
+# convert) never import torch.
+TORCH_COMMANDS = ('train', 'crossval', 'eval', 'correct', 'ensemble')
+
 
 def _train(args: argparse.Namespace) -> None:
     from .train import load_config, train
@@ -229,9 +233,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``denoise-imu`` console script."""
     args = build_parser().parse_args(argv)
-    import torch
-    # Denormal floats in the network's activations slow its CPU convolutions tenfold.
-    torch.set_flush_denormal(True)
+    if args.command in TORCH_COMMANDS:
+        import torch
+        # Denormal floats in the network's activations slow its CPU convolutions tenfold.
+        torch.set_flush_denormal(True)
     try:
         args.func(args)
     except DenoiseError as err:

@@ -80,7 +80,7 @@ def correct_to_csv(model_spec: str, source: str, output: str,
     rate = (len(rec.imu) - 1) / ((rec.imu_stamp_ns[-1] - rec.imu_stamp_ns[0]) * 1e-9)
     check_rate(rate, loaded.meta, source)
     if engine == 'streaming':
-        omega = StreamingCorrector(loaded.model).process(rec.imu)
+        omega = StreamingCorrector.from_module(loaded.model).process(rec.imu)
     else:
         omega = correct_gyro(loaded.model, rec.imu)
     Path(output).parent.mkdir(parents=True, exist_ok=True)

@@ -28,42 +28,14 @@ of the members' outputs, in one pass (:func:`merge`).
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
-import math
 
 import torch
 from torch import nn
 import torch.nn.functional as F  # noqa: N812
 
+from .architecture import BN_EPS, ModelConfig
 
-BN_EPS = 1e-5  # BatchNorm epsilon (torch's default), also used by the streaming engine
-
-
-@dataclass(frozen=True)
-class ModelConfig:
-    """Architecture; defaults are the paper's network (77,052 trainable parameters)."""
-
-    in_channels: int = 6                         # gyro xyz (rad/s) + accel xyz (m/s^2)
-    channels: tuple[int, ...] = (16, 32, 64, 128)  # hidden widths, doubling per layer
-    kernels: tuple[int, ...] = (7, 7, 7, 7)      # hidden kernel sizes
-    dilations: tuple[int, ...] = (1, 4, 16, 64)  # cumulative products of [4, 4, 4]
-    dropout: float = 0.1                         # after each hidden block
-    bn_momentum: float = 0.1
-    # sigma_g, rad/s: scales f(u) so that early outputs are small (EuRoC [1, 2, 5] deg/s)
-    gyro_std: tuple[float, float, float] = tuple(math.radians(d) for d in (1.0, 2.0, 5.0))
-    # The paper's "calibrated IMU" baseline: no network, only I + Delta and a bias (12).
-    calibration_only: bool = False
-    members: int = 1                             # ensemble size (networks averaged)
-
-    def __post_init__(self) -> None:
-        """Reject inconsistent layer lists early (config files are user input)."""
-        if not len(self.channels) == len(self.kernels) == len(self.dilations):
-            raise ValueError('channels, kernels and dilations must have the same length')
-        if not isinstance(self.members, int) or self.members < 1 or (
-                self.calibration_only and self.members > 1):
-            raise ValueError('members must be a positive integer (1 for calibration_only)')
-        if len(self.gyro_std) != 3 or min(self.gyro_std) <= 0:
-            raise ValueError('gyro_std must be three positive values (rad/s)')
+__all__ = ['BN_EPS', 'Dropout', 'GyroNet', 'merge', 'ModelConfig']
 
 
 class Dropout(nn.Module):
@@ -108,23 +80,19 @@ class GyroNet(nn.Module):
             self.bias = nn.Parameter(torch.zeros(3))  # in units of gyro_std
             return
         layers: list[nn.Module] = []
-        m = config.members  # the first layer reads the shared input; later ones per member
-        c_in, groups = config.in_channels, 1
-        for c_out, k, d in zip(config.channels, config.kernels, config.dilations):
-            layers += [nn.Conv1d(c_in * groups, c_out * m, k, dilation=d, groups=groups),
-                       nn.BatchNorm1d(c_out * m, eps=BN_EPS, momentum=config.bn_momentum),
+        *hidden, (c_in, c_out, _, _, groups) = config.convolutions()
+        for c_in_h, c_out_h, k, d, g in hidden:  # conv, BatchNorm, GELU, dropout
+            layers += [nn.Conv1d(c_in_h, c_out_h, k, dilation=d, groups=g),
+                       nn.BatchNorm1d(c_out_h, eps=BN_EPS, momentum=config.bn_momentum),
                        nn.GELU(),
                        Dropout(config.dropout)]
-            c_in, groups = c_out, m
-        layers.append(nn.Conv1d(c_in * m, 3 * m, 1, groups=m))
+        layers.append(nn.Conv1d(c_in, c_out, 1, groups=groups))
         self.net = nn.Sequential(*layers)
 
     @property
     def receptive_field(self) -> int:
         """Count the samples one output depends on: the newest plus the left padding."""
-        if self.config.calibration_only:
-            return 1
-        return 1 + sum(d * (k - 1) for k, d in zip(self.config.kernels, self.config.dilations))
+        return self.config.receptive_field
 
     def set_normalization(self, mean: torch.Tensor, std: torch.Tensor) -> None:
         """Store per-channel input statistics (std floored to avoid division by ~0)."""

@@ -18,6 +18,10 @@ The tensors are the model's state dict (weights, BatchNorm statistics, input
 normalisation, gyro_std, Delta); the safetensors header metadata holds JSON strings
 that make the file self-describing: architecture, sample rate, receptive field,
 training recipe and sequences, validation figures and the code version.
+
+Reading and writing need numpy only (:func:`read_model_file`): the online runtime never
+imports torch. :func:`load_model` builds the torch module on top, for training and
+batch evaluation.
 """
 
 from __future__ import annotations
@@ -27,31 +31,42 @@ import json
 from pathlib import Path
 import subprocess
 import time
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, TYPE_CHECKING
 
 import numpy as np
 from safetensors import safe_open, SafetensorError
-from safetensors.torch import load_file, save_file
-import torch
+from safetensors.numpy import load_file, save_file
 
 from . import __version__
+from .architecture import ModelConfig
 from .errors import ModelFileError
-from .model import GyroNet, merge, ModelConfig
+
+if TYPE_CHECKING:  # torch is imported only where a torch module is built
+    from .model import GyroNet
 
 FORMAT = 'denoise_imu_ros.gyro_model'
 FORMAT_VERSION = 1
 SHIPPED_DIR = Path(__file__).parent / 'models'
 
 
+class ModelFile(NamedTuple):
+    """A model file's contents as numpy arrays: enough for the streaming engine."""
+
+    config: ModelConfig
+    arrays: dict[str, np.ndarray]  # the state dict
+    meta: dict[str, Any]
+    path: Path
+
+
 class LoadedModel(NamedTuple):
-    """A model in eval mode plus the metadata it was saved with."""
+    """A torch model in eval mode plus the metadata it was saved with."""
 
     model: GyroNet
     meta: dict[str, Any]
     path: Path
 
 
-def sample_rate(loaded: LoadedModel) -> float:
+def sample_rate(loaded: ModelFile | LoadedModel) -> float:
     """IMU rate (Hz) the model was trained at; online use needs it."""
     rate = loaded.meta.get('sample_rate_hz')
     if not isinstance(rate, (int, float)) or not rate > 0:
@@ -59,7 +74,7 @@ def sample_rate(loaded: LoadedModel) -> float:
     return float(rate)
 
 
-def gyro_covariance(loaded: LoadedModel, stddev: float = -1.0) -> list[float]:
+def gyro_covariance(loaded: ModelFile | LoadedModel, stddev: float = -1.0) -> list[float]:
     """
     Row-major 3x3 angular_velocity_covariance for corrected gyro messages.
 
@@ -87,14 +102,25 @@ def code_version() -> str:
 
 
 def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:
-    """Write weights and metadata; ``meta`` values must be JSON-serialisable."""
+    """Write a torch model's weights and metadata (JSON-serialisable values)."""
+    write_model_file(path, model.config, {k: v.detach().cpu().numpy()
+                                          for k, v in model.state_dict().items()}, meta)
+
+
+def write_model_file(path: str | Path, config: ModelConfig, arrays: dict[str, np.ndarray],
+                     meta: dict[str, Any]) -> None:
+    """Write a model file, under a temporary name renamed on success (never half-written)."""
     header = {'format': FORMAT, 'format_version': str(FORMAT_VERSION),
-              'model_config': json.dumps(asdict(model.config)),
-              'receptive_field': str(model.receptive_field)}
+              'model_config': json.dumps(asdict(config)),
+              'receptive_field': str(config.receptive_field)}
     header.update({k: json.dumps(v) for k, v in meta.items()})
-    tensors = {k: v.detach().contiguous() for k, v in model.state_dict().items()}
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    save_file(tensors, str(path), metadata=header)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + '.tmp')
+    save_file({k: np.asarray(v, order='C') for k, v in arrays.items()}, str(tmp),
+              metadata=header)
+    tmp.chmod(0o644)  # a shared artefact, not a secret
+    tmp.replace(path)
 
 
 def add_metadata(path: str | Path, **meta: Any) -> None:
@@ -104,13 +130,9 @@ def add_metadata(path: str | Path, **meta: Any) -> None:
     Used to store figures measured after training (cross-recording validation). The file
     is rewritten under a temporary name and renamed, so a failure leaves it intact.
     """
-    loaded = load_model(path)
-    with safe_open(str(loaded.path), framework='pt') as f:
-        header = f.metadata() or {}
-    header.update({k: json.dumps(v) for k, v in meta.items()})
-    tmp = loaded.path.with_name(loaded.path.name + '.tmp')
-    save_file(load_file(str(loaded.path)), str(tmp), metadata=header)
-    tmp.replace(loaded.path)
+    mf = read_model_file(path)
+    base = {k: v for k, v in mf.meta.items() if k not in ('model_config', 'receptive_field')}
+    write_model_file(mf.path, mf.config, mf.arrays, dict(base, **meta))
 
 
 def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
@@ -120,6 +142,7 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
     The metadata keeps each member's seed and validation figures; the residual std the
     node publishes as covariance is the members' mean (the ensemble's own is lower).
     """
+    from .model import merge
     members = [load_model(spec) for spec in specs]
     if len(members) < 2:
         raise ModelFileError('an ensemble needs at least two model files')
@@ -161,17 +184,17 @@ def resolve(spec: str | Path) -> Path:
     return path
 
 
-def load_model(spec: str | Path) -> LoadedModel:
-    """Rebuild a model from its file alone, in eval mode; every failure is ModelFileError."""
+def read_model_file(spec: str | Path) -> ModelFile:
+    """Read and check a model file with numpy alone; every failure is ModelFileError."""
     path = resolve(spec)
     try:
         with open(path, 'rb') as f:
             head = f.read(8)
         if len(head) < 8:
             raise ModelFileError(f'{path}: not a model file (too short)')
-        with safe_open(str(path), framework='pt') as f:
+        with safe_open(str(path), framework='np') as f:
             header = f.metadata() or {}
-        tensors = load_file(str(path))
+        arrays = load_file(str(path))
     except (SafetensorError, OSError, ValueError) as err:
         raise ModelFileError(f'{path}: corrupt or not a model file ({err})') from err
     if header.get('format') != FORMAT:
@@ -183,13 +206,28 @@ def load_model(spec: str | Path) -> LoadedModel:
         cfg = json.loads(header['model_config'])
         config = ModelConfig(**{k: tuple(v) if isinstance(v, list) else v
                                 for k, v in cfg.items()})
-        model = GyroNet(config)
-        model.load_state_dict(tensors, strict=True)
         meta = {k: json.loads(v) for k, v in header.items()
                 if k not in ('format', 'format_version')}
-    except (KeyError, TypeError, ValueError, RuntimeError) as err:
+    except (KeyError, TypeError, ValueError, AttributeError) as err:
         raise ModelFileError(f'{path}: inconsistent model file ({err})') from err
-    if not all(torch.isfinite(t.float()).all() for t in tensors.values()):
+    shapes = {k: tuple(v.shape) for k, v in arrays.items()}
+    if shapes != config.state_shapes():
+        wrong = sorted(set(shapes.items()) ^ set(config.state_shapes().items()))
+        raise ModelFileError(f'{path}: inconsistent model file (weights do not match its '
+                             f'architecture: {wrong[0][0]})')
+    if not all(np.isfinite(v).all() for v in arrays.values()):
         raise ModelFileError(f'{path}: model file holds non-finite weights')
+    if not (arrays['input_std'] > 0).all():
+        raise ModelFileError(f'{path}: model file has a non-positive input_std')
+    return ModelFile(config, arrays, meta, path)
+
+
+def load_model(spec: str | Path) -> LoadedModel:
+    """Rebuild the torch model of a file, in eval mode (training, batch evaluation)."""
+    import torch
+    from .model import GyroNet
+    mf = read_model_file(spec)
+    model = GyroNet(mf.config)
+    model.load_state_dict({k: torch.from_numpy(v.copy()) for k, v in mf.arrays.items()})
     model.eval()
-    return LoadedModel(model=model, meta=meta, path=path)
+    return LoadedModel(model=model, meta=mf.meta, path=mf.path)

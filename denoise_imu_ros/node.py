@@ -39,9 +39,8 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
 from .errors import DenoiseError
-from .modelfile import gyro_covariance, load_model, sample_rate
+from .modelfile import gyro_covariance, read_model_file
 from .online import OnlineDenoiser, stamp_ns
-from .streaming import StreamingCorrector
 
 
 def _param(description: str, read_only: bool = False, floats: tuple | None = None,
@@ -94,9 +93,9 @@ class GyroDenoiser(Node):
         super().__init__('gyro_denoiser', **kwargs)
         self.declare_parameters('', PARAMETERS)
         p = self.get_parameter
-        loaded = load_model(p('model').value)  # raises DenoiseError: handled in main()
-        self._model_rate = sample_rate(loaded)
-        self._denoiser = OnlineDenoiser(StreamingCorrector(loaded.model), self._model_rate)
+        loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()
+        self._denoiser = OnlineDenoiser.from_model_file(loaded)
+        self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
         self._fixed_frame = p('fixed_frame').value
         self.add_post_set_parameters_callback(self._on_parameters)
@@ -123,7 +122,7 @@ class GyroDenoiser(Node):
         self._apply_parameters()
         self.get_logger().info(
             f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field '
-            f'{loaded.model.receptive_field} samples); imu/data_raw -> imu/corrected')
+            f'{loaded.config.receptive_field} samples); imu/data_raw -> imu/corrected')
 
     # -- parameters ---------------------------------------------------------------
     def _apply_parameters(self) -> None:
@@ -223,10 +222,6 @@ class GyroDenoiser(Node):
 
 def main(args: list[str] | None = None) -> int:
     """Entry point of ``gyro_denoiser`` (console script and ``ros2 run``)."""
-    import torch
-    # Flush denormal floats to zero in this (the executor's) thread: products of tiny
-    # weights and activations otherwise make the per-sample engine ~10x slower.
-    torch.set_flush_denormal(True)
     rclpy.init(args=args)
     node = None
     try:

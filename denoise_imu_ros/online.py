@@ -30,13 +30,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import math
-from typing import Any, NamedTuple, TYPE_CHECKING
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-if TYPE_CHECKING:  # the engine is passed in: no torch import for bag tools
-    from .streaming import StreamingCorrector
+from .modelfile import ModelFile, sample_rate
+from .streaming import StreamingCorrector
 
 DROP_CAUSES = ('non_finite', 'zero_stamp', 'duplicate_stamp', 'out_of_order')
 
@@ -76,6 +76,12 @@ class OnlineDenoiser:
     _attitude: Rotation | None = None
     _last_gyro: np.ndarray | None = None
     _pending_reset: bool = False
+
+    @classmethod
+    def from_model_file(cls, model: ModelFile, **options: Any) -> OnlineDenoiser:
+        """Build the pipeline of a model file (node and process-bag): numpy only, no torch."""
+        return cls(StreamingCorrector(model.config, model.arrays), sample_rate(model),
+                   **options)
 
     def reset_attitude(self) -> None:
         """Re-initialise the attitude from the accelerometer at the next sample."""

@@ -290,3 +290,38 @@ def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, eur
     assert result == [0]
     h.spin_until(lambda: len(h.corrected) == 400)
     assert 'published 400 IMU messages' in capsys.readouterr().out
+
+
+def test_the_node_needs_no_torch(model_file, tmp_path):
+    # torch made unimportable: the node imports, starts with a model file and corrects
+    script = tmp_path / 'run.py'
+    script.write_text(f"""
+import sys
+
+
+class NoTorch:
+    def find_spec(self, name, path=None, target=None):
+        if name == 'torch' or name.startswith('torch.'):
+            raise ImportError('torch is not installed here')
+
+
+sys.meta_path.insert(0, NoTorch())
+import rclpy
+from denoise_imu_ros.node import GyroDenoiser
+from rclpy.parameter import Parameter
+rclpy.init(domain_id={DOMAIN})
+node = GyroDenoiser(parameter_overrides=[Parameter('model', value={str(model_file)!r})])
+from denoise_imu_ros.online import OnlineDenoiser
+out = node._denoiser.process(1_000_000_000, [0.1, 0.0, 0.0], [0.0, 0.0, 9.8])
+assert out.gyro.shape == (3,)
+node.destroy_node()
+rclpy.shutdown()
+assert 'torch' not in sys.modules and 'safetensors.torch' not in sys.modules
+print('ok')
+""")
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=60)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip().endswith('ok')

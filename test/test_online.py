@@ -31,7 +31,7 @@ def _run(denoiser, stamps, imu):
 
 def test_online_attitude_equals_offline_integration_of_the_batch_output(seq, model):
     n = 3000
-    outs = _run(OnlineDenoiser(StreamingCorrector(model), 200.0), seq.stamp_ns[:n],
+    outs = _run(OnlineDenoiser(StreamingCorrector.from_module(model), 200.0), seq.stamp_ns[:n],
                 seq.imu[:n])
     gyro = correct_gyro(model, seq.imu[:n])
     np.testing.assert_allclose(np.array([o.gyro for o in outs]), gyro, atol=1e-6)
@@ -49,7 +49,7 @@ def test_gravity_attitude_levels_the_accelerometer():
 
 
 def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
-    den = OnlineDenoiser(StreamingCorrector(model), 200.0)
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
     t, imu = seq.stamp_ns, seq.imu
     assert isinstance(den.process(int(t[0]), imu[0, :3], imu[0, 3:]), Output)
     bad_gyro = np.array([np.nan, 0.0, 0.0])
@@ -65,7 +65,7 @@ def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
 
 
 def test_gap_restarts_the_network_and_holds_the_attitude(seq, model):
-    den = OnlineDenoiser(StreamingCorrector(model), 200.0, max_gap_factor=3.0)
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, max_gap_factor=3.0)
     first = _run(den, seq.stamp_ns[:600], seq.imu[:600])
     after = _run(den, seq.stamp_ns[1000:1600], seq.imu[1000:1600])  # 2 s gap
     assert after[0].event == 'gap' and den.counts['gap_resets'] == 1
@@ -76,17 +76,17 @@ def test_gap_restarts_the_network_and_holds_the_attitude(seq, model):
 
 
 def test_backward_time_jump_resets_everything(seq, model):
-    den = OnlineDenoiser(StreamingCorrector(model), 200.0, time_jump_s=1.0)
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, time_jump_s=1.0)
     _run(den, seq.stamp_ns[:800], seq.imu[:800])
     again = _run(den, seq.stamp_ns[:300], seq.imu[:300])  # a bag played again
     assert again[0].event == 'time_jump' and den.counts['time_jump_resets'] == 1
-    fresh = _run(OnlineDenoiser(StreamingCorrector(model), 200.0), seq.stamp_ns[:300],
+    fresh = _run(OnlineDenoiser(StreamingCorrector.from_module(model), 200.0), seq.stamp_ns[:300],
                  seq.imu[:300])
     np.testing.assert_allclose(again[-1].attitude, fresh[-1].attitude, atol=1e-12)
 
 
 def test_reset_attitude_reinitialises_from_gravity_at_the_next_sample(seq, model):
-    den = OnlineDenoiser(StreamingCorrector(model), 200.0)
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
     _run(den, seq.stamp_ns[:500], seq.imu[:500])
     den.reset_attitude()
     out = den.process(int(seq.stamp_ns[500]), seq.imu[500, :3], seq.imu[500, 3:])

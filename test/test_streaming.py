@@ -38,19 +38,19 @@ def _random_model(calibration_only=False):
 def test_streaming_equals_batch_including_the_first_510_samples(imu, calibration_only):
     model = _random_model(calibration_only)
     batch = correct_gyro(model, imu[:3000])
-    np.testing.assert_allclose(StreamingCorrector(model).process(imu[:3000]), batch,
+    np.testing.assert_allclose(StreamingCorrector.from_module(model).process(imu[:3000]), batch,
                                rtol=0, atol=1e-6)
 
 
 def test_shipped_model_streams_the_whole_sample_exactly(imu):
     model = load_model('euroc').model
-    np.testing.assert_allclose(StreamingCorrector(model).process(imu), correct_gyro(model, imu),
-                               rtol=0, atol=1e-6)
+    np.testing.assert_allclose(StreamingCorrector.from_module(model).process(imu),
+                               correct_gyro(model, imu), rtol=0, atol=1e-6)
 
 
 def test_reset_starts_a_new_recording(imu):
     model = _random_model()
-    stream = StreamingCorrector(model)
+    stream = StreamingCorrector.from_module(model)
     stream.process(imu[:1000])
     stream.reset()
     np.testing.assert_allclose(stream.process(imu[2000:2800]), correct_gyro(model, imu[2000:2800]),
@@ -58,7 +58,7 @@ def test_reset_starts_a_new_recording(imu):
 
 
 def test_outputs_never_depend_on_future_samples(imu):
-    stream = StreamingCorrector(_random_model())
+    stream = StreamingCorrector.from_module(_random_model())
     first = stream.process(imu[:700])
     stream.reset()
     changed = imu[:800].copy()
@@ -84,5 +84,5 @@ def test_an_ensemble_is_the_mean_of_its_members_in_batch_and_streaming(imu):
     # the members do differ ...
     assert np.abs(np.array([correct_gyro(m, imu[:1500]) for m in members]) - mean).max() > 1e-3
     np.testing.assert_allclose(batch, mean, rtol=0, atol=1e-6)  # ... and average exactly
-    np.testing.assert_allclose(StreamingCorrector(ensemble).process(imu[:1500]), batch,
+    np.testing.assert_allclose(StreamingCorrector.from_module(ensemble).process(imu[:1500]), batch,
                                rtol=0, atol=1e-6)
