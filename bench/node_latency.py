@@ -18,8 +18,10 @@ Real EuRoC IMU samples are published on imu/data_raw at a fixed rate; imu/correc
 received in this process. Latency = receive time - publish time (same clock). The node
 runs as its own process; a pass-through relay (same QoS, no processing) is measured in
 the same run as the transport floor, so the node's figures read as "floor + cost".
+With several --models (e.g. a single network and an ensemble file), each runs as the node
+in turn, in the same run. The sweep rates are tried with the first model only.
 Run: .venv/bin/python bench/node_latency.py [--rates 200 1000] [--seconds 10]
-         [--sweep 2000 3000 4000]
+         [--sweep 2000 3000 4000] [--models euroc ensemble.safetensors]
 Needs ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST (set below if missing).
 """
 
@@ -130,16 +132,19 @@ def main():
     parser.add_argument('--rates', type=float, nargs='+', default=[200.0, 1000.0])
     parser.add_argument('--sweep', type=float, nargs='*', default=[2000.0, 3000.0, 4000.0])
     parser.add_argument('--seconds', type=float, default=10.0)
-    parser.add_argument('--model', default='euroc')
+    parser.add_argument('--models', nargs='+', default=['euroc'])
     args = parser.parse_args()
     imu = load_imu(DATA).imu
-    rows = run('relay', args.rates, args.seconds, imu)
-    rows += run('node', args.rates + args.sweep, args.seconds, imu, args.model)
-    print(f'{"":6s} {"rate Hz":>8s} {"sent":>7s} {"lost":>5s} {"p50 ms":>7s} {"p99 ms":>7s} '
+    rows = [('relay', *r[1:]) for r in run('relay', args.rates, args.seconds, imu)]
+    for i, model in enumerate(args.models):
+        rates = args.rates + (args.sweep if i == 0 else [])
+        rows += [(Path(model).stem, *r[1:]) for r in run('node', rates, args.seconds, imu, model)]
+    print(f'{"":18s} {"rate Hz":>8s} {"sent":>7s} {"lost":>5s} {"p50 ms":>7s} {"p99 ms":>7s} '
           f'{"CPU":>5s}')
     for kind, rate, n, lost, p50, p99, cpu in rows:
-        print(f'{kind:6s} {rate:8.0f} {n:7d} {lost:5d} {p50:7.2f} {p99:7.2f} {cpu:5.0%}')
-    ok = [r[1] for r in rows if r[0] == 'node' and r[3] == 0]
+        print(f'{kind:18s} {rate:8.0f} {n:7d} {lost:5d} {p50:7.2f} {p99:7.2f} {cpu:5.0%}')
+    first = Path(args.models[0]).stem
+    ok = [r[1] for r in rows if r[0] == first and r[3] == 0]
     print(f'highest input rate the node sustained without a drop: {max(ok, default=0):.0f} Hz')
 
 

@@ -113,7 +113,8 @@ def write_model_file(path: str | Path, config: ModelConfig, arrays: dict[str, np
     header = {'format': FORMAT, 'format_version': str(FORMAT_VERSION),
               'model_config': json.dumps(asdict(config)),
               'receptive_field': str(config.receptive_field)}
-    header.update({k: json.dumps(v) for k, v in meta.items()})
+    # the architecture written is the model's own, whatever metadata was copied along
+    header.update({k: json.dumps(v) for k, v in meta.items() if k not in header})
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + '.tmp')
@@ -131,8 +132,7 @@ def add_metadata(path: str | Path, **meta: Any) -> None:
     is rewritten under a temporary name and renamed, so a failure leaves it intact.
     """
     mf = read_model_file(path)
-    base = {k: v for k, v in mf.meta.items() if k not in ('model_config', 'receptive_field')}
-    write_model_file(mf.path, mf.config, mf.arrays, dict(base, **meta))
+    write_model_file(mf.path, mf.config, mf.arrays, dict(mf.meta, **meta))
 
 
 def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:

@@ -108,3 +108,12 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
     assert main(['ensemble', str(model_file), str(tmp_path / 'c.safetensors'),
                  '--out', str(tmp_path / 'x.safetensors')]) == 1
     assert not (tmp_path / 'x.safetensors').exists()
+
+
+def test_copied_metadata_never_overrides_the_architecture(tmp_path):
+    from denoise_imu_ros.model import merge
+    single = _model().eval()
+    save_model(tmp_path / 'a.safetensors', single, {'sample_rate_hz': 200.0})
+    meta = load_model(tmp_path / 'a.safetensors').meta  # holds model_config (members 1)
+    save_model(tmp_path / 'b.safetensors', merge([single, single]), meta)
+    assert load_model(tmp_path / 'b.safetensors').model.config.members == 2
