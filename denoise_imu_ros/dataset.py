@@ -31,6 +31,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation, RotationSpline, Slerp
 
 from .errors import DatasetError
+from .limits import describe, in_range
 
 # Ground truth at an IMU instant is trusted only if the ground-truth samples around it
 # are at most this many of the ground truth's own (median) periods apart: 20.8 ms for
@@ -142,7 +143,7 @@ def read_asl(path: str | Path, with_gt: bool = True) -> Recording:
 
 
 def check_recording(rec: Recording, imu_file: object = None, gt_file: object = None) -> None:
-    """Reject what would silently corrupt training or evaluation: NaN, unordered stamps."""
+    """Reject what would corrupt training or evaluation: NaN, absurd values, bad stamps."""
     for what, stamps, values, where in (
             ('IMU', rec.imu_stamp_ns, rec.imu, imu_file or rec.source),
             ('ground truth', rec.gt_stamp_ns, np.hstack([rec.gt_quat, rec.gt_pos]),
@@ -157,6 +158,11 @@ def check_recording(rec: Recording, imu_file: object = None, gt_file: object = N
             kind = 'duplicate' if stamps[i + 1] == stamps[i] else 'non-monotonic'
             raise DatasetError(f'{where}: {kind} {what} stamp at sample {i + 1} '
                                f'({stamps[i]} then {stamps[i + 1]} ns)')
+    bad = np.flatnonzero(~in_range(rec.imu[:, :3], rec.imu[:, 3:]))
+    if len(bad):
+        raise DatasetError(f'{imu_file or rec.source}: IMU values out of the physical range '
+                           f'({describe()}) in sample {bad[0]}: {rec.imu[bad[0]].tolist()} '
+                           f'({len(bad)} such samples)')
     norms = np.linalg.norm(rec.gt_quat, axis=1)
     if np.any(norms < 0.5) or np.any(norms > 1.5):
         raise DatasetError(f'{gt_file or rec.source}: ground-truth quaternions are not unit '

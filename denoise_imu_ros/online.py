@@ -19,7 +19,8 @@ returns the corrected gyro with the integrated attitude or a counted drop. The R
 and the bag processor both drive it, so they publish identical numbers.
 
 Policies (each counted in :attr:`OnlineDenoiser.counts`):
-- a non-finite field, a zero stamp, a duplicate or out-of-order stamp: sample dropped;
+- a non-finite field, a value beyond the physical range (:mod:`denoise_imu_ros.limits`),
+  a zero stamp, a duplicate or out-of-order stamp: sample dropped;
 - a stamp more than ``time_jump_s`` behind the last one (bag loop, clock reset): full
   reset (network history and attitude), the sample is the first of a new recording;
 - a gap longer than ``max_gap_factor`` nominal periods: the network history restarts
@@ -35,10 +36,11 @@ from typing import Any, NamedTuple
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from .limits import in_range
 from .modelfile import ModelFile, sample_rate
 from .streaming import StreamingCorrector
 
-DROP_CAUSES = ('non_finite', 'zero_stamp', 'duplicate_stamp', 'out_of_order')
+DROP_CAUSES = ('non_finite', 'out_of_range', 'zero_stamp', 'duplicate_stamp', 'out_of_order')
 
 
 class Output(NamedTuple):
@@ -101,6 +103,8 @@ class OnlineDenoiser:
         """Correct one sample; returns an :class:`Output` or the cause of a drop."""
         if not (np.isfinite(gyro).all() and np.isfinite(accel).all()):
             return self._drop('non_finite')
+        if not in_range(gyro, accel):
+            return self._drop('out_of_range')
         if stamp_ns <= 0:
             return self._drop('zero_stamp')
         event = None

@@ -87,3 +87,37 @@ def test_errors_are_one_line_naming_the_file(model_file, tmp_path, capsys):
     assert main(['correct', '--model', str(model_file), '--input', str(SAMPLE),
                  '--imu-topic', '/imu9', '--output', str(tmp_path / 'o.csv')]) == 1
     assert "no topic '/imu9'" in _error(capsys)
+
+
+def test_one_absurd_imu_row_is_an_error_offline_and_a_counted_drop_in_process_bag(
+        model_file, tmp_path, capsys):
+    import dataclasses
+    from denoise_imu_ros.bags import TYPESTORE, write_bag
+    from denoise_imu_ros.dataset import read_asl
+    from test_dataset import _break, T0
+    root = write_asl(tmp_path / 'seq', n_imu=1200)
+    _break(root / 'mav0' / 'imu0' / 'data.csv', 700, f'{T0 + 3_495_000_000},5e38,0,0,0,0,9.8')
+    for cmd in (['correct', '--model', str(model_file), '--input', str(root), '--output',
+                 str(tmp_path / 'o.csv')],
+                ['eval', '--model', str(model_file), '--data', str(tmp_path), '--sequences',
+                 'seq', '--out', str(tmp_path / 'e'), '--no-plots']):
+        assert main(cmd) == 1
+        err = _error(capsys)
+        assert 'imu0/data.csv: IMU values out of the physical range' in err
+        assert 'in sample 699' in err
+    assert not (tmp_path / 'o.csv').exists()
+    # a bag holding the same row: process-bag drops and counts it, writes only finite data
+    clean = read_asl(write_asl(tmp_path / 'clean', n_imu=1200))
+    imu = clean.imu.copy()
+    imu[699, 0] = 5e38
+    write_bag(dataclasses.replace(clean, imu=imu), tmp_path / 'bad_bag')
+    assert main(['process-bag', str(tmp_path / 'bad_bag'), str(tmp_path / 'out_bag'),
+                 '--model', str(model_file)]) == 0
+    assert 'out_of_range 1' in capsys.readouterr().out
+    from rosbags.highlevel import AnyReader
+    with AnyReader([tmp_path / 'out_bag'], default_typestore=TYPESTORE) as reader:
+        conns = [c for c in reader.connections if c.topic == '/imu/corrected']
+        values = [reader.deserialize(raw, c.msgtype).angular_velocity
+                  for c, _, raw in reader.messages(connections=conns)]
+    assert len(values) == 1199
+    assert np.isfinite([[v.x, v.y, v.z] for v in values]).all()

@@ -55,11 +55,14 @@ def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
     bad_gyro = np.array([np.nan, 0.0, 0.0])
     assert den.process(int(t[1]), bad_gyro, imu[1, 3:]) == 'non_finite'
     assert den.process(int(t[1]), imu[1, :3], np.array([0.0, np.inf, 0.0])) == 'non_finite'
+    assert den.process(int(t[1]), np.array([5e38, 0.0, 0.0]), imu[1, 3:]) == 'out_of_range'
+    assert den.process(int(t[1]), imu[1, :3], np.array([0.0, 0.0, -1e21])) == 'out_of_range'
     assert den.process(0, imu[1, :3], imu[1, 3:]) == 'zero_stamp'
     assert den.process(int(t[0]), imu[1, :3], imu[1, 3:]) == 'duplicate_stamp'
     assert den.process(int(t[0]) - 1000, imu[1, :3], imu[1, 3:]) == 'out_of_order'
     assert isinstance(den.process(int(t[1]), imu[1, :3], imu[1, 3:]), Output)
-    assert den.counts == {'non_finite': 2, 'zero_stamp': 1, 'duplicate_stamp': 1,
+    assert den.counts == {'non_finite': 2, 'out_of_range': 2, 'zero_stamp': 1,
+                          'duplicate_stamp': 1,
                           'out_of_order': 1, 'accepted': 2, 'gap_resets': 0,
                           'time_jump_resets': 0}
 
@@ -91,3 +94,35 @@ def test_reset_attitude_reinitialises_from_gravity_at_the_next_sample(seq, model
     den.reset_attitude()
     out = den.process(int(seq.stamp_ns[500]), seq.imu[500, :3], seq.imu[500, 3:])
     np.testing.assert_allclose(out.attitude, gravity_attitude(seq.imu[500, 3:]).as_quat())
+
+
+EXTREMES = [1.8e308, -1.8e308, 5e38, 3.4e38, -3e38, 1e30, 1e20, 101.0, 2001.0, np.inf,
+            -np.inf, np.nan]
+ODD_BUT_VALID = [5e-324, -5e-324, 1e-310, 0.0, -0.0, 99.0, -1999.0]
+
+
+def test_fuzz_ten_thousand_samples_with_extremes_never_yield_a_non_finite_output(seq, model):
+    rng = np.random.default_rng(1)
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    answered = out_of_range = 0
+    n = 5000
+    for k in range(n):  # a real sample, then one with extreme or odd fields, 1 ms later
+        t = int(seq.stamp_ns[k])
+        out = den.process(t, seq.imu[k, :3], seq.imu[k, 3:])
+        assert isinstance(out, Output) and np.isfinite(out.gyro).all()
+        assert np.isfinite(out.attitude).all()
+        answered += 1
+        sample = seq.imu[k].copy()
+        fields = rng.choice(6, size=rng.integers(1, 4), replace=False)
+        pool = EXTREMES if rng.random() < 0.7 else ODD_BUT_VALID
+        sample[fields] = rng.choice(pool, size=len(fields))
+        bad = not (np.isfinite(sample).all() and np.abs(sample[:3]).max() <= 100
+                   and np.abs(sample[3:]).max() <= 2000)
+        out = den.process(t + 1_000_000, sample[:3], sample[3:])
+        if bad:
+            assert out in ('non_finite', 'out_of_range')
+            out_of_range += out == 'out_of_range'
+        else:
+            assert isinstance(out, Output) and np.isfinite(out.gyro).all()
+    assert answered == n and out_of_range > 1000
+    assert den.counts['non_finite'] + den.counts['out_of_range'] > 0.6 * n
