@@ -36,5 +36,5 @@ def in_range(gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
 
 
 def describe() -> str:
-    """The limits, for error messages."""
+    """Describe the limits, for error messages."""
     return f'|gyro| <= {MAX_GYRO_RAD_S:g} rad/s, |accel| <= {MAX_ACCEL_M_S2:g} m/s^2'
