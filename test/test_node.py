@@ -140,12 +140,16 @@ def test_fuzz_two_thousand_messages_with_garbage(harness):
             accel[rng.integers(3)] = np.nan
         elif kind < 0.10:
             gyro *= 1e30
+        elif kind < 0.16:  # extreme finite values over the whole float64 range
+            (gyro if kind < 0.13 else accel)[rng.integers(3)] = rng.choice(
+                [1.8e308, -1.8e308, 5e38, 3.4e38, -1e20, 5e-324, -0.0, 1e-310])
         stamp = 0 if kind > 0.98 else max(t, 0)
         msgs.append(imu_msg(stamp, gyro, accel))
     h.send(msgs)
     counts = h.node._denoiser.counts
     dropped = sum(counts[c] for c in DROP_CAUSES)
     assert counts['accepted'] + dropped == 2000
+    assert counts['out_of_range'] > 20
     assert len(h.corrected) == counts['accepted'] > 1000
     for m in h.corrected:
         assert np.isfinite([m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
