@@ -79,13 +79,16 @@ def _ensemble(args: argparse.Namespace) -> None:
 
 def _check_data(args: argparse.Namespace) -> None:
     import json
-    from .dataset import align, load_recording
-    from .quality import check_sequence, markdown
+    from .dataset import load_recording
+    from .quality import check, markdown
     rec = load_recording(args.input, args.imu_topic, args.pose_topic)
-    report = check_sequence(align(rec), rec.gt_stamp_ns)
+    report = check(rec, args.max_offset)
     sys.stdout.write(markdown(report))
     if args.json:
         print(json.dumps(report))
+    if report['usable'] == 'no':
+        raise DenoiseError(f'{args.input}: not usable for training: '
+                           + '; '.join(report['reasons']))
 
 
 def _eval(args: argparse.Namespace) -> None:
@@ -200,6 +203,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help='data quality of one recording: rates, pose holes, label noise')
     p.add_argument('input', help='ASL sequence folder or bag with IMU and poses')
     p.add_argument('--json', action='store_true', help='also print one JSON line at the end')
+    p.add_argument('--max-offset', type=float, default=0.5,
+                   help='clock-offset search range, +- s (default 0.5)')
     p.set_defaults(func=_check_data)
 
     p = sub.add_parser('correct', parents=[topics],

@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-Data quality before training (``denoise-imu check-data``): rates, holes, label noise.
+Data quality before training (``denoise-imu check-data``): clocks, frames, label noise.
 
 The loss compares gyro increments with ground-truth increments over j samples. If the
 ground truth jitters (mocap) or is interpolated between sparse poses (VIO at 10-20 Hz),
@@ -22,22 +22,149 @@ and reports the RMS increment residual per length j; divided by the increment's
 duration it is the gyro error (deg/s) the noise alone would stand for. Above
 NOISE_RATE_LIMIT_DEG_S, more than the corrections the method makes (at most ~1 deg/s,
 the paper), an increment length is noise-dominated.
+
+Alignment: the mean angular rate over short windows (50 ms, or two pose periods) of the
+gyro and of the poses are compared; for each candidate clock offset the rotation from
+the pose body frame to the IMU frame and the gyro bias follow in closed form (Kabsch
+with centring), and the offset minimising the residual is refined to a fraction of a
+millisecond by a parabola. Confidence figures are the spread of the same estimates on
+four consecutive quarters of the recording (standard error of their mean).
 """
 
 from __future__ import annotations
 
 import math
 from typing import Any
+import warnings
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .dataset import Sequence
+from .dataset import align, Recording, Sequence
 from .metrics import integrate
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
 BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)
 NOISE_RATE_LIMIT_DEG_S = 1.0
+RATE_WINDOW_S = 0.05       # window of the mean rates compared (at least two pose periods)
+GRID_S = 1e-3              # pose-rate grid
+MAX_OFFSET_S = 0.5         # default clock-offset search range (+-)
+MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
+MIN_DURATION_S = 30.0      # shorter recordings cannot train (window, tail, warm-up)
+OFFSET_TOLERANCE_S = 1e-3  # above: apply the offset
+ROTATION_TOLERANCE_DEG = 0.2  # above: apply the rotation
+QUARTERS = 4
+
+
+class Rates:
+    """Mean angular rates of the gyro and of the poses over matching windows."""
+
+    def __init__(self, rec: Recording, window_s: float) -> None:
+        t0 = rec.gt_stamp_ns[0]
+        # poses on a fine uniform grid of their own clock (holes marked), via align()
+        grid_ns = t0 + np.arange(0, rec.gt_stamp_ns[-1] - t0, int(GRID_S * 1e9))
+        fake = Recording(rec.name, rec.source, grid_ns, np.zeros((len(grid_ns), 6)),
+                         rec.gt_stamp_ns, rec.gt_quat, rec.gt_pos)
+        grid = align(fake)
+        w = max(1, int(round(window_s / GRID_S)))
+        rot = Rotation.from_quat(grid.gt_quat)
+        self.pose_t = (grid.stamp_ns[:-w] - t0) * 1e-9          # window starts, pose clock
+        self.pose = (rot[:-w].inv() * rot[w:]).as_rotvec() / (w * GRID_S)
+        self.pose_ok = grid.gt_valid[:-w] & grid.gt_valid[w:]
+        # gyro mean rates over windows of the same length, every sample; a sample is the
+        # rate at its stamp, so n samples cover from half a period before the first
+        t = (rec.imu_stamp_ns - t0) * 1e-9
+        n = max(1, int(round(window_s / np.median(np.diff(t)))))
+        steps = rec.imu[:-1, :3] * np.diff(t)[:, None]
+        cs = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
+        self.imu_t = t[:-n] - 0.5 * np.diff(t)[:len(t) - n]
+        self.imu = (cs[n:] - cs[:-n]) / (t[n:] - t[:-n])[:, None]
+        self.window_s = n * float(np.median(np.diff(t)))
+
+    def matched(self, offset_s: float, part: slice = slice(None)) -> tuple[np.ndarray, ...]:
+        """Gyro and pose rates of the IMU windows that trusted poses cover, at an offset."""
+        tau = self.imu_t[part] - offset_s  # t_pose = t_imu - offset
+        inside = (tau >= self.pose_t[0]) & (tau <= self.pose_t[-1])
+        k = np.clip(np.round((tau - self.pose_t[0]) / GRID_S).astype(int), 0,
+                    len(self.pose_t) - 1)
+        ok = inside & self.pose_ok[k]
+        pose = np.stack([np.interp(tau[ok], self.pose_t, self.pose[:, i]) for i in range(3)],
+                        axis=1)
+        return self.imu[part][ok], pose
+
+
+def fit_frame(imu: np.ndarray, pose: np.ndarray) -> tuple[Rotation, np.ndarray, float]:
+    """Rotation R and bias b with imu = R pose + b (least squares); RMS residual."""
+    mi, mp = imu.mean(0), pose.mean(0)
+    with warnings.catch_warnings():  # degenerate motion: reported as missing excitation
+        warnings.simplefilter('ignore', UserWarning)
+        rot, _ = Rotation.align_vectors(imu - mi, pose - mp)
+    bias = mi - rot.apply(mp)
+    res = imu - rot.apply(pose) - bias
+    return rot, bias, float(np.sqrt(np.mean(res ** 2)))
+
+
+def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
+                 center: float = 0.0) -> float:
+    """Clock offset (s) minimising the frame-fitted residual: coarse grid, fine, parabola."""
+    def cost(d: float) -> float:
+        imu, pose = rates.matched(d, part)
+        return fit_frame(imu, pose)[2] if len(imu) > 100 else math.inf
+
+    best = center
+    for span, step in ((max_offset_s, 2e-3), (4e-3, 2e-4)):
+        grid = best + np.arange(-span, span + step / 2, step)
+        costs = np.array([cost(d) for d in grid])
+        i = int(np.argmin(costs))
+        best = float(grid[i])
+    if 0 < i < len(grid) - 1:  # vertex of the parabola through the three best points
+        c0, c1, c2 = costs[i - 1:i + 2]
+        denom = c0 - 2 * c1 + c2
+        if denom > 0:
+            best += 0.5 * step * (c0 - c2) / denom
+    return best
+
+
+def alignment(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
+    """
+    Clock offset and frame rotation between the poses and the IMU, with confidences.
+
+    ``time_offset_s``: t_imu = t_pose + offset. ``imu_from_pose_rotation_xyzw``:
+    omega_imu = R omega_pose_body. Also the gyro bias, per-axis scale and excitation.
+    """
+    period = float(np.median(np.diff(rec.gt_stamp_ns))) * 1e-9
+    rates = Rates(rec, max(RATE_WINDOW_S, 2 * period))
+    offset = _best_offset(rates, max_offset_s)
+    imu, pose = rates.matched(offset)
+    rot, bias, rms = fit_frame(imu, pose)
+    aligned = rot.apply(pose)
+    power = (aligned ** 2).sum(0)
+    observed = power > 1e-12 * len(aligned)  # an axis without rotation has no scale
+    scale = ((imu - bias) * aligned).sum(0) / np.where(observed, power, 1.0)
+    # confidence: the same estimates on four quarters of the recording
+    n = len(rates.imu_t)
+    offsets, angles = [], []
+    for q in range(QUARTERS):
+        part = slice(q * n // QUARTERS, (q + 1) * n // QUARTERS)
+        offsets.append(_best_offset(rates, 4e-3, part, center=offset))
+        qi, qp = rates.matched(offset, part)
+        if len(qi) > 100:
+            angles.append(math.degrees((fit_frame(qi, qp)[0] * rot.inv()).magnitude()))
+    return {
+        'time_offset_s': offset,
+        'time_offset_std_s': float(np.std(offsets) / math.sqrt(len(offsets))),
+        'time_offset_at_search_limit': bool(abs(offset) > max_offset_s - 2e-3),
+        'imu_from_pose_rotation_xyzw': rot.as_quat().tolist(),
+        'imu_from_pose_rotation_deg': math.degrees(rot.magnitude()),
+        'imu_from_pose_rotation_std_deg': float(np.sqrt(np.mean(np.square(angles)))
+                                                / math.sqrt(max(len(angles), 1))),
+        'gyro_bias_vs_pose_deg_s': np.degrees(bias).tolist(),
+        'gyro_scale_error_percent': [float(100 * (v - 1)) if ok else None
+                                     for v, ok in zip(scale, observed)],
+        'excitation_rms_deg_s': np.degrees(np.sqrt(np.mean(aligned ** 2, axis=0))).tolist(),
+        'rate_residual_rms_deg_s': math.degrees(rms),
+        'rate_window_s': rates.window_s,
+    }
 
 
 def increment_residuals(seq: Sequence, gyro: np.ndarray, length: int) -> np.ndarray:
@@ -71,10 +198,16 @@ def label_noise(seq: Sequence) -> dict[str, Any]:
             'noise_dominated_increments': noisy}
 
 
-def check_sequence(seq: Sequence, gt_stamp_ns: np.ndarray) -> dict[str, Any]:
-    """Rates, stamp jitter, ground-truth holes and label noise of one aligned recording."""
+def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
+    """
+    Everything check-data reports on one recording, with a verdict and its reasons.
+
+    ``usable`` is ``yes``, ``after alignment`` (the clock offset or the frame rotation
+    exceed OFFSET_TOLERANCE_S / ROTATION_TOLERANCE_DEG) or ``no``.
+    """
+    seq = align(rec)
     imu_dt = np.diff(seq.stamp_ns) * 1e-9
-    gt_dt = np.diff(gt_stamp_ns) * 1e-9
+    gt_dt = np.diff(rec.gt_stamp_ns) * 1e-9
     holes = ~seq.gt_valid
     starts = np.flatnonzero(np.diff(np.r_[0, holes.astype(np.int8)]) == 1)
     ends = np.flatnonzero(np.diff(np.r_[holes.astype(np.int8), 0]) == -1)
@@ -87,33 +220,74 @@ def check_sequence(seq: Sequence, gt_stamp_ns: np.ndarray) -> dict[str, Any]:
               'pose_hole_fraction': float(holes.mean()),
               'duration_s': float(imu_dt.sum())}
     report.update(label_noise(seq))
+    report.update(alignment(rec, max_offset_s))
     noisy = report['noise_dominated_increments']
     clean = [j for j in report['increments'] if j >= 16 and j not in noisy]
     report['shortest_clean_increment'] = clean[0] if clean else None
     short = [j for j in (16, 32) if j in noisy]
     if not short:
-        report['verdict'] = ('the 16- and 32-sample increments of the paper are not '
-                             'dominated by ground-truth noise')
+        report['label_noise'] = ('the 16- and 32-sample increments of the paper are not '
+                                 'dominated by ground-truth noise')
     else:
-        report['verdict'] = (
+        report['label_noise'] = (
             f'increments of {" and ".join(map(str, short))} samples are dominated by '
             'ground-truth noise' + (f'; from {clean[0]} samples on they are not'
                                     if clean else '; so are all up to 512 samples'))
+    reasons = []
+    if report['duration_s'] < MIN_DURATION_S:
+        reasons.append(f'too short: {report["duration_s"]:.1f} s of IMU with poses, training '
+                       f'needs {MIN_DURATION_S:g} s')
+    motion = float(np.sqrt(np.mean(np.square(report['excitation_rms_deg_s']))))
+    if report['time_offset_at_search_limit'] or report['rate_residual_rms_deg_s'] > 0.5 * motion:
+        reasons.append(
+            f'the poses do not follow the gyro at any clock offset within +-{max_offset_s:g} s '
+            f'(rate residual {report["rate_residual_rms_deg_s"]:.1f} deg/s RMS against '
+            f'{motion:.1f} deg/s of motion): the offset is beyond the search range, or the '
+            'poses are not of this IMU')
+    for axis, rms in zip('xyz', report['excitation_rms_deg_s']):
+        if rms < MIN_EXCITATION_DEG_S:
+            reasons.append(f'no rotation about the IMU {axis} axis ({rms:.2f} deg/s RMS)')
+    if reasons:
+        report['usable'], report['reasons'] = 'no', reasons
+    elif (abs(report['time_offset_s']) > OFFSET_TOLERANCE_S
+          or report['imu_from_pose_rotation_deg'] > ROTATION_TOLERANCE_DEG):
+        report['usable'] = 'after alignment'
+        report['reasons'] = [
+            f'poses {1e3 * report["time_offset_s"]:+.1f} ms off the IMU clock and in a frame '
+            f'{report["imu_from_pose_rotation_deg"]:.2f} deg from the IMU\'s: apply both '
+            'before training']
+    else:
+        report['usable'], report['reasons'] = 'yes', []
+    report['verdict'] = {'yes': 'usable for training', 'after alignment':
+                         'usable for training with alignment applied',
+                         'no': 'not usable for training'}[report['usable']]
     return report
 
 
 def markdown(report: dict[str, Any]) -> str:
-    """Human-readable report of :func:`check_sequence`."""
-    lines = [f'{report["name"]}: {report["duration_s"]:.1f} s',
-             f'  IMU {report["imu_rate_hz"]:.2f} Hz, stamp jitter '
-             f'{report["imu_stamp_jitter_ms"]:.3f} ms',
-             f'  poses {report["pose_rate_hz"]:.1f} Hz, {report["pose_holes"]} holes '
-             f'(longest {report["pose_longest_hole_s"]:.2f} s, '
-             f'{100 * report["pose_hole_fraction"]:.1f} % of IMU stamps)',
+    """Human-readable report of :func:`check`."""
+    r = report
+    rot = Rotation.from_quat(r['imu_from_pose_rotation_xyzw']).as_rotvec(degrees=True)
+    lines = [f'{r["name"]}: {r["duration_s"]:.1f} s',
+             f'  IMU {r["imu_rate_hz"]:.2f} Hz, stamp jitter {r["imu_stamp_jitter_ms"]:.3f} ms',
+             f'  poses {r["pose_rate_hz"]:.1f} Hz, {r["pose_holes"]} holes (longest '
+             f'{r["pose_longest_hole_s"]:.2f} s, {100 * r["pose_hole_fraction"]:.1f} % of '
+             'IMU stamps)',
+             f'  clock offset (t_imu = t_pose + offset): {1e3 * r["time_offset_s"]:+.2f} '
+             f'+- {1e3 * r["time_offset_std_s"]:.2f} ms',
+             f'  rotation pose body -> IMU: {r["imu_from_pose_rotation_deg"]:.3f} +- '
+             f'{r["imu_from_pose_rotation_std_deg"]:.3f} deg (rotation vector '
+             + ', '.join(f'{v:+.3f}' for v in rot) + ' deg)',
              '  gyro bias against the poses (deg/s): '
-             + ', '.join(f'{b:+.3f}' for b in report['gyro_bias_deg_s']),
-             '  increment residual after that bias (samples: mrad per axis, as deg/s):']
+             + ', '.join(f'{b:+.3f}' for b in r['gyro_bias_vs_pose_deg_s']),
+             '  gyro scale error (%): '
+             + ', '.join('-' if v is None else f'{v:+.3f}' for v in r['gyro_scale_error_percent']),
+             '  excitation, RMS rate per IMU axis (deg/s): '
+             + ', '.join(f'{v:.1f}' for v in r['excitation_rms_deg_s']),
+             '  increment residual after a constant bias (samples: mrad per axis, as deg/s):']
     lines += [f'    {j:4d}: {p["residual_mrad"]:7.3f}  {p["noise_rate_deg_s"]:7.3f}'
-              for j, p in report['increments'].items()]
-    lines.append(f'  verdict: {report["verdict"]}')
+              for j, p in r['increments'].items()]
+    lines.append(f'  label noise: {r["label_noise"]}')
+    lines.append(f'  verdict: {r["verdict"]}' + (': ' + '; '.join(r['reasons'])
+                                                 if r['reasons'] else ''))
     return '\n'.join(lines) + '\n'

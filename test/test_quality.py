@@ -4,11 +4,13 @@
 
 import dataclasses
 import json
+import math
 
 from denoise_imu_ros.cli import main
-from denoise_imu_ros.dataset import align, load_sequence, read_asl
-from denoise_imu_ros.quality import check_sequence
+from denoise_imu_ros.dataset import align, read_asl
+from denoise_imu_ros.quality import alignment, check, label_noise
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 from test_dataset import write_asl
 
@@ -16,20 +18,22 @@ from test_dataset import write_asl
 def test_clean_and_jittery_ground_truth_are_told_apart(tmp_path):
     rec = read_asl(write_asl(tmp_path / 's', n_imu=6000, gt_rate=120.0, gt_dir='mocap0',
                              gt_hole=(10.0, 11.0), gyro_bias=0.01))
-    clean = check_sequence(align(rec), rec.gt_stamp_ns)
+    clean = check(rec)
     assert abs(clean['gyro_bias_deg_s'][2] - np.degrees(0.01)) < 1e-3
     assert clean['noise_dominated_increments'] == []
     assert clean['pose_holes'] == 1 and 0.9 < clean['pose_longest_hole_s'] < 1.1
     assert abs(clean['pose_rate_hz'] - 120.0) < 0.5 and abs(clean['imu_rate_hz'] - 200) < 0.1
+    assert clean['usable'] == 'no'  # a constant yaw rate: no x or y rotation, no clock
     # 3 mrad of white jitter on every pose: short increments measure it, not the gyro
     rng = np.random.default_rng(0)
     jitter = Rotation.from_rotvec(rng.normal(0, 3e-3, (len(rec.gt_quat), 3)))
     noisy_rec = dataclasses.replace(
         rec, gt_quat=(Rotation.from_quat(rec.gt_quat) * jitter).as_quat())
-    noisy = check_sequence(align(noisy_rec), rec.gt_stamp_ns)
+    noisy = label_noise(align(noisy_rec))
     assert {16, 32} <= set(noisy['noise_dominated_increments'])
-    assert noisy['shortest_clean_increment'] in (64, 128, 256)
-    assert noisy['verdict'].startswith('increments of 16 and 32 samples are dominated')
+    assert 64 not in noisy['noise_dominated_increments']
+    assert check(noisy_rec)['label_noise'].startswith(
+        'increments of 16 and 32 samples are dominated by ground-truth noise; from 64')
 
 
 def test_check_data_on_real_recordings(data_dir, capsys):
@@ -37,7 +41,49 @@ def test_check_data_on_real_recordings(data_dir, capsys):
                  '--json']) == 0
     tumvi = json.loads(capsys.readouterr().out.splitlines()[-1])
     assert {16, 32} <= set(map(int, tumvi['noise_dominated_increments']))
-    seq = load_sequence(data_dir / 'euroc' / 'V1_01_easy')  # 20 Hz corrected poses
-    euroc = check_sequence(seq, read_asl(data_dir / 'euroc' / 'V1_01_easy').gt_stamp_ns)
+    assert abs(tumvi['time_offset_s']) < 1e-3 and tumvi['usable'] == 'yes'
+    assert tumvi['imu_from_pose_rotation_deg'] < 0.2
+    euroc = check(read_asl(data_dir / 'euroc' / 'V1_01_easy'))  # 20 Hz corrected poses
     assert 19.5 < euroc['pose_rate_hz'] < 20.5
     assert not {16, 32} & set(euroc['noise_dominated_increments'])
+    assert abs(euroc['time_offset_s']) < 1e-3 and euroc['imu_from_pose_rotation_deg'] < 0.2
+
+
+@pytest.mark.parametrize('offset_ms, rotvec_deg', [
+    (37.3, (30.0, -20.0, 45.0)), (-12.6, (0.0, 90.0, 0.0)), (81.0, (-170.0, 5.0, 10.0))])
+def test_a_shifted_clock_and_a_rotated_pose_frame_are_recovered(euroc, offset_ms, rotvec_deg):
+    rec = read_asl(euroc / 'V1_03_difficult')
+    # poses of a marker body (rotated, 12 cm lever arm) on a clock offset_ms late
+    marker = Rotation.from_rotvec(rotvec_deg, degrees=True)  # imu_from_pose
+    body = Rotation.from_quat(rec.gt_quat)
+    moved = dataclasses.replace(
+        rec, gt_stamp_ns=rec.gt_stamp_ns - int(offset_ms * 1e6),
+        gt_quat=(body * marker).as_quat(), gt_pos=rec.gt_pos + body.apply([0.12, 0.0, 0.05]))
+    base = alignment(rec)
+    found = alignment(moved)
+    assert abs(found['time_offset_s'] - base['time_offset_s'] - offset_ms * 1e-3) < 1e-3
+    rot = Rotation.from_quat(found['imu_from_pose_rotation_xyzw'])
+    assert math.degrees((rot * marker.inv()).magnitude()) < 0.2
+    assert found['time_offset_std_s'] < 1e-3 and found['imu_from_pose_rotation_std_deg'] < 0.2
+    assert check(moved)['usable'] == 'after alignment'
+
+
+def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, capsys, euroc):
+    # yaw only: nothing about x and y
+    flat = write_asl(tmp_path / 'flat', n_imu=8000)
+    assert main(['check-data', str(flat)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert 'not usable for training: no rotation about the IMU x axis' in err
+    # too short, and poses 2 s off the clock with a 0.5 s search range
+    rec = read_asl(euroc / 'MH_01_easy')
+    short = dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:4000],
+                                imu=rec.imu[:4000])
+    assert check(short)['reasons'][0].startswith('too short: 18.9 s of IMU with poses')
+    late = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns - 2_000_000_000)
+    assert 'do not follow the gyro at any clock offset within +-0.5 s' in ' '.join(
+        check(late)['reasons'])
+    # no overlap at all
+    away = write_asl(tmp_path / 'away', n_imu=2000, gt_offset_s=20.0)
+    assert main(['check-data', str(away)]) == 1
+    assert 'do not overlap in time' in capsys.readouterr().err
