@@ -95,7 +95,7 @@ def _eval(args: argparse.Namespace) -> None:
     from .evaluate import evaluate
     evaluate(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
              imu_topic=args.imu_topic, pose_topic=args.pose_topic, plots=not args.no_plots,
-             start_sample=args.start_sample)
+             start_sample=args.start_sample, align_poses=args.align)
 
 
 def _correct(args: argparse.Namespace) -> None:
@@ -196,6 +196,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--start-sample', type=int, default=0,
                    help='score from this sample on (16032: the validation tail of the '
                         'training recipe); the network still sees the samples before')
+    p.add_argument('--align', choices=('none', 'auto'), default='none',
+                   help='auto: move the poses onto the IMU clock and frame first (check-data)')
     p.add_argument('--no-plots', action='store_true')
     p.set_defaults(func=_eval)
 

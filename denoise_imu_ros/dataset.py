@@ -24,6 +24,7 @@ scalar-last ``(x, y, z, w)`` and rotate body (IMU) vectors into the world frame.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -63,6 +64,7 @@ class Sequence:
     gt_quat: np.ndarray         # (N, 4) float64 xyzw, slerped to the IMU stamps
     gt_pos: np.ndarray          # (N, 3) float64, linearly interpolated
     gt_valid: np.ndarray        # (N,) bool: False inside ground-truth holes
+    alignment: dict | None = None  # clock offset and frame rotation applied to the poses
 
     def __len__(self) -> int:
         """Return the number of IMU samples."""
@@ -76,7 +78,8 @@ class Sequence:
     def tail(self, start: int) -> Sequence:
         """Return the samples from index ``start`` on."""
         return Sequence(self.name, self.stamp_ns[start:], self.imu[start:],
-                        self.gt_quat[start:], self.gt_pos[start:], self.gt_valid[start:])
+                        self.gt_quat[start:], self.gt_pos[start:], self.gt_valid[start:],
+                        self.alignment)
 
     @property
     def rate_hz(self) -> float:
@@ -276,10 +279,45 @@ def load_recording(path: str | Path, imu_topic: str | None = None,
     return read_asl(path)
 
 
+def apply_alignment(rec: Recording, time_offset_s: float,
+                    imu_from_pose_rotation_xyzw: list[float]) -> Recording:
+    """
+    Poses moved onto the IMU clock and into the IMU frame.
+
+    ``t_imu = t_pose + time_offset_s`` and ``omega_imu = R omega_pose_body``, so the IMU's
+    attitude is the pose's times R^-1 (positions are left as they are: only their
+    distances are used, for ROE).
+    """
+    rot = Rotation.from_quat(imu_from_pose_rotation_xyzw)
+    return Recording(rec.name, rec.source, rec.imu_stamp_ns, rec.imu,
+                     rec.gt_stamp_ns + int(round(time_offset_s * 1e9)),
+                     (Rotation.from_quat(rec.gt_quat) * rot.inv()).as_quat(), rec.gt_pos)
+
+
 def load_sequence(path: str | Path, imu_topic: str | None = None,
                   pose_topic: str | None = None,
                   max_gt_gap_s: float | None = None,
-                  min_samples: int = 1) -> Sequence:
-    """Read an ASL folder or a bag and align it; topics are auto-detected when None."""
-    return align(load_recording(path, imu_topic, pose_topic), max_gt_gap_s=max_gt_gap_s,
-                 min_samples=min_samples)
+                  min_samples: int = 1, align_poses: str | dict = 'none') -> Sequence:
+    """
+    Read an ASL folder or a bag and align it; topics are auto-detected when None.
+
+    ``align_poses``: ``none``, ``auto`` (clock offset and frame rotation estimated as
+    ``check-data`` does) or ``{time_offset_s, imu_from_pose_rotation_xyzw}``; what was
+    applied is kept in :attr:`Sequence.alignment`.
+    """
+    rec = load_recording(path, imu_topic, pose_topic)
+    used = None
+    if align_poses == 'auto':
+        from .quality import alignment  # quality builds on this module
+        found = alignment(rec)
+        used = {k: found[k] for k in ('time_offset_s', 'time_offset_std_s',
+                                      'imu_from_pose_rotation_xyzw',
+                                      'imu_from_pose_rotation_std_deg')}
+    elif isinstance(align_poses, dict):
+        used = dict(align_poses)
+    elif align_poses != 'none':
+        raise DatasetError(f'align must be none, auto or a mapping, not {align_poses!r}')
+    if used is not None:
+        rec = apply_alignment(rec, used['time_offset_s'], used['imu_from_pose_rotation_xyzw'])
+    seq = align(rec, max_gt_gap_s=max_gt_gap_s, min_samples=min_samples)
+    return dataclasses.replace(seq, alignment=used)

@@ -75,6 +75,9 @@ class TrainConfig:
     pose_topic: str | None = None      # bags only; None = the only pose topic
     # ground-truth holes longer than this (s) are masked; None: 2.5 of its own periods
     max_gt_gap_s: float | None = None
+    # poses onto the IMU clock and frame: none, auto (estimated per recording, as
+    # check-data does) or {time_offset_s: s, imu_from_pose_rotation_xyzw: [x, y, z, w]}
+    align: str | dict = 'none'
     gyro_std_deg: list[float] = field(default_factory=lambda: [1.0, 2.0, 5.0])  # sigma_g
     dropout: float = 0.1
     calibration_only: bool = False     # the 12-parameter "calibrated IMU" baseline
@@ -144,6 +147,11 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: window must be a multiple of {span}')
     if not cfg.sequences:
         raise TrainingError(f'{path}: no training sequences')
+    if not (cfg.align in ('none', 'auto') or (
+            isinstance(cfg.align, dict)
+            and set(cfg.align) == {'time_offset_s', 'imu_from_pose_rotation_xyzw'})):
+        raise TrainingError(f'{path}: align must be none, auto or a mapping with '
+                            'time_offset_s and imu_from_pose_rotation_xyzw')
     if cfg.steps < 1:
         raise TrainingError(f'{path}: steps must be at least 1')
     if cfg.workers < 1:
@@ -370,7 +378,8 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
     seqs = []
     for name in cfg.sequences:
         seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
-                            cfg.max_gt_gap_s, min_samples=max(min_len, receptive_field))
+                            cfg.max_gt_gap_s, min_samples=max(min_len, receptive_field),
+                            align_poses=cfg.align)
         head = cfg.window + cfg.max_offset
         for part, valid in (('training window', seq.gt_valid[:head + 1]),
                             ('validation tail', seq.gt_valid[head:])):
@@ -481,6 +490,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
         'sample_rate_hz': float(np.mean([s.rate_hz for s in seqs])),
         'train_sequences': cfg.sequences,
         'train_config': cfg.recipe(),
+        'pose_alignment': {s.name: s.alignment for s in seqs if s.alignment is not None},
         'run': cfg.run_environment(),
         'selected': chosen,
         'validation': candidates[chosen],

@@ -21,8 +21,8 @@ CONFIG = Path(__file__).parents[1] / 'config' / 'train_euroc.yaml'
 def _short(euroc, **changes):
     """Return the EuRoC recipe on two sequences with 10 s windows and a few steps."""
     changes = {'swa_start': 12, 'sequences': ['MH_01_easy', 'V1_02_medium'], 'steps': 24,
-               'val_every': 12, **changes}
-    return load_config(CONFIG, data=str(euroc), window=2048, restart_period=24, **changes)
+               'val_every': 12, 'data': str(euroc), **changes}
+    return load_config(CONFIG, window=2048, restart_period=24, **changes)
 
 
 def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
@@ -137,3 +137,31 @@ def test_an_unwritable_output_is_refused_before_training(tmp_path, capsys, monke
                  str(tmp_path / 'file' / 'model.safetensors')]) == 1
     err = capsys.readouterr().err
     assert 'cannot create the output folder' in err and len(err.splitlines()) == 1
+
+
+def test_align_auto_trains_on_poses_of_a_rotated_marker_on_a_late_clock(euroc, tmp_path):
+    import dataclasses
+    from denoise_imu_ros.bags import write_bag
+    from denoise_imu_ros.dataset import read_asl
+    from scipy.spatial.transform import Rotation
+    rec = read_asl(euroc / 'V1_02_medium')
+    marker = Rotation.from_rotvec([20.0, -35.0, 60.0], degrees=True)  # imu_from_pose
+    moved = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns - 23_000_000,
+                                gt_quat=(Rotation.from_quat(rec.gt_quat) * marker).as_quat())
+    write_bag(moved, tmp_path / 'moved')
+    original = load_sequence(euroc / 'V1_02_medium')
+    fixed = load_sequence(tmp_path / 'moved', align_poses='auto')
+    assert abs(fixed.alignment['time_offset_s'] - 0.023) < 1e-3
+    common, i, j = np.intersect1d(original.stamp_ns, fixed.stamp_ns, return_indices=True)
+    err = (Rotation.from_quat(original.gt_quat[i]).inv()
+           * Rotation.from_quat(fixed.gt_quat[j])).magnitude()
+    assert len(common) > 0.9 * len(original) and np.degrees(err[fixed.gt_valid[j]]).max() < 0.2
+    cfg = _short(euroc, data=str(tmp_path), sequences=['moved'], steps=6, val_every=6,
+                 swa_start=3, align='auto')
+    meta = train(cfg, progress=False).meta
+    assert meta['train_config']['align'] == 'auto'
+    used = meta['pose_alignment']['moved']
+    assert abs(used['time_offset_s'] - 0.023) < 1e-3
+    assert len(used['imu_from_pose_rotation_xyzw']) == 4
+    with pytest.raises(TrainingError, match='align must be none, auto or a mapping'):
+        _short(euroc, align='yes')
