@@ -31,10 +31,12 @@ from geometry_msgs.msg import QuaternionStamped, Vector3
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 import rclpy
+from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.utilities import remove_ros_args
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
@@ -91,7 +93,10 @@ class GyroDenoiser(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__('gyro_denoiser', **kwargs)
-        self.declare_parameters('', PARAMETERS)
+        try:
+            self.declare_parameters('', PARAMETERS)
+        except ParameterException as err:  # a wrong type or range given at start-up
+            raise DenoiseError(f'bad parameter: {" ".join(str(err).split())}') from err
         p = self.get_parameter
         loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()
         self._denoiser = OnlineDenoiser.from_model_file(loaded)
@@ -220,8 +225,28 @@ class GyroDenoiser(Node):
         self.get_logger().warning(f'still waiting for data on {sub}')
 
 
+USAGE = """usage: gyro_denoiser [--ros-args -p NAME:=VALUE ... --params-file FILE ...]
+
+Corrects imu/data_raw into imu/corrected and imu/attitude with a learned gyro model.
+Parameters (see config/gyro_denoiser.yaml): """ + ', '.join(
+    name for name, _, _ in PARAMETERS) + """.
+Later --params-file and -p arguments override earlier ones: put -p after --params-file.
+Example: gyro_denoiser --ros-args --params-file config/gyro_denoiser.yaml -p model:=tumvi
+"""
+
+
 def main(args: list[str] | None = None) -> int:
     """Entry point of ``gyro_denoiser`` (console script and ``ros2 run``)."""
+    # args, as in tests, holds no program name; sys.argv does
+    rest = remove_ros_args(sys.argv)[1:] if args is None else remove_ros_args(args)
+    if rest and rest[0] in ('-h', '--help'):
+        print(USAGE, end='')
+        return 0
+    if rest:
+        print(f'gyro_denoiser: error: unknown arguments {" ".join(rest)!r}; parameters go '
+              'after --ros-args, e.g. gyro_denoiser --ros-args -p model:=tumvi',
+              file=sys.stderr)
+        return 1
     rclpy.init(args=args)
     node = None
     try:

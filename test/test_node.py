@@ -329,3 +329,31 @@ print('ok')
                          timeout=60)
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip().endswith('ok')
+
+
+@pytest.mark.parametrize('args, message', [
+    (['-p', 'max_gap_factor:=5'], "parameter 'max_gap_factor'"),
+    (['-p', 'max_gap_factor:=0.5'], 'max_gap_factor out of range'),
+    (['-p', 'input_queue_depth:=5'], 'input_queue_depth out of range'),
+    (['-p', 'model:=5'], "parameter 'model'"),
+    (['-p', 'embed_attitude:=maybe'], "parameter 'embed_attitude'"),
+])
+def test_a_bad_parameter_is_a_one_line_error_at_start_up(args, message, capsys):
+    assert main(['--ros-args', *args]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith('gyro_denoiser: error: bad parameter') and message in err
+    assert len(err.splitlines()) == 1
+
+
+def test_a_params_file_with_an_int_for_a_double_is_refused(tmp_path, capsys):
+    (tmp_path / 'p.yaml').write_text('/**:\n  ros__parameters:\n    max_gap_factor: 3\n')
+    assert main(['--ros-args', '--params-file', str(tmp_path / 'p.yaml')]) == 1
+    assert "parameter 'max_gap_factor'" in capsys.readouterr().err
+
+
+def test_help_and_unknown_arguments(capsys):
+    assert main(['--help']) == 0
+    out = capsys.readouterr().out
+    assert out.startswith('usage: gyro_denoiser') and 'max_gap_factor' in out
+    assert main(['--model', 'tumvi']) == 1
+    assert "unknown arguments '--model tumvi'" in capsys.readouterr().err
