@@ -123,6 +123,8 @@ class GyroDenoiser(Node):
         self._waiting_timer = self.create_timer(10.0, self._still_waiting)
 
         self._stamps: deque[int] = deque(maxlen=int(2 * self._model_rate) + 1)
+        self._rate_error = False  # set by the diagnostics timer from the measured rate
+        self.attitude_withheld = 0  # accepted samples whose attitude was not published
         self._infer_s: deque[float] = deque(maxlen=1000)
         self._apply_parameters()
         self.get_logger().info(
@@ -158,7 +160,9 @@ class GyroDenoiser(Node):
             self.get_logger().warning(
                 f'{"stamp gap" if out.event == "gap" else "backward time jump"} before '
                 f'{stamp_ns(msg.header)} ns: network history restarted'
-                + (', attitude re-initialised' if out.event == 'time_jump' else ''))
+                + (', attitude re-initialised' if out.event == 'time_jump' else
+                   ', attitude held (not published for this sample)'),
+                throttle_duration_sec=5.0)
         self._stamps.append(stamp_ns(msg.header))
 
         corrected = Imu(header=msg.header, linear_acceleration=msg.linear_acceleration,
@@ -177,7 +181,12 @@ class GyroDenoiser(Node):
         else:
             corrected.orientation_covariance[0] = -1.0
         self._pub_imu.publish(corrected)
-        self._pub_att.publish(attitude)
+        # an attitude held across a gap, or integrated at a rate the model was not made
+        # for, is not published as if it were valid
+        if out.event != 'gap' and not self._rate_error:
+            self._pub_att.publish(attitude)
+        else:
+            self.attitude_withheld += 1
         self._infer_s.append(time.perf_counter() - t0)
 
     def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
@@ -188,22 +197,29 @@ class GyroDenoiser(Node):
 
     # -- monitoring ---------------------------------------------------------------
     def input_rate_hz(self) -> float:
-        """Mean input rate over the last ~2 s of accepted stamps (0 if unknown)."""
-        if len(self._stamps) < 2 or self._stamps[-1] <= self._stamps[0]:
+        """
+        Input rate from the median stamp interval of the last ~2 s (0 if unknown).
+
+        The median, so that one gap (a 2 s dropout) does not read as a slow stream.
+        """
+        if len(self._stamps) < 3:
             return 0.0
-        return (len(self._stamps) - 1) / ((self._stamps[-1] - self._stamps[0]) * 1e-9)
+        step = float(np.median(np.diff(np.array(self._stamps))))
+        return 1e9 / step if step > 0 else 0.0
 
     def _publish_diagnostics(self) -> None:
         counts = self._denoiser.counts
         rate = self.input_rate_hz()
-        status = DiagnosticStatus(name=f'{self.get_name()}: gyro correction',
+        status = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: gyro correction',
                                   hardware_id=self._fixed_frame, level=DiagnosticStatus.OK,
                                   message='ok')
         fill = min(self._denoiser.engine.samples, self._denoiser.engine.receptive_field)
-        if rate and abs(rate / self._model_rate - 1.0) > self._rate_tolerance:
+        self._rate_error = bool(rate) and abs(rate / self._model_rate - 1.0) > self._rate_tolerance
+        if self._rate_error:
             status.level = DiagnosticStatus.ERROR
             status.message = (f'input rate {rate:.1f} Hz differs from the model rate '
-                              f'{self._model_rate:.1f} Hz: corrections are not valid')
+                              f'{self._model_rate:.1f} Hz: corrections are not valid, '
+                              'imu/attitude not published')
             self.get_logger().error(status.message, throttle_duration_sec=10.0)
         elif counts['accepted'] == 0:
             status.level, status.message = DiagnosticStatus.WARN, 'no input yet'
@@ -215,6 +231,7 @@ class GyroDenoiser(Node):
                   'callback_time_p50_us': f'{np.median(infer) * 1e6:.1f}',
                   'callback_time_max_us': f'{infer.max() * 1e6:.1f}'}
         values.update({k: str(v) for k, v in counts.items()})
+        values['attitude_withheld'] = str(self.attitude_withheld)
         status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()

@@ -24,7 +24,9 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
 - a stamp more than ``time_jump_s`` behind the last one (bag loop, clock reset): full
   reset (network history and attitude), the sample is the first of a new recording;
 - a gap longer than ``max_gap_factor`` nominal periods: the network history restarts
-  (as at start-up) and the attitude is held across the gap, which cannot be integrated.
+  (as at start-up) and the attitude is held across the gap, which cannot be integrated;
+- every nominal period without a sample is counted (``skipped_periods``): samples lost
+  upstream or in a subscription queue show there, not only as a lower rate.
 """
 
 from __future__ import annotations
@@ -73,7 +75,7 @@ class OnlineDenoiser:
     max_gap_factor: float = 3.0         # gap threshold, in nominal sample periods
     time_jump_s: float = 1.0            # backward stamp jump that resets everything
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
-        (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets'), 0))
+        (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods'), 0))
     _last_ns: int | None = None
     _attitude: Rotation | None = None
     _last_gyro: np.ndarray | None = None
@@ -117,9 +119,13 @@ class OnlineDenoiser:
                 return self._drop('out_of_order')
             event = 'time_jump'
             self.counts['time_jump_resets'] += 1
-        elif (stamp_ns - self._last_ns) * 1e-9 > self.max_gap_factor / self.rate_hz:
-            event = 'gap'
-            self.counts['gap_resets'] += 1
+        else:
+            # nominal periods with no sample: lost upstream or in a queue (or a slow stream)
+            periods = round((stamp_ns - self._last_ns) * 1e-9 * self.rate_hz)
+            self.counts['skipped_periods'] += max(periods - 1, 0)
+            if (stamp_ns - self._last_ns) * 1e-9 > self.max_gap_factor / self.rate_hz:
+                event = 'gap'
+                self.counts['gap_resets'] += 1
 
         if event is not None:
             self.engine.reset()

@@ -70,7 +70,8 @@ class Harness:
                 self.pub.publish(msg)
             self.spin_until(lambda: self.processed() - start >= min(k + 50, len(msgs)))
         self.spin_until(lambda: len(self.corrected) >= self.node._denoiser.counts['accepted'])
-        self.spin_until(lambda: len(self.attitude) >= self.node._denoiser.counts['accepted'])
+        self.spin_until(lambda: len(self.attitude) >= self.node._denoiser.counts['accepted']
+                        - self.node.attitude_withheld)
 
     def close(self):
         self.executor.shutdown()
@@ -171,7 +172,30 @@ def test_rate_mismatch_is_a_diagnostics_error(harness):
     status = [s for d in h.diagnostics for s in d.status if s.level == DiagnosticStatus.ERROR][0]
     assert 'input rate 100.0 Hz differs from the model rate 200.0 Hz' in status.message
     assert {kv.key for kv in status.values} >= {'input_rate_hz', 'buffer_fill', 'accepted',
-                                                'out_of_order', 'callback_time_p50_us'}
+                                                'out_of_order', 'callback_time_p50_us',
+                                                'skipped_periods', 'attitude_withheld'}
+    assert status.name == '/gyro_denoiser: gyro correction'  # the namespaced node name
+    # from now on the corrected gyro flows, the attitude is not published as if valid
+    before = len(h.attitude)
+    later = stamps[-1] + np.arange(1, 201) * 10_000_000
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(later, rec.imu[600:800])])
+    assert len(h.attitude) == before and len(h.corrected) == 800
+
+
+def test_one_long_gap_is_not_a_slow_stream(harness):
+    h = harness()
+    rec = load_imu(SAMPLE)
+    stamps = rec.imu_stamp_ns[0] + np.arange(800) * 5_000_000
+    stamps[400:] += 2_000_000_000  # 2 s without data, then the stream goes on
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(stamps, rec.imu[:800])])
+    h.diagnostics.clear()
+    h.spin_until(lambda: h.diagnostics, timeout=5.0)
+    status = h.diagnostics[-1].status[0]
+    values = {kv.key: kv.value for kv in status.values}
+    assert float(values['input_rate_hz']) == pytest.approx(200.0, rel=0.01)
+    assert status.level != DiagnosticStatus.ERROR
+    assert values['gap_resets'] == '1' and values['skipped_periods'] == '400'
+    assert values['attitude_withheld'] == '1'
 
 
 def test_reset_attitude_service_and_embedded_attitude(harness):

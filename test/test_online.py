@@ -64,7 +64,15 @@ def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
     assert den.counts == {'non_finite': 2, 'out_of_range': 2, 'zero_stamp': 1,
                           'duplicate_stamp': 1,
                           'out_of_order': 1, 'accepted': 2, 'gap_resets': 0,
-                          'time_jump_resets': 0}
+                          'time_jump_resets': 0, 'skipped_periods': 0}
+
+
+def test_missing_samples_are_counted_from_the_stamps(seq, model):
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    keep = np.ones(400, bool)
+    keep[[10, 11, 12, 200]] = False  # four samples lost upstream
+    _run(den, seq.stamp_ns[:400][keep], seq.imu[:400][keep])
+    assert den.counts['skipped_periods'] == 4 and den.counts['gap_resets'] == 1
 
 
 def test_gap_restarts_the_network_and_holds_the_attitude(seq, model):
