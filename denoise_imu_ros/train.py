@@ -127,17 +127,68 @@ class TrainConfig:
         return {k: getattr(self, k) for k in RUN_KEYS}
 
 
+# Allowed range of each numeric recipe key: (lowest, highest, whether lowest is allowed).
+RANGES = {
+    'steps': (1, None, True), 'lr': (0, None, False), 'weight_decay': (0, None, True),
+    'lr_min': (0, None, True), 'restart_period': (1, None, True),
+    'restart_mult': (1, None, True), 'window': (1, None, True), 'max_offset': (1, None, True),
+    'gyro_noise': (0, None, True), 'accel_noise': (0, None, True),
+    'gyro_bias': (0, None, True), 'accel_bias': (0, None, True),
+    'huber_delta': (0, None, False), 'skip_blocks': (0, None, True),
+    'val_every': (1, None, True), 'swa_start': (0, None, True), 'threads': (1, None, True),
+    'workers': (1, None, True), 'dropout': (0, 1, True), 'max_gt_gap_s': (0, None, False),
+}
+
+
+def _is(value: Any, kind: str) -> bool:
+    """Whether a YAML value fits a TrainConfig annotation (bool is not a number here)."""
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    checks = {
+        'str': isinstance(value, str), 'bool': isinstance(value, bool),
+        'int': isinstance(value, int) and not isinstance(value, bool),
+        'float': number and math.isfinite(value),
+        'list[str]': isinstance(value, list) and all(isinstance(v, str) for v in value),
+        'list[int]': isinstance(value, list) and all(_is(v, 'int') for v in value),
+        'list[float]': isinstance(value, list) and all(_is(v, 'float') for v in value),
+        'dict': isinstance(value, dict),
+    }
+    return any(value is None if k == 'None' else checks[k] for k in kind.split(' | '))
+
+
 def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
-    """Read a YAML recipe; unknown keys are errors (a typo must not train silently)."""
+    """
+    Read a YAML recipe and check every value's type and range.
+
+    Unknown keys are errors (a typo must not train silently), and so are values of the
+    wrong type (``steps: 3.7``, ``calibration_only: "no"``) or out of range.
+    """
     try:
-        raw = yaml.safe_load(Path(path).read_text()) or {}
-    except (OSError, yaml.YAMLError) as err:
-        raise TrainingError(f'{path}: cannot read training config ({err})') from err
-    known = {f.name for f in fields(TrainConfig)}
-    unknown = sorted(set(raw) - known)
+        raw = yaml.safe_load(Path(path).read_text(encoding='utf-8'))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+        raise TrainingError(f'{path}: cannot read training config '
+                            f'({" ".join(str(err).split())})') from err
+    raw = {} if raw is None else raw
+    if not isinstance(raw, dict):
+        raise TrainingError(f'{path}: a training config is a mapping of keys, '
+                            f'not {type(raw).__name__}')
+    types = {f.name: f.type for f in fields(TrainConfig)}
+    unknown = sorted(set(map(str, raw)) - set(types))
     if unknown:
         raise TrainingError(f'{path}: unknown keys {unknown}')
     raw.update({k: v for k, v in overrides.items() if v is not None})
+    for key, value in raw.items():
+        if not _is(value, types[key]):
+            raise TrainingError(f'{path}: {key} must be {types[key]}, not {value!r}')
+        if key in RANGES and value is not None:
+            low, high, closed = RANGES[key]
+            if value < low or (value == low and not closed) or (
+                    high is not None and value >= high):
+                bound = ('at least' if closed else 'above') + f' {low}'
+                bound += f' and below {high}' if high is not None else ''
+                raise TrainingError(f'{path}: {key} must be {bound}, not {value!r}')
+    if 'gyro_std_deg' in raw and (len(raw['gyro_std_deg']) != 3
+                                  or min(raw['gyro_std_deg']) <= 0):
+        raise TrainingError(f'{path}: gyro_std_deg must be three positive values (deg/s)')
     cfg = TrainConfig(**raw)
     try:
         span = cfg.loss_config().span
@@ -152,10 +203,6 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
             and set(cfg.align) == {'time_offset_s', 'imu_from_pose_rotation_xyzw'})):
         raise TrainingError(f'{path}: align must be none, auto or a mapping with '
                             'time_offset_s and imu_from_pose_rotation_xyzw')
-    if cfg.steps < 1:
-        raise TrainingError(f'{path}: steps must be at least 1')
-    if cfg.workers < 1:
-        raise TrainingError(f'{path}: workers must be at least 1')
     cfg.workers = min(cfg.workers, len(cfg.sequences))  # each worker needs a sequence
     cfg.device = resolve_device(cfg.device)
     if cfg.device != 'cpu':

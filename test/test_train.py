@@ -165,3 +165,26 @@ def test_align_auto_trains_on_poses_of_a_rotated_marker_on_a_late_clock(euroc, t
     assert len(used['imu_from_pose_rotation_xyzw']) == 4
     with pytest.raises(TrainingError, match='align must be none, auto or a mapping'):
         _short(euroc, align='yes')
+
+
+@pytest.mark.parametrize('text, message', [
+    ('steps: three', 'steps must be int'),
+    ('steps: 3.7', 'steps must be int'),
+    ('lr: -0.01', 'lr must be above 0'),
+    ('gyro_std_deg: [1, 2]', 'gyro_std_deg must be three positive values'),
+    ('val_every: 0', 'val_every must be at least 1'),
+    ('calibration_only: "no"', 'calibration_only must be bool'),
+    ('dropout: 1.5', 'dropout must be at least 0 and below 1'),
+    ('increments: [16, 32.5]', r'increments must be list\[int\]'),
+    ('42', 'a training config is a mapping of keys, not int'),
+])
+def test_recipe_values_of_the_wrong_type_or_range_are_refused(tmp_path, text, message):
+    (tmp_path / 'r.yaml').write_text(('sequences: [a]\n' if ':' in text else '') + text + '\n')
+    with pytest.raises(TrainingError, match=message):
+        load_config(tmp_path / 'r.yaml')
+
+
+def test_a_binary_recipe_is_a_clear_error(tmp_path):
+    (tmp_path / 'r.yaml').write_bytes(b'\xff\xfe\x00garbage')
+    with pytest.raises(TrainingError, match='cannot read training config'):
+        load_config(tmp_path / 'r.yaml')
