@@ -34,6 +34,7 @@ from rosbags.typesys import get_typestore, Stores
 from .dataset import check_recording, Recording
 from .errors import DatasetError
 from .online import stamp_ns
+from .outputs import atomic_output
 
 IMU_TYPE = 'sensor_msgs/msg/Imu'
 POSE_TYPES = ('geometry_msgs/msg/PoseStamped', 'geometry_msgs/msg/TransformStamped',
@@ -147,10 +148,15 @@ def write_bag(rec: Recording, out: str | Path, storage: str = 'mcap',
 
     ``compress`` uses zstd (inside the MCAP chunks, or per message for sqlite3).
     """
-    t = TYPESTORE.types
     plugin = {'mcap': StoragePlugin.MCAP, 'sqlite3': StoragePlugin.SQLITE3}.get(storage)
     if plugin is None:
         raise DatasetError(f'unknown bag storage {storage!r} (mcap or sqlite3)')
+    with atomic_output(out) as tmp:
+        _write_bag(rec, tmp, plugin, compress)
+
+
+def _write_bag(rec: Recording, out: Path, plugin: StoragePlugin, compress: bool) -> None:
+    t = TYPESTORE.types
     try:
         writer = Writer(out, version=9, storage_plugin=plugin)
         if compress:
@@ -171,4 +177,4 @@ def write_bag(rec: Recording, out: str | Path, storage: str = 'mcap',
                         x=q[0], y=q[1], z=q[2], w=q[3])))
                 writer.write(pose_conn, int(stamp), TYPESTORE.serialize_cdr(msg, POSE_TYPES[0]))
     except (WriterError, FileExistsError) as err:
-        raise DatasetError(f'{out}: cannot write bag: {err}') from err
+        raise DatasetError(f'{out.name}: cannot write bag: {err}') from err

@@ -34,6 +34,7 @@ from .bags import IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
 from .modelfile import gyro_covariance, read_model_file
 from .online import DROP_CAUSES, OnlineDenoiser
+from .outputs import atomic_output
 
 CORRECTED_TOPIC = '/imu/corrected'
 ATTITUDE_TOPIC = '/imu/attitude'
@@ -69,10 +70,10 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     t = TYPESTORE.types
     vec = t['geometry_msgs/msg/Vector3']
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
         try:
             with AnyReader([_ros2_source(src, Path(tmp))], default_typestore=TYPESTORE) as rd, \
-                    Writer(dst, version=9, storage_plugin=plugin) as wr:
+                    Writer(partial, version=9, storage_plugin=plugin) as wr:
                 imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
                 out = {c.id: wr.add_connection(c.topic, c.msgtype, typestore=rd.typestore)
                        for c in rd.connections}

@@ -34,6 +34,7 @@ from .errors import DatasetError
 from .metrics import attitude_errors, AttitudeErrors, integrate, ROE_DISTANCES_M
 from .model import GyroNet
 from .modelfile import load_model, shipped_models
+from .outputs import atomic_output
 from .streaming import StreamingCorrector
 
 CHUNK = 65536  # samples per network call; long recordings are processed in pieces
@@ -83,8 +84,7 @@ def correct_to_csv(model_spec: str, source: str, output: str,
         omega = StreamingCorrector.from_module(loaded.model).process(rec.imu)
     else:
         omega = correct_gyro(loaded.model, rec.imu)
-    Path(output).parent.mkdir(parents=True, exist_ok=True)
-    with open(output, 'w') as f:
+    with atomic_output(output, overwrite=True) as tmp, open(tmp, 'w') as f:
         f.write('timestamp_ns,wx,wy,wz\n')
         for t, w in zip(rec.imu_stamp_ns, omega):
             f.write(f'{t},{w[0]:.9g},{w[1]:.9g},{w[2]:.9g}\n')

@@ -40,6 +40,7 @@ from safetensors.numpy import load_file, save_file
 from . import __version__
 from .architecture import ModelConfig
 from .errors import ModelFileError
+from .outputs import atomic_output
 
 if TYPE_CHECKING:  # torch is imported only where a torch module is built
     from .model import GyroNet
@@ -115,13 +116,10 @@ def write_model_file(path: str | Path, config: ModelConfig, arrays: dict[str, np
               'receptive_field': str(config.receptive_field)}
     # the architecture written is the model's own, whatever metadata was copied along
     header.update({k: json.dumps(v) for k, v in meta.items() if k not in header})
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + '.tmp')
-    save_file({k: np.asarray(v, order='C') for k, v in arrays.items()}, str(tmp),
-              metadata=header)
-    tmp.chmod(0o644)  # a shared artefact, not a secret
-    tmp.replace(path)
+    with atomic_output(path, overwrite=True) as tmp:
+        save_file({k: np.asarray(v, order='C') for k, v in arrays.items()}, str(tmp),
+                  metadata=header)
+        tmp.chmod(0o644)  # a shared artefact, not a secret
 
 
 def add_metadata(path: str | Path, **meta: Any) -> None:

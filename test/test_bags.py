@@ -141,3 +141,28 @@ def test_convert_overlap_keeps_only_the_span_with_ground_truth(euroc, tmp_path):
     assert asl.gt_stamp_ns[0] > asl.imu_stamp_ns[0]  # the case this test is about
     assert rec.imu_stamp_ns[0] >= asl.gt_stamp_ns[0]
     assert len(load_sequence(tmp_path / 'b')) == len(load_sequence(seq))
+
+
+def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(
+        model_file, tmp_path, monkeypatch):
+    from denoise_imu_ros import bagtools
+    from denoise_imu_ros.bags import read_bag
+    from test_dataset import write_asl
+    assert main(['convert', str(write_asl(tmp_path / 'a', n_imu=1200)),
+                 str(tmp_path / 'in')]) == 0
+    real = bagtools.OnlineDenoiser.process_imu
+    calls = []
+
+    def fail_half_way(self, msg):
+        calls.append(1)
+        if len(calls) == 600:
+            raise DatasetError('disk full (simulated)')
+        return real(self, msg)
+    monkeypatch.setattr(bagtools.OnlineDenoiser, 'process_imu', fail_half_way)
+    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+                 '--model', str(model_file)]) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['a', 'in', 'model.safetensors']
+    monkeypatch.setattr(bagtools.OnlineDenoiser, 'process_imu', real)
+    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+                 '--model', str(model_file)]) == 0
+    assert len(read_bag(tmp_path / 'out', imu_topic='/imu/corrected').imu) == 1200
