@@ -37,7 +37,7 @@ os.environ.setdefault('FASTDDS_BUILTIN_TRANSPORTS', 'UDPv4')
 os.environ.setdefault('ROS_DOMAIN_ID', '57')
 
 from denoise_imu_ros.dataset import load_imu  # noqa: E402
-from denoise_imu_ros.online import stamp_ns  # noqa: E402
+from denoise_imu_ros.msgs import stamp_ns  # noqa: E402
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402

@@ -31,9 +31,10 @@ from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, W
     WriterError
 from rosbags.typesys import get_typestore, Stores
 
+from . import msgs
 from .dataset import check_recording, Recording
 from .errors import DatasetError
-from .online import stamp_ns
+from .msgs import stamp_ns
 from .outputs import atomic_output
 
 IMU_TYPE = 'sensor_msgs/msg/Imu'
@@ -44,6 +45,7 @@ IMU_TOPIC = '/imu0'
 POSE_TOPIC = '/groundtruth/pose'
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+BAG_TYPES = msgs.bag_types(TYPESTORE)
 
 
 def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
@@ -117,28 +119,10 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
     return rec
 
 
-def _header(stamp_ns: int, frame_id: str) -> Any:
-    t = TYPESTORE.types
-    sec, nanosec = divmod(int(stamp_ns), 1_000_000_000)
-    return t['std_msgs/msg/Header'](stamp=t['builtin_interfaces/msg/Time'](
-        sec=sec, nanosec=nanosec), frame_id=frame_id)
-
-
-def imu_message(stamp_ns: int, gyro: np.ndarray, accel: np.ndarray,
+def imu_message(stamp: int, gyro: np.ndarray, accel: np.ndarray,
                 frame_id: str = 'imu0') -> Any:
     """Build a rosbags ``sensor_msgs/Imu`` with no orientation (covariance[0] = -1)."""
-    t = TYPESTORE.types
-    vec = t['geometry_msgs/msg/Vector3']
-    no_orientation = np.zeros(9)
-    no_orientation[0] = -1.0
-    return t[IMU_TYPE](
-        header=_header(stamp_ns, frame_id),
-        orientation=t['geometry_msgs/msg/Quaternion'](x=0.0, y=0.0, z=0.0, w=1.0),
-        orientation_covariance=no_orientation,
-        angular_velocity=vec(x=float(gyro[0]), y=float(gyro[1]), z=float(gyro[2])),
-        angular_velocity_covariance=np.zeros(9),
-        linear_acceleration=vec(x=float(accel[0]), y=float(accel[1]), z=float(accel[2])),
-        linear_acceleration_covariance=np.zeros(9))
+    return msgs.imu(BAG_TYPES, msgs.header(BAG_TYPES, stamp, frame_id), gyro, accel)
 
 
 def write_bag(rec: Recording, out: str | Path, storage: str = 'mcap',
@@ -170,7 +154,7 @@ def _write_bag(rec: Recording, out: Path, plugin: StoragePlugin, compress: bool)
                 msg = imu_message(stamp, row[:3], row[3:])
                 writer.write(imu_conn, int(stamp), TYPESTORE.serialize_cdr(msg, IMU_TYPE))
             for stamp, q, p in zip(rec.gt_stamp_ns, rec.gt_quat, rec.gt_pos):
-                msg = t[POSE_TYPES[0]](header=_header(stamp, 'world'), pose=t[
+                msg = t[POSE_TYPES[0]](header=msgs.header(BAG_TYPES, stamp, 'world'), pose=t[
                     'geometry_msgs/msg/Pose'](
                     position=t['geometry_msgs/msg/Point'](x=p[0], y=p[1], z=p[2]),
                     orientation=t['geometry_msgs/msg/Quaternion'](

@@ -30,7 +30,8 @@ from rosbags.convert import convert, ConverterError
 from rosbags.highlevel import AnyReader, AnyReaderError
 from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
-from .bags import IMU_TYPE, pick_connections, TYPESTORE
+from . import msgs
+from .bags import BAG_TYPES, IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
 from .modelfile import gyro_covariance, read_model_file
 from .online import DROP_CAUSES, OnlineDenoiser
@@ -65,10 +66,6 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     loaded = read_model_file(model_spec)
     den = OnlineDenoiser.from_model_file(loaded)
     cov = np.array(gyro_covariance(loaded))
-    no_orientation = np.zeros(9)
-    no_orientation[0] = -1.0  # REP-145: orientation not provided
-    t = TYPESTORE.types
-    vec = t['geometry_msgs/msg/Vector3']
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
         try:
@@ -88,20 +85,8 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                     res = den.process_imu(msg)
                     if isinstance(res, str):
                         continue
-                    corrected = t[IMU_TYPE](
-                        header=msg.header, orientation=msg.orientation,
-                        orientation_covariance=no_orientation,
-                        angular_velocity=vec(x=float(res.gyro[0]), y=float(res.gyro[1]),
-                                             z=float(res.gyro[2])),
-                        angular_velocity_covariance=cov,
-                        linear_acceleration=msg.linear_acceleration,
-                        linear_acceleration_covariance=msg.linear_acceleration_covariance)
-                    q = res.attitude
-                    attitude = t[ATTITUDE_TYPE](
-                        header=t['std_msgs/msg/Header'](stamp=msg.header.stamp,
-                                                        frame_id=fixed_frame),
-                        quaternion=t['geometry_msgs/msg/Quaternion'](
-                            x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3])))
+                    corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov)
+                    attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
                     wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
                     wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
         except (AnyReaderError, WriterError, FileExistsError) as err:

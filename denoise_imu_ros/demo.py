@@ -43,7 +43,7 @@ from scipy.spatial.transform import Rotation
 
 from .dataset import load_sequence
 from .metrics import integrate
-from .online import stamp_ns
+from .msgs import stamp_ns
 from .player import Player, read_imu_messages
 
 SAMPLE = Path(__file__).parent / 'sample' / 'euroc_V1_03_90s'

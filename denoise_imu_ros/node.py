@@ -27,7 +27,7 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import QuaternionStamped, Vector3
+from geometry_msgs.msg import QuaternionStamped
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 import rclpy
@@ -40,9 +40,11 @@ from rclpy.utilities import remove_ros_args
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
+from . import msgs
 from .errors import DenoiseError
 from .modelfile import gyro_covariance, read_model_file
-from .online import OnlineDenoiser, stamp_ns
+from .msgs import stamp_ns
+from .online import OnlineDenoiser
 
 
 def _param(description: str, read_only: bool = False, floats: tuple | None = None,
@@ -102,6 +104,7 @@ class GyroDenoiser(Node):
         self._denoiser = OnlineDenoiser.from_model_file(loaded)
         self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
+        self._types = msgs.rclpy_types()
         self._fixed_frame = p('fixed_frame').value
         self.add_post_set_parameters_callback(self._on_parameters)
 
@@ -165,22 +168,10 @@ class GyroDenoiser(Node):
                 throttle_duration_sec=5.0)
         self._stamps.append(stamp_ns(msg.header))
 
-        corrected = Imu(header=msg.header, linear_acceleration=msg.linear_acceleration,
-                        linear_acceleration_covariance=msg.linear_acceleration_covariance,
-                        angular_velocity_covariance=self._gyro_cov)
-        corrected.angular_velocity = Vector3(x=float(out.gyro[0]), y=float(out.gyro[1]),
-                                             z=float(out.gyro[2]))
-        attitude = QuaternionStamped()
-        attitude.header.stamp = msg.header.stamp
-        attitude.header.frame_id = self._fixed_frame
-        q = attitude.quaternion
-        q.x, q.y, q.z, q.w = (float(v) for v in out.attitude)
-        if self._embed:
-            corrected.orientation = q
-            corrected.orientation_covariance = self._orientation_cov
-        else:
-            corrected.orientation_covariance[0] = -1.0
-        self._pub_imu.publish(corrected)
+        embed = out.attitude if self._embed else None
+        self._pub_imu.publish(msgs.corrected_imu(self._types, msg, out.gyro, self._gyro_cov,
+                                                 embed, self._orientation_cov))
+        attitude = msgs.attitude(self._types, msg, self._fixed_frame, out.attitude)
         # an attitude held across a gap, or integrated at a rate the model was not made
         # for, is not published as if it were valid
         if out.event != 'gap' and not self._rate_error:

@@ -40,6 +40,7 @@ from scipy.spatial.transform import Rotation
 
 from .limits import in_range
 from .modelfile import ModelFile, sample_rate
+from .msgs import imu_fields
 from .streaming import StreamingCorrector
 
 DROP_CAUSES = ('non_finite', 'out_of_range', 'zero_stamp', 'duplicate_stamp', 'out_of_order')
@@ -51,11 +52,6 @@ class Output(NamedTuple):
     gyro: np.ndarray        # (3,) corrected angular velocity, rad/s
     attitude: np.ndarray    # (4,) xyzw, IMU frame to the fixed frame
     event: str | None       # 'start', 'gap', 'time_jump' when state was reset, else None
-
-
-def stamp_ns(header: Any) -> int:
-    """Nanoseconds of a ROS header stamp (rclpy or rosbags message)."""
-    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
 
 
 def gravity_attitude(accel: np.ndarray) -> Rotation:
@@ -97,9 +93,7 @@ class OnlineDenoiser:
 
     def process_imu(self, msg: Any) -> Output | str:
         """Correct one sensor_msgs/Imu (rclpy or rosbags message); see :meth:`process`."""
-        w, a = msg.angular_velocity, msg.linear_acceleration
-        return self.process(stamp_ns(msg.header), np.array([w.x, w.y, w.z]),
-                            np.array([a.x, a.y, a.z]))
+        return self.process(*imu_fields(msg))
 
     def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray) -> Output | str:
         """Correct one sample; returns an :class:`Output` or the cause of a drop."""

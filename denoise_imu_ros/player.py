@@ -30,24 +30,12 @@ from rosbags.highlevel import AnyReader, AnyReaderError
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 
+from . import msgs
 from .bags import IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
-from .online import stamp_ns
+from .msgs import stamp_ns
 
-
-def _to_ros(src: Any) -> Imu:
-    """Copy a rosbags Imu (ROS 1 or ROS 2 typestore) into an rclpy Imu."""
-    msg = Imu()
-    msg.header.stamp.sec, msg.header.stamp.nanosec = src.header.stamp.sec, src.header.stamp.nanosec
-    msg.header.frame_id = src.header.frame_id
-    for name in ('orientation', 'angular_velocity', 'linear_acceleration'):
-        mine, theirs = getattr(msg, name), getattr(src, name)
-        for axis in ('x', 'y', 'z', 'w') if name == 'orientation' else ('x', 'y', 'z'):
-            setattr(mine, axis, float(getattr(theirs, axis)))
-    for name in ('orientation_covariance', 'angular_velocity_covariance',
-                 'linear_acceleration_covariance'):
-        setattr(msg, name, [float(v) for v in getattr(src, name)])
-    return msg
+RCLPY_TYPES = msgs.rclpy_types()
 
 
 def read_imu_messages(path: str | Path, imu_topic: str | None = None) -> list[Imu]:
@@ -58,7 +46,7 @@ def read_imu_messages(path: str | Path, imu_topic: str | None = None) -> list[Im
     try:
         with AnyReader([path], default_typestore=TYPESTORE) as reader:
             conns = pick_connections(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
-            return [_to_ros(reader.deserialize(raw, c.msgtype))
+            return [msgs.copy_imu(RCLPY_TYPES, reader.deserialize(raw, c.msgtype))
                     for c, _, raw in reader.messages(connections=conns)]
     except AnyReaderError as err:
         raise DatasetError(f'{path}: cannot read bag: {err}') from err

@@ -1,0 +1,126 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Message conversion in one place: the node, process-bag, the player and bag writing.
+
+The same functions build rclpy messages (the node, the player) and rosbags typestore
+messages (bags), given the message classes (:func:`rclpy_types`, :func:`bag_types`):
+every field is passed explicitly, which both kinds of constructor accept. So the node
+and process-bag cannot drift apart in what they publish.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+NO_ORIENTATION = np.array([-1.0] + [0.0] * 8)  # REP-145: orientation not provided
+
+
+class MsgTypes(NamedTuple):
+    """The message classes the builders use."""
+
+    Header: Any
+    Time: Any
+    Imu: Any
+    Vector3: Any
+    Quaternion: Any
+    QuaternionStamped: Any
+
+
+def rclpy_types() -> MsgTypes:
+    """Message classes of rclpy (imported here: bag tools need no ROS install)."""
+    from builtin_interfaces.msg import Time
+    from geometry_msgs.msg import Quaternion, QuaternionStamped, Vector3
+    from sensor_msgs.msg import Imu
+    from std_msgs.msg import Header
+    return MsgTypes(Header, Time, Imu, Vector3, Quaternion, QuaternionStamped)
+
+
+def bag_types(typestore: Any) -> MsgTypes:
+    """Message classes of a rosbags typestore."""
+    t = typestore.types
+    return MsgTypes(t['std_msgs/msg/Header'], t['builtin_interfaces/msg/Time'],
+                    t['sensor_msgs/msg/Imu'], t['geometry_msgs/msg/Vector3'],
+                    t['geometry_msgs/msg/Quaternion'], t['geometry_msgs/msg/QuaternionStamped'])
+
+
+def stamp_ns(header: Any) -> int:
+    """Nanoseconds of a header stamp (rclpy or rosbags message)."""
+    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+
+
+def imu_fields(msg: Any) -> tuple[int, np.ndarray, np.ndarray]:
+    """Stamp (ns), gyro (3,) and accel (3,) of a sensor_msgs/Imu."""
+    w, a = msg.angular_velocity, msg.linear_acceleration
+    return stamp_ns(msg.header), np.array([w.x, w.y, w.z]), np.array([a.x, a.y, a.z])
+
+
+def header(types: MsgTypes, stamp: int, frame_id: str) -> Any:
+    """Build a header with a stamp in ns."""
+    sec, nanosec = divmod(int(stamp), 1_000_000_000)
+    return types.Header(stamp=types.Time(sec=sec, nanosec=nanosec), frame_id=frame_id)
+
+
+def _vec(types: MsgTypes, v: Any) -> Any:
+    return types.Vector3(x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+
+def _quat(types: MsgTypes, q: Any) -> Any:
+    return types.Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+
+
+def imu(types: MsgTypes, head: Any, gyro: Any, accel: Any,
+        orientation: Any = (0.0, 0.0, 0.0, 1.0), orientation_cov: Any = NO_ORIENTATION,
+        gyro_cov: Any = np.zeros(9), accel_cov: Any = np.zeros(9)) -> Any:
+    """Build a sensor_msgs/Imu from arrays (orientation xyzw, covariances row-major)."""
+    return types.Imu(header=head, orientation=_quat(types, orientation),
+                     orientation_covariance=np.asarray(orientation_cov, np.float64),
+                     angular_velocity=_vec(types, gyro),
+                     angular_velocity_covariance=np.asarray(gyro_cov, np.float64),
+                     linear_acceleration=_vec(types, accel),
+                     linear_acceleration_covariance=np.asarray(accel_cov, np.float64))
+
+
+def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
+                  attitude: np.ndarray | None = None, orientation_cov: Any = None) -> Any:
+    """
+    Build the imu/corrected message of a raw one: header copied, never re-stamped.
+
+    The accelerometer and its covariance pass through; the orientation is the attitude
+    with ``orientation_cov`` when given, else absent (covariance[0] = -1, REP-145).
+    """
+    a = raw.linear_acceleration
+    embed = attitude is not None
+    return imu(types, raw.header, gyro, (a.x, a.y, a.z),
+               orientation=attitude if embed else (0.0, 0.0, 0.0, 1.0),
+               orientation_cov=orientation_cov if embed else NO_ORIENTATION,
+               gyro_cov=gyro_cov, accel_cov=raw.linear_acceleration_covariance)
+
+
+def attitude(types: MsgTypes, raw: Any, frame_id: str, quat: np.ndarray) -> Any:
+    """Build the imu/attitude message: the raw message's stamp, in the fixed frame."""
+    return types.QuaternionStamped(header=header(types, stamp_ns(raw.header), frame_id),
+                                   quaternion=_quat(types, quat))
+
+
+def copy_imu(types: MsgTypes, src: Any) -> Any:
+    """Copy every field of an Imu into an Imu of ``types`` (e.g. bag to rclpy)."""
+    o, w, a = src.orientation, src.angular_velocity, src.linear_acceleration
+    return imu(types, header(types, stamp_ns(src.header), src.header.frame_id),
+               (w.x, w.y, w.z), (a.x, a.y, a.z), orientation=(o.x, o.y, o.z, o.w),
+               orientation_cov=src.orientation_covariance,
+               gyro_cov=src.angular_velocity_covariance,
+               accel_cov=src.linear_acceleration_covariance)
