@@ -34,7 +34,7 @@ from . import msgs
 from .bags import BAG_TYPES, IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
 from .modelfile import gyro_covariance, read_model_file
-from .online import DROP_CAUSES, OnlineDenoiser
+from .online import Drop, DROP_CAUSES, OnlineDenoiser
 from .outputs import atomic_output
 
 CORRECTED_TOPIC = '/imu/corrected'
@@ -83,7 +83,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                         continue
                     msg = rd.deserialize(raw, conn.msgtype)
                     res = den.process_imu(msg)
-                    if isinstance(res, str):
+                    if isinstance(res, Drop):
                         continue
                     corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov)
                     attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)

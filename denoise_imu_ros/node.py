@@ -43,8 +43,7 @@ from std_srvs.srv import Trigger
 from . import msgs
 from .errors import DenoiseError
 from .modelfile import gyro_covariance, read_model_file
-from .msgs import stamp_ns
-from .online import OnlineDenoiser
+from .online import Drop, Event, OnlineDenoiser
 
 
 def _param(description: str, read_only: bool = False, floats: tuple | None = None,
@@ -155,18 +154,18 @@ class GyroDenoiser(Node):
             self._waiting_timer = None
         t0 = time.perf_counter()
         out = self._denoiser.process_imu(msg)
-        if isinstance(out, str):
-            self.get_logger().warning(f'dropped an IMU message: {out.replace("_", " ")}',
+        if isinstance(out, Drop):
+            self.get_logger().warning(f'dropped an IMU message: {out.value.replace("_", " ")}',
                                       throttle_duration_sec=5.0)
             return
-        if out.event in ('gap', 'time_jump'):
+        if out.event in (Event.GAP, Event.TIME_JUMP):
             self.get_logger().warning(
-                f'{"stamp gap" if out.event == "gap" else "backward time jump"} before '
-                f'{stamp_ns(msg.header)} ns: network history restarted'
-                + (', attitude re-initialised' if out.event == 'time_jump' else
+                f'{"stamp gap" if out.event == Event.GAP else "backward time jump"} before '
+                f'{out.stamp_ns} ns: network history restarted'
+                + (', attitude re-initialised' if out.event == Event.TIME_JUMP else
                    ', attitude held (not published for this sample)'),
                 throttle_duration_sec=5.0)
-        self._stamps.append(stamp_ns(msg.header))
+        self._stamps.append(out.stamp_ns)
 
         embed = out.attitude if self._embed else None
         self._pub_imu.publish(msgs.corrected_imu(self._types, msg, out.gyro, self._gyro_cov,
@@ -174,7 +173,7 @@ class GyroDenoiser(Node):
         attitude = msgs.attitude(self._types, msg, self._fixed_frame, out.attitude)
         # an attitude held across a gap, or integrated at a rate the model was not made
         # for, is not published as if it were valid
-        if out.event != 'gap' and not self._rate_error:
+        if out.event != Event.GAP and not self._rate_error:
             self._pub_att.publish(attitude)
         else:
             self.attitude_withheld += 1

@@ -32,6 +32,7 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import Enum
 import math
 from typing import Any, NamedTuple
 
@@ -43,15 +44,35 @@ from .modelfile import ModelFile, sample_rate
 from .msgs import imu_fields
 from .streaming import StreamingCorrector
 
-DROP_CAUSES = ('non_finite', 'out_of_range', 'zero_stamp', 'duplicate_stamp', 'out_of_order')
+
+class Drop(str, Enum):
+    """Why a sample was dropped (the value is its counter's name)."""
+
+    NON_FINITE = 'non_finite'
+    OUT_OF_RANGE = 'out_of_range'
+    ZERO_STAMP = 'zero_stamp'
+    DUPLICATE_STAMP = 'duplicate_stamp'
+    OUT_OF_ORDER = 'out_of_order'
+
+
+class Event(str, Enum):
+    """A reset of the pipeline's state at an accepted sample."""
+
+    START = 'start'          # first sample: network warm-up, attitude from gravity
+    GAP = 'gap'              # stamps too far apart: network warm-up, attitude held
+    TIME_JUMP = 'time_jump'  # stamps went back in time: everything reset
+
+
+DROP_CAUSES = tuple(d.value for d in Drop)
 
 
 class Output(NamedTuple):
     """What one accepted sample yields."""
 
+    stamp_ns: int           # the sample's own stamp
     gyro: np.ndarray        # (3,) corrected angular velocity, rad/s
     attitude: np.ndarray    # (4,) xyzw, IMU frame to the fixed frame
-    event: str | None       # 'start', 'gap', 'time_jump' when state was reset, else None
+    event: Event | None     # set when the state was reset at this sample
 
 
 def gravity_attitude(accel: np.ndarray) -> Rotation:
@@ -87,43 +108,43 @@ class OnlineDenoiser:
         """Re-initialise the attitude from the accelerometer at the next sample."""
         self._pending_reset = True
 
-    def _drop(self, cause: str) -> str:
-        self.counts[cause] += 1
+    def _drop(self, cause: Drop) -> Drop:
+        self.counts[cause.value] += 1
         return cause
 
-    def process_imu(self, msg: Any) -> Output | str:
+    def process_imu(self, msg: Any) -> Output | Drop:
         """Correct one sensor_msgs/Imu (rclpy or rosbags message); see :meth:`process`."""
         return self.process(*imu_fields(msg))
 
-    def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray) -> Output | str:
+    def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray) -> Output | Drop:
         """Correct one sample; returns an :class:`Output` or the cause of a drop."""
         if not (np.isfinite(gyro).all() and np.isfinite(accel).all()):
-            return self._drop('non_finite')
+            return self._drop(Drop.NON_FINITE)
         if not in_range(gyro, accel):
-            return self._drop('out_of_range')
+            return self._drop(Drop.OUT_OF_RANGE)
         if stamp_ns <= 0:
-            return self._drop('zero_stamp')
+            return self._drop(Drop.ZERO_STAMP)
         event = None
         if self._last_ns is None:
-            event = 'start'
+            event = Event.START
         elif stamp_ns == self._last_ns:
-            return self._drop('duplicate_stamp')
+            return self._drop(Drop.DUPLICATE_STAMP)
         elif stamp_ns < self._last_ns:
             if (self._last_ns - stamp_ns) * 1e-9 <= self.time_jump_s:
-                return self._drop('out_of_order')
-            event = 'time_jump'
+                return self._drop(Drop.OUT_OF_ORDER)
+            event = Event.TIME_JUMP
             self.counts['time_jump_resets'] += 1
         else:
             # nominal periods with no sample: lost upstream or in a queue (or a slow stream)
             periods = round((stamp_ns - self._last_ns) * 1e-9 * self.rate_hz)
             self.counts['skipped_periods'] += max(periods - 1, 0)
             if (stamp_ns - self._last_ns) * 1e-9 > self.max_gap_factor / self.rate_hz:
-                event = 'gap'
+                event = Event.GAP
                 self.counts['gap_resets'] += 1
 
         if event is not None:
             self.engine.reset()
-        if event in ('start', 'time_jump') or self._pending_reset:
+        if event in (Event.START, Event.TIME_JUMP) or self._pending_reset:
             self._attitude = gravity_attitude(accel)
             self._pending_reset = False
         elif event is None:  # sample k-1 drives the attitude from stamp k-1 to stamp k
@@ -132,4 +153,5 @@ class OnlineDenoiser:
         corrected = self.engine.step(np.concatenate([gyro, accel]))
         self._last_ns, self._last_gyro = stamp_ns, corrected
         self.counts['accepted'] += 1
-        return Output(gyro=corrected, attitude=self._attitude.as_quat(), event=event)
+        return Output(stamp_ns=stamp_ns, gyro=corrected, attitude=self._attitude.as_quat(),
+                      event=event)

@@ -6,7 +6,7 @@ from conftest import SAMPLE, untrained_model
 from denoise_imu_ros.dataset import load_sequence
 from denoise_imu_ros.evaluate import correct_gyro
 from denoise_imu_ros.metrics import integrate
-from denoise_imu_ros.online import gravity_attitude, OnlineDenoiser, Output
+from denoise_imu_ros.online import Event, gravity_attitude, OnlineDenoiser, Output
 from denoise_imu_ros.streaming import StreamingCorrector
 import numpy as np
 import pytest
@@ -39,7 +39,8 @@ def test_online_attitude_equals_offline_integration_of_the_batch_output(seq, mod
     offline = integrate(start.as_quat(), gyro[:-1], seq.dt[:n - 1])
     online = Rotation.from_quat(np.array([o.attitude for o in outs]))
     assert np.max((offline.inv() * online).magnitude()) < 1e-6
-    assert outs[0].event == 'start' and all(o.event is None for o in outs[1:])
+    assert outs[0].event == Event.START and all(o.event is None for o in outs[1:])
+    assert [o.stamp_ns for o in outs] == list(seq.stamp_ns[:n])  # each output has its stamp
 
 
 def test_gravity_attitude_levels_the_accelerometer():
@@ -79,7 +80,7 @@ def test_gap_restarts_the_network_and_holds_the_attitude(seq, model):
     den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, max_gap_factor=3.0)
     first = _run(den, seq.stamp_ns[:600], seq.imu[:600])
     after = _run(den, seq.stamp_ns[1000:1600], seq.imu[1000:1600])  # 2 s gap
-    assert after[0].event == 'gap' and den.counts['gap_resets'] == 1
+    assert after[0].event == Event.GAP and den.counts['gap_resets'] == 1
     np.testing.assert_array_equal(after[0].attitude, first[-1].attitude)
     # the network restarted exactly as at start-up on the new segment
     np.testing.assert_allclose(np.array([o.gyro for o in after]),
@@ -90,7 +91,7 @@ def test_backward_time_jump_resets_everything(seq, model):
     den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, time_jump_s=1.0)
     _run(den, seq.stamp_ns[:800], seq.imu[:800])
     again = _run(den, seq.stamp_ns[:300], seq.imu[:300])  # a bag played again
-    assert again[0].event == 'time_jump' and den.counts['time_jump_resets'] == 1
+    assert again[0].event == Event.TIME_JUMP and den.counts['time_jump_resets'] == 1
     fresh = _run(OnlineDenoiser(StreamingCorrector.from_module(model), 200.0), seq.stamp_ns[:300],
                  seq.imu[:300])
     np.testing.assert_allclose(again[-1].attitude, fresh[-1].attitude, atol=1e-12)
