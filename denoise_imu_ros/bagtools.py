@@ -33,7 +33,9 @@ from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 from . import msgs
 from .bags import BAG_TYPES, IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
+from .limits import check_rate
 from .modelfile import gyro_covariance, read_model_file
+from .msgs import stamp_ns
 from .online import Drop, DROP_CAUSES, OnlineDenoiser
 from .outputs import atomic_output
 
@@ -72,6 +74,9 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
             with AnyReader([_ros2_source(src, Path(tmp))], default_typestore=TYPESTORE) as rd, \
                     Writer(partial, version=9, storage_plugin=plugin) as wr:
                 imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
+                check_rate([stamp_ns(rd.deserialize(raw, c.msgtype).header)
+                            for c, _, raw in rd.messages(connections=imu_conns)],
+                           den.rate_hz, src)
                 out = {c.id: wr.add_connection(c.topic, c.msgtype, typestore=rd.typestore)
                        for c in rd.connections}
                 corr = wr.add_connection(CORRECTED_TOPIC, IMU_TYPE, typestore=TYPESTORE)

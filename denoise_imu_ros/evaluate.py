@@ -31,6 +31,7 @@ import torch
 
 from .dataset import load_imu, load_sequence, Sequence
 from .errors import DatasetError
+from .limits import check_rate
 from .metrics import attitude_errors, AttitudeErrors, integrate, ROE_DISTANCES_M
 from .model import GyroNet
 from .modelfile import load_model, shipped_models
@@ -57,14 +58,6 @@ def correct_gyro(model: GyroNet, imu: np.ndarray) -> np.ndarray:
     return torch.cat(out).double().numpy()
 
 
-def check_rate(rate_hz: float, meta: dict[str, Any], source: str) -> None:
-    """Refuse data whose IMU rate differs from the model's by more than 5 %."""
-    model_rate = meta.get('sample_rate_hz')
-    if model_rate and abs(rate_hz / model_rate - 1) > 0.05:
-        raise DatasetError(f'{source}: IMU rate {rate_hz:.1f} Hz, the model was trained at '
-                           f'{model_rate:.1f} Hz')
-
-
 def correct_to_csv(model_spec: str, source: str, output: str,
                    imu_topic: str | None = None, engine: str = 'batch') -> int:
     """
@@ -78,8 +71,7 @@ def correct_to_csv(model_spec: str, source: str, output: str,
     if len(rec.imu) < loaded.model.receptive_field:
         raise DatasetError(f'{source}: {len(rec.imu)} IMU samples, shorter than the '
                            f'receptive field ({loaded.model.receptive_field})')
-    rate = (len(rec.imu) - 1) / ((rec.imu_stamp_ns[-1] - rec.imu_stamp_ns[0]) * 1e-9)
-    check_rate(rate, loaded.meta, source)
+    check_rate(rec.imu_stamp_ns, loaded.meta.get('sample_rate_hz'), source)
     if engine == 'streaming':
         omega = StreamingCorrector.from_module(loaded.model).process(rec.imu)
     else:
@@ -130,7 +122,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     for name in sequences:
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
                             min_samples=loaded.model.receptive_field, align_poses=align_poses)
-        check_rate(seq.rate_hz, loaded.meta, name)
+        check_rate(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
         if start_sample >= len(seq) - 1:
             raise DatasetError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')
         gyros = {'raw': seq.imu[:, :3]}

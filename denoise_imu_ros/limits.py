@@ -12,8 +12,15 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-The physical range of an IMU sample: one limit for the node and every offline reader.
+Input policies shared by the node and every offline tool: value range and sample rate.
 
+Rate: the network is trained at one IMU rate; its increments, receptive field and
+normalisation are in samples. A stream whose rate (median stamp interval) is more than
+RATE_TOLERANCE off the model's is refused by every offline tool (``correct``, ``eval``,
+``process-bag``: a one-line error); the node, which cannot refuse a stream, reports an
+ERROR in diagnostics, warns, and does not publish the attitude.
+
+Range:
 Values beyond it are not motion but corruption (a bit flip, a wrong unit, an
 uninitialised field): the float32 network would overflow on them (~3e38) or turn them
 into an attitude ruined for good. The limits sit well above every MEMS IMU's range
@@ -24,6 +31,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import DatasetError
+
+RATE_TOLERANCE = 0.05     # relative rate mismatch refused offline, an ERROR online
 MAX_GYRO_RAD_S = 100.0    # ~5,700 deg/s
 MAX_ACCEL_M_S2 = 2000.0   # ~200 g
 
@@ -38,3 +48,18 @@ def in_range(gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
 def describe() -> str:
     """Describe the limits, for error messages."""
     return f'|gyro| <= {MAX_GYRO_RAD_S:g} rad/s, |accel| <= {MAX_ACCEL_M_S2:g} m/s^2'
+
+
+def stream_rate_hz(stamps_ns: np.ndarray) -> float:
+    """Rate from the median stamp interval (gaps and dropped samples do not bias it)."""
+    steps = np.diff(np.asarray(stamps_ns, dtype=np.int64))
+    return 1e9 / float(np.median(steps)) if len(steps) and np.median(steps) > 0 else 0.0
+
+
+def check_rate(stamps_ns: np.ndarray, model_rate_hz: float | None, source: object) -> None:
+    """Refuse a recording whose IMU rate is more than RATE_TOLERANCE off the model's."""
+    rate = stream_rate_hz(stamps_ns)
+    if model_rate_hz and abs(rate / model_rate_hz - 1) > RATE_TOLERANCE:
+        raise DatasetError(f'{source}: IMU rate {rate:.1f} Hz, the model was trained at '
+                           f'{model_rate_hz:.1f} Hz (more than {100 * RATE_TOLERANCE:g} % '
+                           'off: retrain at this rate or resample)')

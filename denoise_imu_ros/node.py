@@ -42,6 +42,7 @@ from std_srvs.srv import Trigger
 
 from . import msgs
 from .errors import DenoiseError
+from .limits import RATE_TOLERANCE
 from .modelfile import gyro_covariance, read_model_file
 from .online import Drop, Event, OnlineDenoiser
 
@@ -80,7 +81,7 @@ PARAMETERS = [
     ('time_jump_threshold', 1.0, _param(
         's; a stamp this far behind the last one resets everything (bag loop); '
         'smaller backward steps are dropped as out of order.', floats=(0.0, 3600.0))),
-    ('rate_tolerance', 0.05, _param(
+    ('rate_tolerance', RATE_TOLERANCE, _param(
         'Relative input-rate mismatch to the model rate that raises a warning and a '
         'diagnostics error.', floats=(0.0, 1.0))),
     ('input_queue_depth', 200, _param(

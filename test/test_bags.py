@@ -166,3 +166,18 @@ def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(
     assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
                  '--model', str(model_file)]) == 0
     assert len(read_bag(tmp_path / 'out', imu_topic='/imu/corrected').imu) == 1200
+
+
+def test_every_offline_tool_refuses_a_stream_at_another_rate(model_file, tmp_path, capsys):
+    from test_dataset import write_asl
+    slow = write_asl(tmp_path / 'slow', n_imu=2000, imu_rate=100.0)
+    assert main(['convert', str(slow), str(tmp_path / 'slow_bag')]) == 0
+    capsys.readouterr()
+    for cmd in (['process-bag', str(tmp_path / 'slow_bag'), str(tmp_path / 'out')],
+                ['correct', '--input', str(tmp_path / 'slow_bag'), '--output',
+                 str(tmp_path / 'o.csv')],
+                ['eval', '--data', str(tmp_path), '--sequences', 'slow_bag', '--out',
+                 str(tmp_path / 'e'), '--no-plots']):
+        assert main(cmd + ['--model', str(model_file)]) == 1
+        assert 'IMU rate 100.0 Hz, the model was trained at 200.0 Hz' in capsys.readouterr().err
+    assert not (tmp_path / 'out').exists() and not (tmp_path / 'o.csv').exists()
