@@ -32,10 +32,10 @@ from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, W
 from rosbags.typesys import get_typestore, Stores
 
 from . import msgs
-from .dataset import check_recording, Recording
 from .errors import DatasetError
 from .msgs import stamp_ns
 from .outputs import atomic_output
+from .records import check_recording, Recording
 
 IMU_TYPE = 'sensor_msgs/msg/Imu'
 POSE_TYPES = ('geometry_msgs/msg/PoseStamped', 'geometry_msgs/msg/TransformStamped',

@@ -29,13 +29,14 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 import torch
 
-from .dataset import load_imu, load_sequence, Sequence
+from .dataset import load_imu, load_sequence
 from .errors import DatasetError
 from .limits import check_rate
 from .metrics import attitude_errors, AttitudeErrors, integrate, ROE_DISTANCES_M
 from .model import GyroNet
 from .modelfile import load_model, shipped_models
 from .outputs import atomic_output
+from .records import Sequence
 from .streaming import StreamingCorrector
 
 CHUNK = 65536  # samples per network call; long recordings are processed in pieces

@@ -40,8 +40,9 @@ import warnings
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .dataset import align, Recording, Sequence
+from .dataset import align
 from .metrics import integrate
+from .records import Recording, Sequence
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
 BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)

@@ -41,12 +41,13 @@ from tqdm import tqdm
 import yaml
 
 from . import parallel
-from .dataset import load_sequence, Sequence
+from .dataset import load_sequence
 from .errors import TrainingError
 from .loss import increment_loss, LossConfig
 from .metrics import attitude_errors, integrate
 from .model import GyroNet, ModelConfig
 from .modelfile import code_version, save_model
+from .records import Sequence
 
 
 RESIDUAL_BLOCK = 16  # samples per block of the gyro residual estimate (validation)
