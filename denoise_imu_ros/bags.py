@@ -22,7 +22,10 @@ Message header stamps are used, not the bag's receive times.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
+import struct
 from typing import Any
 
 import numpy as np
@@ -78,6 +81,30 @@ def pick_connections(reader: AnyReader, topic: str | None, types: tuple[str, ...
     return chosen
 
 
+# What rosbags' parsers raise on a file that is not a bag (a garbage .bag gives
+# UnicodeDecodeError in the ROS 1 reader, for one).
+CORRUPT = (AnyReaderError, UnicodeDecodeError, ValueError, EOFError, IndexError, KeyError,
+           struct.error)
+
+
+@contextmanager
+def open_bag(path: str | Path) -> Iterator[AnyReader]:
+    """Open a ROS 1 or ROS 2 bag for reading; a missing or corrupt one is a DatasetError."""
+    path = Path(path)
+    if not path.exists():
+        raise DatasetError(f'{path}: bag not found')
+    reader = AnyReader([path], default_typestore=TYPESTORE)
+    try:
+        reader.open()
+    except CORRUPT as err:
+        raise DatasetError(f'{path}: not a readable bag ({type(err).__name__}: '
+                           f'{" ".join(str(err).split())[:120]})') from err
+    try:
+        yield reader
+    finally:
+        reader.close()
+
+
 def read_bag(path: str | Path, imu_topic: str | None = None,
              pose_topic: str | None = None, with_pose: bool = True) -> Recording:
     """
@@ -86,10 +113,8 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
     With ``with_pose=False`` only the IMU is read (the ground-truth arrays are empty).
     """
     path = Path(path)
-    if not path.exists():
-        raise DatasetError(f'{path}: bag not found')
     try:
-        with AnyReader([path], default_typestore=TYPESTORE) as reader:
+        with open_bag(path) as reader:
             imu_conns = pick_connections(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
             pose_conns = (pick_connections(reader, pose_topic, POSE_TYPES, 'pose', path)
                           if with_pose else [])
@@ -104,8 +129,8 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
                     p, q = _pose(msg, conn.msgtype)
                     gt_t.append(stamp_ns(msg.header))
                     gt.append((q.x, q.y, q.z, q.w, p.x, p.y, p.z))
-    except AnyReaderError as err:
-        raise DatasetError(f'{path}: cannot read bag: {err}') from err
+    except CORRUPT as err:
+        raise DatasetError(f'{path}: cannot read bag: {" ".join(str(err).split())}') from err
     if not imu or (with_pose and not gt):
         raise DatasetError(f'{path}: {len(imu)} IMU and {len(gt)} pose messages, need both')
     gt_arr = np.array(gt, dtype=np.float64).reshape(-1, 7)

@@ -27,11 +27,11 @@ import tempfile
 
 import numpy as np
 from rosbags.convert import convert, ConverterError
-from rosbags.highlevel import AnyReader, AnyReaderError
+from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
 from . import msgs
-from .bags import BAG_TYPES, IMU_TYPE, pick_connections, TYPESTORE
+from .bags import BAG_TYPES, CORRUPT, IMU_TYPE, pick_connections, TYPESTORE
 from .errors import DatasetError
 from .limits import check_rate
 from .modelfile import gyro_covariance, read_model_file
@@ -53,8 +53,9 @@ def _ros2_source(src: Path, workdir: Path) -> Path:
         convert([src], dst, dst_storage='sqlite3', dst_version=9, compress=None,
                 compress_mode='file', default_typestore=None, typestore=TYPESTORE,
                 exclude_topics=[], include_topics=[], exclude_msgtypes=[], include_msgtypes=[])
-    except ConverterError as err:
-        raise DatasetError(f'{src}: cannot convert ROS 1 bag: {err}') from err
+    except (ConverterError, *CORRUPT) as err:
+        raise DatasetError(f'{src}: cannot read ROS 1 bag: {" ".join(str(err).split())[:120]}'
+                           ) from err
     return dst
 
 
@@ -94,6 +95,6 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                     attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
                     wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
                     wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
-        except (AnyReaderError, WriterError, FileExistsError) as err:
+        except (*CORRUPT, WriterError, FileExistsError) as err:
             raise DatasetError(f'{src} -> {dst}: {err}') from err
     return {k: v for k, v in den.counts.items() if v or k in DROP_CAUSES}

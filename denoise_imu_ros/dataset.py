@@ -50,8 +50,9 @@ def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
         raise DatasetError(f'{path}: file not found')
     stamps: list[int] = []
     rows: list[list[float]] = []
-    with path.open() as f:
-        for lineno, line in enumerate(f, 1):
+    with path.open(encoding='utf-8', errors='strict') as f:
+        lines = _lines(f, path)
+        for lineno, line in enumerate(lines, 1):
             if line.startswith('#') or not line.strip():
                 continue
             parts = line.split(',')
@@ -67,6 +68,15 @@ def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
     if not stamps:
         raise DatasetError(f'{path}: no data rows')
     return np.array(stamps, dtype=np.int64), np.array(rows, dtype=np.float64)
+
+
+def _lines(f: object, path: Path) -> list[str]:
+    """All lines of a text file; a binary or non-UTF-8 one is a one-line error."""
+    try:
+        return f.readlines()
+    except UnicodeDecodeError as err:
+        raise DatasetError(f'{path}: not a text CSV file (byte {err.start} is not UTF-8)'
+                           ) from err
 
 
 def read_asl(path: str | Path, with_gt: bool = True) -> Recording:

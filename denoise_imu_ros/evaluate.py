@@ -117,7 +117,13 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     if baseline is not None:
         models = {'calibrated': load_model(baseline), 'network': loaded}
     out_dir = Path(out)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    if start_sample < 0:
+        raise DatasetError(f'--start-sample {start_sample}: must be 0 or more')
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise DatasetError(f'{out_dir}: cannot create the output folder ({err.strerror})'
+                           ) from err
     results: dict[str, Any] = {}
     roe_all: dict[str, list[np.ndarray]] = {}
     for name in sequences:

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from dataclasses import asdict
 import json
+import math
 from pathlib import Path
 import subprocess
 import time
@@ -217,7 +218,26 @@ def read_model_file(spec: str | Path) -> ModelFile:
         raise ModelFileError(f'{path}: model file holds non-finite weights')
     if not (arrays['input_std'] > 0).all():
         raise ModelFileError(f'{path}: model file has a non-positive input_std')
+    _check_meta(meta, path)
     return ModelFile(config, arrays, meta, path)
+
+
+def _check_meta(meta: dict[str, Any], path: Path) -> None:
+    """Refuse metadata the tools would compute with: a rate, the residual std."""
+    def number(v: Any) -> bool:
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+    rate = meta.get('sample_rate_hz')
+    if rate is not None and not (number(rate) and rate > 0):
+        raise ModelFileError(f'{path}: inconsistent model file (sample_rate_hz {rate!r} is '
+                             'not a positive number)')
+    validation = meta.get('validation', {})
+    std = validation.get('gyro_residual_std') if isinstance(validation, dict) else None
+    if not isinstance(validation, dict) or (std is not None and not (
+            isinstance(std, list) and len(std) == 3 and all(number(v) and v >= 0
+                                                            for v in std))):
+        raise ModelFileError(f'{path}: inconsistent model file (validation.gyro_residual_std '
+                             f'{std!r} is not three non-negative numbers)')
 
 
 def load_model(spec: str | Path) -> LoadedModel:

@@ -26,13 +26,13 @@ from typing import Any, Iterator
 
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
-from rosbags.highlevel import AnyReader, AnyReaderError
+from rclpy.validate_topic_name import InvalidTopicNameException, validate_topic_name
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 
 from . import msgs
-from .bags import IMU_TYPE, pick_connections, TYPESTORE
-from .errors import DatasetError
+from .bags import CORRUPT, IMU_TYPE, open_bag, pick_connections
+from .errors import DatasetError, DenoiseError
 from .msgs import stamp_ns
 
 RCLPY_TYPES = msgs.rclpy_types()
@@ -41,15 +41,13 @@ RCLPY_TYPES = msgs.rclpy_types()
 def read_imu_messages(path: str | Path, imu_topic: str | None = None) -> list[Imu]:
     """All IMU messages of a ROS 1 or ROS 2 bag, as rclpy messages, in bag order."""
     path = Path(path)
-    if not path.exists():
-        raise DatasetError(f'{path}: bag not found')
     try:
-        with AnyReader([path], default_typestore=TYPESTORE) as reader:
+        with open_bag(path) as reader:
             conns = pick_connections(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
             return [msgs.copy_imu(RCLPY_TYPES, reader.deserialize(raw, c.msgtype))
                     for c, _, raw in reader.messages(connections=conns)]
-    except AnyReaderError as err:
-        raise DatasetError(f'{path}: cannot read bag: {err}') from err
+    except CORRUPT as err:
+        raise DatasetError(f'{path}: cannot read bag: {" ".join(str(err).split())}') from err
 
 
 class Player(Node):
@@ -99,6 +97,10 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool) 
     import rclpy
     from rclpy.executors import ExternalShutdownException
     messages = read_imu_messages(bag, imu_topic)
+    try:
+        validate_topic_name(topic)
+    except InvalidTopicNameException as err:
+        raise DenoiseError(f'--topic {topic!r}: {" ".join(str(err).split()[:12])}') from err
     rclpy.init()
     player = None
     try:

@@ -121,3 +121,37 @@ def test_one_absurd_imu_row_is_an_error_offline_and_a_counted_drop_in_process_ba
                   for c, _, raw in reader.messages(connections=conns)]
     assert len(values) == 1199
     assert np.isfinite([[v.x, v.y, v.z] for v in values]).all()
+
+
+def test_garbage_inputs_and_bad_options_are_one_line_errors(model_file, tmp_path, capsys):
+    garbage = tmp_path / 'garbage.bag'
+    garbage.write_bytes(b'\xff\xfe\x00\x01 not a bag')
+    binary = write_asl(tmp_path / 'binary', n_imu=600)
+    (binary / 'mav0' / 'imu0' / 'data.csv').write_bytes(b'\xff\xfe\x00\x01binary\n')
+    (tmp_path / 'file').write_text('')
+    model = ['--model', str(model_file)]
+    cases = [
+        (['correct', '--input', str(garbage), '--output', str(tmp_path / 'o.csv')] + model,
+         'garbage.bag: not a readable bag'),
+        (['eval', '--data', str(tmp_path), '--sequences', 'garbage.bag', '--out',
+          str(tmp_path / 'e')] + model, 'garbage.bag: not a readable bag'),
+        (['process-bag', str(garbage), str(tmp_path / 'p')] + model,
+         'garbage.bag: cannot read ROS 1 bag'),
+        (['play', str(garbage)], 'garbage.bag: not a readable bag'),
+        (['play', str(SAMPLE), '--topic', 'bad topic'], "--topic 'bad topic': Invalid topic"),
+        (['correct', '--input', str(binary), '--output', str(tmp_path / 'o.csv')] + model,
+         'imu0/data.csv: not a text CSV file'),
+        (['eval', '--data', str(SAMPLE.parent), '--sequences', SAMPLE.name,
+          '--start-sample', '-100', '--out', str(tmp_path / 'e')] + model,
+         '--start-sample -100: must be 0 or more'),
+        (['eval', '--data', str(SAMPLE.parent), '--sequences', SAMPLE.name,
+          '--out', str(tmp_path / 'file' / 'e')] + model, 'cannot create the output folder'),
+        (['correct', '--input', str(SAMPLE), '--output', str(tmp_path / 'file' / 'o.csv')]
+         + model, 'cannot write here'),
+        (['process-bag', str(SAMPLE), str(tmp_path / 'file' / 'p')] + model,
+         'cannot write here'),
+    ]
+    for argv, message in cases:
+        assert main(argv) == 1, argv
+        err = _error(capsys)
+        assert message in err, (argv, err)

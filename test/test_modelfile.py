@@ -117,3 +117,34 @@ def test_copied_metadata_never_overrides_the_architecture(tmp_path):
     meta = load_model(tmp_path / 'a.safetensors').meta  # holds model_config (members 1)
     save_model(tmp_path / 'b.safetensors', merge([single, single]), meta)
     assert load_model(tmp_path / 'b.safetensors').model.config.members == 2
+
+
+@pytest.mark.parametrize('meta, message', [
+    ({'sample_rate_hz': 'fast'}, "sample_rate_hz 'fast' is not a positive number"),
+    ({'sample_rate_hz': 0}, 'sample_rate_hz 0 is not a positive number'),
+    ({'validation': {'gyro_residual_std': ['a', 1, 2]}}, 'gyro_residual_std'),
+    ({'validation': [1, 2]}, 'gyro_residual_std'),
+])
+def test_malformed_metadata_is_refused_on_reading(tmp_path, meta, message):
+    save_model(tmp_path / 'm.safetensors', _model().eval(), meta)
+    with pytest.raises(ModelFileError, match=message):
+        load_model(tmp_path / 'm.safetensors')
+
+
+def test_a_model_config_that_is_not_a_mapping_or_zero_input_std_is_refused(tmp_path):
+    from denoise_imu_ros.modelfile import read_model_file, write_model_file
+    model = _model().eval()
+    arrays = {k: v.numpy() for k, v in model.state_dict().items()}
+    write_model_file(tmp_path / 'a.safetensors', model.config, arrays, {})
+    from safetensors.numpy import load_file
+    from safetensors.numpy import save_file as save_np
+    header = {'format': 'denoise_imu_ros.gyro_model', 'format_version': '1',
+              'model_config': '[1, 2]'}
+    save_np(load_file(str(tmp_path / 'a.safetensors')), str(tmp_path / 'b.safetensors'),
+            metadata=header)
+    with pytest.raises(ModelFileError, match='inconsistent model file'):
+        read_model_file(tmp_path / 'b.safetensors')
+    arrays['input_std'][:] = 0
+    write_model_file(tmp_path / 'c.safetensors', model.config, arrays, {})
+    with pytest.raises(ModelFileError, match='non-positive input_std'):
+        read_model_file(tmp_path / 'c.safetensors')
