@@ -200,9 +200,13 @@ def _plot_sequence(path: Path, seq: Sequence, estimates: dict[str, Rotation]) ->
     t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
     gt = Rotation.from_quat(seq.gt_quat)
     fig, axes = plt.subplots(4, 1, figsize=(10, 11), sharex=True)
+    gt_ypr = np.degrees(np.unwrap(gt.as_euler('ZYX'), axis=0))
     for label, rot, style in [('ground truth', gt, 'k-')] + [
             (m, r, '-') for m, r in estimates.items()]:
-        ypr = np.degrees(np.unwrap(rot.as_euler('ZYX'), axis=0))
+        # each curve is drawn as the ground truth's plus its wrapped difference to it:
+        # unwrapping curves one by one near pitch +-90 deg put a yaw 360 deg away
+        diff = np.degrees(rot.as_euler('ZYX')) - gt_ypr
+        ypr = gt_ypr + (diff + 180.0) % 360.0 - 180.0
         for ax, col in zip(axes[:3], (2, 1, 0)):
             ax.plot(t, ypr[:, col], style, label=label, lw=0.8)
         if label != 'ground truth':

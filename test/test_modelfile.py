@@ -110,6 +110,11 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
     assert not (tmp_path / 'x.safetensors').exists()
 
 
+def test_model_files_are_readable_by_everyone(tmp_path):
+    save_model(tmp_path / 'm.safetensors', _model().eval(), {})
+    assert (tmp_path / 'm.safetensors').stat().st_mode & 0o777 == 0o644
+
+
 def test_copied_metadata_never_overrides_the_architecture(tmp_path):
     from denoise_imu_ros.model import merge
     single = _model().eval()
