@@ -199,15 +199,23 @@ def test_one_long_gap_is_not_a_slow_stream(harness):
 
 
 def test_reset_attitude_service_and_embedded_attitude(harness):
+    from scipy.spatial.transform import Rotation
     h = harness(embed_attitude=True, orientation_stddev=0.1)
+    # one second of yaw at 1 rad/s: the attitude has turned by ~1 rad about z
+    h.send([imu_msg(10**9 + k * 5_000_000, [0, 0, 1.0], [0, 0, 9.81]) for k in range(200)])
+    turned = h.attitude[-1].quaternion
+    assert abs(Rotation.from_quat([turned.x, turned.y, turned.z, turned.w]).as_euler(
+        'ZYX')[0]) > 0.5
     cli = h.client.create_client(Trigger, 'gyro_denoiser/reset_attitude')
     h.spin_until(cli.service_is_ready)
     future = cli.call_async(Trigger.Request())
     h.spin_until(future.done)
     assert future.result().success
-    h.send([imu_msg(10**9 + k * 5_000_000, [0, 0, 0], [0, 0, 9.81]) for k in range(5)])
+    # the next sample's attitude comes from its accelerometer alone: level, yaw 0
+    h.send([imu_msg(10**9 + 200 * 5_000_000, [0, 0, 1.0], [0, 0, 9.81])])
     assert h.corrected[-1].orientation_covariance[0] == pytest.approx(0.01)
     assert h.corrected[-1].orientation.w == pytest.approx(1.0)
+    assert h.attitude[-1].quaternion.w == pytest.approx(1.0)
 
 
 def test_missing_or_corrupt_model_exits_non_zero_with_one_line(tmp_path, capsys):

@@ -78,3 +78,16 @@ def test_a_two_process_run_trains_and_returns_a_plain_model(euroc, tmp_path):
     assert not any(isinstance(m, parallel.SyncBatchNorm) for m in model.modules())
     assert not dist.is_initialized()
     assert meta['run']['workers'] == 2 and 'workers' not in meta['train_config']
+
+
+def test_two_workers_train_on_synthetic_recordings_without_the_real_data(tmp_path):
+    from test_dataset import write_asl
+    for i in range(2):
+        write_asl(tmp_path / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=0.01)
+    cfg = load_config(CONFIG, data=str(tmp_path), sequences=['rec0', 'rec1'], window=1024,
+                      steps=6, val_every=3, restart_period=6, swa_start=3, workers=2)
+    result = train(cfg, progress=False)
+    assert result.meta['run']['workers'] == 2
+    assert [h['step'] for h in result.meta['history']] == [0, 3, 6]
+    assert all(np.isfinite(h['val_loss']) for h in result.meta['history'])
+    assert not dist.is_initialized()
