@@ -328,8 +328,13 @@ def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, eur
     assert 'published 400 IMU messages' in capsys.readouterr().out
 
 
-def test_the_node_needs_no_torch(model_file, tmp_path):
-    # torch made unimportable: the node imports, starts with a model file and corrects
+def test_the_node_needs_no_torch_and_equals_the_batch_network(tmp_path):
+    # torch made unimportable: the node starts with the shipped model, and every message
+    # through its callback gives the batch network's output (computed here, with torch)
+    rec = load_imu(SAMPLE)
+    n = 1500
+    np.savez(tmp_path / 'data.npz', stamps=rec.imu_stamp_ns[:n], imu=rec.imu[:n],
+             batch=correct_gyro(load_model('euroc').model, rec.imu[:n]))
     script = tmp_path / 'run.py'
     script.write_text(f"""
 import sys
@@ -342,14 +347,24 @@ class NoTorch:
 
 
 sys.meta_path.insert(0, NoTorch())
+import numpy as np
 import rclpy
-from denoise_imu_ros.node import GyroDenoiser
 from rclpy.parameter import Parameter
+from denoise_imu_ros import msgs
+from denoise_imu_ros.node import GyroDenoiser
 rclpy.init(domain_id={DOMAIN})
-node = GyroDenoiser(parameter_overrides=[Parameter('model', value={str(model_file)!r})])
-from denoise_imu_ros.online import OnlineDenoiser
-out = node._denoiser.process(1_000_000_000, [0.1, 0.0, 0.0], [0.0, 0.0, 9.8])
-assert out.gyro.shape == (3,)
+node = GyroDenoiser(parameter_overrides=[Parameter('model', value='euroc')])
+sent = []
+node._pub_imu.publish = sent.append  # what the callback publishes
+data = np.load({str(tmp_path / 'data.npz')!r})
+types = msgs.rclpy_types()
+for t, row in zip(data['stamps'], data['imu']):
+    node._on_imu(msgs.imu(types, msgs.header(types, int(t), 'imu0'), row[:3], row[3:]))
+out = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
+                for m in sent])
+assert len(out) == len(data['batch']), len(out)
+print('max difference', np.abs(out - data['batch']).max())
+assert np.abs(out - data['batch']).max() <= 1e-6
 node.destroy_node()
 rclpy.shutdown()
 assert 'torch' not in sys.modules and 'safetensors.torch' not in sys.modules
@@ -358,7 +373,7 @@ print('ok')
     import subprocess
     import sys
     run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                         timeout=60)
+                         timeout=120)
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip().endswith('ok')
 
