@@ -121,16 +121,6 @@ def test_convert_refuses_an_existing_output(euroc, tmp_path, capsys):
     assert '\n' not in err
 
 
-def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path, model_file):
-    from rosbags.highlevel import AnyReader
-    path = _write_ros1(tmp_path / 'in.bag')
-    assert main(['process-bag', str(path), str(tmp_path / 'out'), '--model',
-                 str(model_file), '--storage', 'sqlite3']) == 0
-    with AnyReader([tmp_path / 'out']) as reader:
-        topics = {c.topic: c.msgcount for c in reader.connections}
-    assert topics == {'/imu0': N, '/vicon/body': N, '/imu/corrected': N, '/imu/attitude': N}
-
-
 def test_convert_overlap_keeps_only_the_span_with_ground_truth(euroc, tmp_path):
     from denoise_imu_ros.dataset import read_asl
     from denoise_imu_ros.bags import read_bag
@@ -141,43 +131,3 @@ def test_convert_overlap_keeps_only_the_span_with_ground_truth(euroc, tmp_path):
     assert asl.gt_stamp_ns[0] > asl.imu_stamp_ns[0]  # the case this test is about
     assert rec.imu_stamp_ns[0] >= asl.gt_stamp_ns[0]
     assert len(load_sequence(tmp_path / 'b')) == len(load_sequence(seq))
-
-
-def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(
-        model_file, tmp_path, monkeypatch):
-    from denoise_imu_ros import bagtools
-    from denoise_imu_ros.bags import read_bag
-    from test_dataset import write_asl
-    assert main(['convert', str(write_asl(tmp_path / 'a', n_imu=1200)),
-                 str(tmp_path / 'in')]) == 0
-    real = bagtools.OnlineDenoiser.process_imu
-    calls = []
-
-    def fail_half_way(self, msg):
-        calls.append(1)
-        if len(calls) == 600:
-            raise DatasetError('disk full (simulated)')
-        return real(self, msg)
-    monkeypatch.setattr(bagtools.OnlineDenoiser, 'process_imu', fail_half_way)
-    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
-                 '--model', str(model_file)]) == 1
-    assert sorted(p.name for p in tmp_path.iterdir()) == ['a', 'in', 'model.safetensors']
-    monkeypatch.setattr(bagtools.OnlineDenoiser, 'process_imu', real)
-    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
-                 '--model', str(model_file)]) == 0
-    assert len(read_bag(tmp_path / 'out', imu_topic='/imu/corrected').imu) == 1200
-
-
-def test_every_offline_tool_refuses_a_stream_at_another_rate(model_file, tmp_path, capsys):
-    from test_dataset import write_asl
-    slow = write_asl(tmp_path / 'slow', n_imu=2000, imu_rate=100.0)
-    assert main(['convert', str(slow), str(tmp_path / 'slow_bag')]) == 0
-    capsys.readouterr()
-    for cmd in (['process-bag', str(tmp_path / 'slow_bag'), str(tmp_path / 'out')],
-                ['correct', '--input', str(tmp_path / 'slow_bag'), '--output',
-                 str(tmp_path / 'o.csv')],
-                ['eval', '--data', str(tmp_path), '--sequences', 'slow_bag', '--out',
-                 str(tmp_path / 'e'), '--no-plots']):
-        assert main(cmd + ['--model', str(model_file)]) == 1
-        assert 'IMU rate 100.0 Hz, the model was trained at 200.0 Hz' in capsys.readouterr().err
-    assert not (tmp_path / 'out').exists() and not (tmp_path / 'o.csv').exists()

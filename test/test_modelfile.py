@@ -6,7 +6,7 @@ import json
 
 from denoise_imu_ros.errors import ModelFileError
 from denoise_imu_ros.model import GyroNet, ModelConfig
-from denoise_imu_ros.modelfile import load_model, save_model, shipped_models
+from denoise_imu_ros.modelfile import load_model, save_model
 import numpy as np
 import pytest
 from safetensors.torch import save_file
@@ -31,22 +31,6 @@ def test_round_trip_rebuilds_the_same_model_from_the_file_alone(tmp_path):
     assert loaded.meta['sample_rate_hz'] == 200.0
     assert loaded.meta['receptive_field'] == 511
     assert not loaded.model.training
-
-
-@pytest.mark.parametrize('name', ['euroc', 'tumvi', 'euroc_calibrated', 'tumvi_calibrated'])
-def test_shipped_models_load_by_name_with_their_provenance(name):
-    assert name in shipped_models()
-    loaded = load_model(name)
-    meta = loaded.meta
-    for key in ('sample_rate_hz', 'train_sequences', 'train_config', 'validation',
-                'code_version', 'receptive_field'):
-        assert key in meta
-    expected = {'euroc': ['MH_01_easy', 'MH_03_medium', 'MH_05_difficult', 'V1_02_medium',
-                          'V2_01_easy', 'V2_03_difficult'],
-                'tumvi': ['dataset-room1_512_16', 'dataset-room3_512_16',
-                          'dataset-room5_512_16']}[name.split('_')[0]]
-    assert meta['train_sequences'] == expected
-    assert loaded.model.receptive_field == (1 if 'calibrated' in name else 511)
 
 
 def test_corrupt_foreign_and_missing_files_raise_model_file_error(tmp_path):

@@ -2,107 +2,21 @@
 # Licensed under the Apache License, Version 2.0
 """The gyro_denoiser node in-process: topics, headers, bad input, fuzz, services."""
 
-import os
 from pathlib import Path
-import time
 
-from builtin_interfaces.msg import Time
-from conftest import SAMPLE, untrained_model
+from conftest import DOMAIN, imu_msg, SAMPLE, untrained_model
 from denoise_imu_ros.dataset import load_imu
 from denoise_imu_ros.evaluate import correct_gyro
 from denoise_imu_ros.modelfile import load_model, save_model
-from denoise_imu_ros.node import GyroDenoiser, main, PARAMETERS
+from denoise_imu_ros.node import main, PARAMETERS
 from denoise_imu_ros.online import DROP_CAUSES
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from geometry_msgs.msg import QuaternionStamped
+from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
 import pytest
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import Imu
+from rclpy.qos import ReliabilityPolicy
 from std_srvs.srv import Trigger
 
-DOMAIN = 10 + os.getpid() % 90
 NODE_PARAMETERS = {name: default for name, default, _ in PARAMETERS}
-
-
-class Harness:
-    """A context with the node under test and a client node that talks to it."""
-
-    def __init__(self, model_file, **params):
-        self.ctx = rclpy.context.Context()
-        rclpy.init(context=self.ctx, domain_id=DOMAIN)
-        overrides = [Parameter('model', value=str(model_file))]
-        overrides += [Parameter(k, value=v) for k, v in params.items()]
-        self.node = GyroDenoiser(context=self.ctx, parameter_overrides=overrides)
-        self.client = rclpy.create_node('client', context=self.ctx)
-        self.pub = self.client.create_publisher(
-            Imu, 'imu/data_raw', QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
-        self.corrected, self.attitude, self.diagnostics = [], [], []
-        reliable = QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE)
-        self.client.create_subscription(Imu, 'imu/corrected', self.corrected.append, reliable)
-        self.client.create_subscription(QuaternionStamped, 'imu/attitude',
-                                        self.attitude.append, reliable)
-        self.client.create_subscription(DiagnosticArray, '/diagnostics',
-                                        self.diagnostics.append, 10)
-        self.executor = SingleThreadedExecutor(context=self.ctx)
-        self.executor.add_node(self.node)
-        self.executor.add_node(self.client)
-        self.spin_until(lambda: self.pub.get_subscription_count() > 0)
-
-    def spin_until(self, done, timeout=10.0):
-        deadline = time.monotonic() + timeout
-        while not done() and time.monotonic() < deadline:
-            self.executor.spin_once(timeout_sec=0.01)
-        assert done(), 'timed out'
-
-    def processed(self):
-        counts = self.node._denoiser.counts
-        return counts['accepted'] + sum(counts[c] for c in DROP_CAUSES)
-
-    def send(self, msgs):
-        """Publish in bursts well inside the input queue; wait until all are handled."""
-        start = self.processed()
-        for k in range(0, len(msgs), 50):
-            for msg in msgs[k:k + 50]:
-                self.pub.publish(msg)
-            self.spin_until(lambda: self.processed() - start >= min(k + 50, len(msgs)))
-        self.spin_until(lambda: len(self.corrected) >= self.node._denoiser.counts['accepted'])
-        self.spin_until(lambda: len(self.attitude) >= self.node._denoiser.counts['accepted']
-                        - self.node.attitude_withheld)
-
-    def close(self):
-        self.executor.shutdown()
-        self.node.destroy_node()
-        self.client.destroy_node()
-        rclpy.shutdown(context=self.ctx)
-
-
-@pytest.fixture()
-def harness(model_file):
-    """Yield a running node and client; torn down after the test."""
-    made = []
-
-    def make(**params):
-        made.append(Harness(model_file, **params))
-        return made[-1]
-    yield make
-    for h in made:
-        h.close()
-
-
-def imu_msg(stamp_ns, gyro, accel, frame='imu4'):
-    """Build a sensor_msgs/Imu as a driver would."""
-    msg = Imu()
-    msg.header.stamp = Time(sec=int(stamp_ns // 10**9), nanosec=int(stamp_ns % 10**9))
-    msg.header.frame_id = frame
-    (msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z) = map(float, gyro)
-    (msg.linear_acceleration.x, msg.linear_acceleration.y,
-     msg.linear_acceleration.z) = map(float, accel)
-    msg.linear_acceleration_covariance[0] = 0.04
-    return msg
 
 
 def test_corrected_imu_copies_headers_and_matches_the_batch_network(harness, model_file):
@@ -249,83 +163,11 @@ def test_use_sim_time_is_accepted(harness):
     assert len(h.corrected) == 3
 
 
-def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path):
-    from denoise_imu_ros.cli import main as cli
-    from rosbags.highlevel import AnyReader
-    assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
-                str(model_file)]) == 0
-    with AnyReader([tmp_path / 'out']) as reader:
-        topics = {c.topic: c.msgcount for c in reader.connections}
-        conns = [c for c in reader.connections if c.topic == '/imu/corrected']
-        bag = []
-        for conn, _, raw in reader.messages(connections=conns):
-            m = reader.deserialize(raw, conn.msgtype)
-            bag.append([m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
-                        *m.angular_velocity_covariance, m.orientation_covariance[0]])
-            if len(bag) == 600:
-                break
-    assert topics['/imu0'] == topics['/imu/corrected'] == topics['/imu/attitude'] == 18000
-    assert topics['/groundtruth/pose'] > 17000
-    rec = load_imu(SAMPLE)
-    h = harness()
-    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:600], rec.imu[:600])])
-    node = [[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
-             *m.angular_velocity_covariance, m.orientation_covariance[0]] for m in h.corrected]
-    assert np.array_equal(np.array(node), np.array(bag))
-
-
-def test_player_publishes_a_bag_in_order_with_clock(harness):
-    from denoise_imu_ros.player import Player, read_imu_messages
-    from rosgraph_msgs.msg import Clock
-    messages = read_imu_messages(SAMPLE)[:300]
-    h = harness()
-    clocks = []
-    h.client.create_subscription(Clock, '/clock', clocks.append, 1000)
-    player = Player(messages, rate=20.0, clock=True, context=h.ctx)
-    h.executor.add_node(player)
-    for k, _ in enumerate(player.play()):  # one executor: let the node keep pace
-        h.spin_until(lambda: h.processed() > k)
-    h.spin_until(lambda: len(h.corrected) == 300 and len(clocks) == 300)
-    assert [m.header.stamp for m in h.corrected] == [m.header.stamp for m in messages]
-    assert [c.clock for c in clocks] == [m.header.stamp for m in messages]
-    assert h.node._denoiser.counts['accepted'] == 300
-
-
-def test_live_demo_runs_node_player_and_monitor(tmp_path, monkeypatch, capsys):
-    from denoise_imu_ros import demo
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(DOMAIN))
-    assert demo.main(['--model', 'euroc', '--rate', '2', '--seconds', '20',
-                      '--out', str(tmp_path)]) == 0
-    out = capsys.readouterr().out
-    assert '4000/4000 samples corrected live over DDS' in out
-    raw, node = (float(line.split(':')[1].split('°')[0]) for line in out.splitlines()
-                 if line.strip().startswith(('raw gyro integration', 'gyro_denoiser ')))
-    assert node < raw / 10
-    assert (tmp_path / 'live_attitude_error.png').read_bytes()[:4] == b'\x89PNG'
-
-
 def test_qos_is_overridable_through_parameters(harness):
     h = harness(**{'qos_overrides./imu/corrected.publisher.reliability': 'best_effort',
                    'qos_overrides./imu/corrected.publisher.depth': 7})
     assert h.node._pub_imu.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
     assert h.node._pub_imu.qos_profile.depth == 7
-
-
-def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, euroc):
-    import threading
-    from denoise_imu_ros.cli import main as cli
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(DOMAIN))
-    h = harness()
-    bag = tmp_path / 'short'
-    assert cli(['convert', str(euroc / 'V1_01_easy'), str(bag), '--duration', '2']) == 0
-    result = []
-    thread = threading.Thread(target=lambda: result.append(cli(['play', str(bag), '--rate', '2'])))
-    thread.start()
-    while thread.is_alive():
-        h.executor.spin_once(timeout_sec=0.01)
-    assert result == [0]
-    h.spin_until(lambda: len(h.corrected) == 400)
-    assert 'published 400 IMU messages' in capsys.readouterr().out
 
 
 def test_the_node_needs_no_torch_and_equals_the_batch_network(tmp_path):

@@ -5,7 +5,6 @@
 from conftest import SAMPLE, untrained_model
 from denoise_imu_ros.dataset import load_imu
 from denoise_imu_ros.evaluate import correct_gyro
-from denoise_imu_ros.modelfile import load_model
 from denoise_imu_ros.streaming import StreamingCorrector
 import numpy as np
 import pytest
@@ -40,12 +39,6 @@ def test_streaming_equals_batch_including_the_first_510_samples(imu, calibration
     batch = correct_gyro(model, imu[:3000])
     np.testing.assert_allclose(StreamingCorrector.from_module(model).process(imu[:3000]), batch,
                                rtol=0, atol=1e-6)
-
-
-def test_shipped_model_streams_the_whole_sample_exactly(imu):
-    model = load_model('euroc').model
-    np.testing.assert_allclose(StreamingCorrector.from_module(model).process(imu),
-                               correct_gyro(model, imu), rtol=0, atol=1e-6)
 
 
 def test_reset_starts_a_new_recording(imu):
