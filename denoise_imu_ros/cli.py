@@ -71,6 +71,13 @@ def _crossval(args: argparse.Namespace) -> None:
         print(f'stored the cross-recording figures in {path}')
 
 
+def _init_recipe(args: argparse.Namespace) -> None:
+    from .recipe import init_recipe, write_recipe
+    recipe, why = init_recipe(args.data, args.sequences, args.imu_topic, args.pose_topic)
+    write_recipe(args.out, recipe, why)
+    print(f'wrote {args.out}:\n' + ''.join(f'  {line}\n' for line in why), end='')
+
+
 def _ensemble(args: argparse.Namespace) -> None:
     from .modelfile import save_ensemble
     loaded = save_ensemble(args.out, args.models)
@@ -208,6 +215,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--max-offset', type=float, default=0.5,
                    help='clock-offset search range, +- s (default 0.5)')
     p.set_defaults(func=_check_data)
+
+    p = sub.add_parser('init-recipe', parents=[topics],
+                       help='write a training recipe for your recordings from their data')
+    p.add_argument('--data', required=True, help='folder holding the recordings')
+    p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags in it')
+    p.add_argument('--out', default='recipe.yaml', help='recipe to write')
+    p.set_defaults(func=_init_recipe)
 
     p = sub.add_parser('correct', parents=[topics],
                        help='write the corrected gyro of every IMU sample as CSV')

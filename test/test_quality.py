@@ -87,3 +87,17 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
     away = write_asl(tmp_path / 'away', n_imu=2000, gt_offset_s=20.0)
     assert main(['check-data', str(away)]) == 1
     assert 'do not overlap in time' in capsys.readouterr().err
+
+
+def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
+    from denoise_imu_ros.train import load_config
+    rooms = ['dataset-room1_512_16', 'dataset-room5_512_16']
+    out = tmp_path / 'recipe.yaml'
+    assert main(['init-recipe', '--data', str(data_dir / 'tumvi'), '--sequences', *rooms,
+                 '--out', str(out)]) == 0
+    cfg = load_config(out)  # a recipe train accepts as it is
+    assert cfg.increments == [64, 128]  # the mocap's 16/32 are noise-dominated
+    assert cfg.gyro_std_deg == [0.2, 0.2, 0.2] and cfg.align == 'none'
+    assert cfg.window % 128 == 0 and 75 < cfg.window / 199.4 <= 80
+    assert cfg.sequences == rooms
+    assert '16/32 are noise-dominated' in out.read_text().splitlines()[2]
