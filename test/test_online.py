@@ -6,8 +6,9 @@ from conftest import SAMPLE, untrained_model
 from denoise_imu_ros.dataset import load_sequence
 from denoise_imu_ros.evaluate import correct_gyro
 from denoise_imu_ros.metrics import integrate
-from denoise_imu_ros.online import Event, gravity_attitude, OnlineDenoiser, Output
+from denoise_imu_ros.online import DROP_CAUSES, Event, gravity_attitude, OnlineDenoiser, Output
 from denoise_imu_ros.streaming import StreamingCorrector
+from hypothesis import given, HealthCheck, settings, strategies as st
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -135,3 +136,29 @@ def test_fuzz_ten_thousand_samples_with_extremes_never_yield_a_non_finite_output
             assert isinstance(out, Output) and np.isfinite(out.gyro).all()
     assert answered == n and out_of_range > 1000
     assert den.counts['non_finite'] + den.counts['out_of_range'] > 0.6 * n
+
+
+# Every float64 (NaN, +-inf, +-1.8e308, denormals, +-0.0 included) in every field, and
+# stamp steps that repeat, go back, jump forward or are normal.
+FIELDS = st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64),
+                  min_size=6, max_size=6)
+STREAMS = st.lists(st.tuples(st.sampled_from([5_000_000] * 6 + [0, -3_000_000, 40_000_000,
+                                                                 -2_000_000_000]),
+                             st.one_of(FIELDS, st.just(None))), min_size=20, max_size=60)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(stream=STREAMS)
+def test_property_no_sample_raises_or_yields_a_non_finite_output(seq, model, stream):
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    t = 1_700_000_000 * 10**9
+    for k, (step, fields) in enumerate(stream):
+        t += step
+        sample = seq.imu[k] if fields is None else np.array(fields)  # None: a real sample
+        out = den.process(t, sample[:3], sample[3:])
+        if isinstance(out, Output):
+            assert np.isfinite(out.gyro).all() and np.isfinite(out.attitude).all()
+            assert abs(np.linalg.norm(out.attitude) - 1) < 1e-9
+    counted = den.counts['accepted'] + sum(den.counts[c] for c in DROP_CAUSES)
+    assert counted == len(stream)  # every sample accepted or dropped with a cause
