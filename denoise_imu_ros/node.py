@@ -171,11 +171,11 @@ class GyroDenoiser(Node):
         embed = out.attitude if self._embed else None
         self._pub_imu.publish(msgs.corrected_imu(self._types, msg, out.gyro, self._gyro_cov,
                                                  embed, self._orientation_cov))
-        attitude = msgs.attitude(self._types, msg, self._fixed_frame, out.attitude)
         # an attitude held across a gap, or integrated at a rate the model was not made
         # for, is not published as if it were valid
         if out.event != Event.GAP and not self._rate_error:
-            self._pub_att.publish(attitude)
+            self._pub_att.publish(msgs.attitude(self._types, msg, self._fixed_frame,
+                                                out.attitude))
         else:
             self.attitude_withheld += 1
         self._infer_s.append(time.perf_counter() - t0)
