@@ -33,7 +33,7 @@ import torch
 from torch import nn
 import torch.nn.functional as F  # noqa: N812
 
-from .architecture import BN_EPS, ModelConfig
+from .architecture import BLOCK, BN_EPS, ModelConfig
 
 __all__ = ['BN_EPS', 'Dropout', 'GyroNet', 'merge', 'ModelConfig']
 
@@ -129,21 +129,38 @@ def merge(members: list[GyroNet]) -> GyroNet:
     """
     One eval-mode network whose output is the mean of ``members``' outputs, exactly.
 
-    The members must share architecture, input normalisation and gyro_std (trainings of
-    one recipe differing only in their seed).
+    The members must share the architecture (trainings of one recipe, e.g. differing in
+    their seed). Their input normalisations and gyro_std may differ (the statistics of
+    two runs on the same data differ in the last float32 digits): the first member's are
+    kept and each member's own are folded into its first and last convolutions, which is
+    exact since both are affine (the first layer's replication padding commutes with it).
     """
     first = members[0]
     base = dataclasses.replace(first.config, members=1)
-    for other in members[1:]:
-        if dataclasses.replace(other.config, members=1) != base:
+    for other in members:
+        alike = dataclasses.replace(other.config, members=1, gyro_std=base.gyro_std)
+        if alike != base or other.config.members != 1:
             raise ValueError('ensemble members differ in architecture')
-        for name in ('input_mean', 'input_std', 'gyro_std'):
-            if not torch.equal(getattr(other, name), getattr(first, name)):
-                raise ValueError(f'ensemble members differ in {name} (trained on other data?)')
-    if any(m.config.members != 1 or m.config.calibration_only for m in members):
-        raise ValueError('ensemble members must be single trained networks')
+    if base.calibration_only:
+        raise ValueError('ensemble members must be networks, not calibration baselines')
     merged = GyroNet(dataclasses.replace(base, members=len(members)))
-    states = [m.state_dict() for m in members]
+    last = f'net.{len(base.channels) * BLOCK}.'
+    states = []
+    with torch.no_grad():
+        for m in members:
+            st = {k: v.detach().clone() for k, v in m.state_dict().items()}
+            # (u - mu_k) / s_k = (s / s_k) (u - mu) / s + (mu - mu_k) / s_k
+            scale = first.input_std / m.input_std
+            shift = (first.input_mean - m.input_mean) / m.input_std
+            w = st['net.0.weight'].double()                         # (c_out, 6, k)
+            st['net.0.bias'] = (st['net.0.bias'].double()
+                                + (w * shift.double()[None, :, None]).sum((1, 2))).float()
+            st['net.0.weight'] = (w * scale.double()[None, :, None]).float()
+            # gyro_std_k f_k = gyro_std (gyro_std_k / gyro_std) f_k
+            ratio = (m.gyro_std / first.gyro_std)
+            st[last + 'weight'] = st[last + 'weight'] * ratio[:, None, None]
+            st[last + 'bias'] = st[last + 'bias'] * ratio
+            states.append(st)
     state = {}
     for key, value in states[0].items():
         if key.startswith('net.') and not key.endswith('num_batches_tracked'):

@@ -86,12 +86,22 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
     u = np.random.default_rng(0).normal(0, 1, (800, 6))
     mean = (correct_gyro(load_model(model_file).model, u) + correct_gyro(second, u)) / 2
     np.testing.assert_allclose(correct_gyro(ens.model, u), mean, rtol=0, atol=1e-6)
+    # a member normalised otherwise (another run's float32 statistics) is folded in exactly
     other = untrained_model()
-    other.set_normalization(torch.zeros(6), torch.full((6,), 2.0))
+    other.set_normalization(torch.tensor([0.1, -0.2, 0.0, 9.5, 0.3, -2.0]),
+                            torch.tensor([0.4, 0.2, 0.3, 1.5, 0.8, 1.1]))
     save_model(tmp_path / 'c.safetensors', other, {'sample_rate_hz': 200.0})
     assert main(['ensemble', str(model_file), str(tmp_path / 'c.safetensors'),
-                 '--out', str(tmp_path / 'x.safetensors')]) == 1
-    assert not (tmp_path / 'x.safetensors').exists()
+                 '--out', str(tmp_path / 'x.safetensors')]) == 0
+    mean = (correct_gyro(load_model(model_file).model, u) + correct_gyro(other, u)) / 2
+    np.testing.assert_allclose(correct_gyro(load_model(tmp_path / 'x.safetensors').model, u),
+                               mean, rtol=0, atol=1e-6)
+    # another architecture cannot be averaged in
+    save_model(tmp_path / 'd.safetensors', GyroNet(ModelConfig(channels=(8, 16, 32, 64))),
+               {'sample_rate_hz': 200.0})
+    assert main(['ensemble', str(model_file), str(tmp_path / 'd.safetensors'),
+                 '--out', str(tmp_path / 'y.safetensors')]) == 1
+    assert not (tmp_path / 'y.safetensors').exists()
 
 
 def test_model_files_are_readable_by_everyone(tmp_path):

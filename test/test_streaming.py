@@ -67,6 +67,8 @@ def test_an_ensemble_is_the_mean_of_its_members_in_batch_and_streaming(imu):
         torch.manual_seed(seed + 10)  # members differ in every weight and in Delta
         with torch.no_grad():
             member.delta.normal_(std=0.01)
+            member.input_mean.add_(0.1 * torch.randn(6))  # each its own normalisation
+            member.input_std.mul_(1 + 0.1 * torch.rand(6))
             for mod in member.modules():
                 if isinstance(mod, torch.nn.Conv1d):
                     mod.weight.normal_(std=0.05)
