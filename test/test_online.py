@@ -147,8 +147,8 @@ STREAMS = st.lists(st.tuples(STEPS, st.one_of(FIELDS, st.just(None))), min_size=
                    max_size=60)
 
 
-@settings(max_examples=300, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=300, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(stream=STREAMS)
 def test_property_no_sample_raises_or_yields_a_non_finite_output(seq, model, stream):
     den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
