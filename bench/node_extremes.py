@@ -92,7 +92,9 @@ def main():
         ex.spin_once(timeout_sec=0.01)
     alive = node.poll() is None
     values = np.array(list(got.values())) if got else np.zeros((0, 3))
-    print(f'real samples sent {len(real)}, answered {sum(s in got for s in real)}')
+    lost = [k for k, s in enumerate(real) if s not in got]
+    print(f'real samples sent {len(real)}, answered {len(real) - len(lost)}'
+          + (f' (unanswered: sample {", ".join(map(str, lost[:10]))})' if lost else ''))
     print(f'injected samples {len(injected)}, accepted (in range) '
           f'{sum(s in got for s in injected)}')
     print(f'non-finite values received: {int((~np.isfinite(values)).sum())}')
