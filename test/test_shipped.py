@@ -42,3 +42,17 @@ def test_shipped_model_streams_the_whole_sample_exactly():
     model = load_model('euroc').model
     np.testing.assert_allclose(StreamingCorrector.from_module(model).process(imu),
                                correct_gyro(model, imu), rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize('name', ['euroc', 'tumvi', 'euroc_calibrated', 'tumvi_calibrated'])
+def test_every_shipped_model_carries_its_cross_recording_report(name):
+    report = load_model(name).meta['crossval']
+    assert report['verdict'].startswith('the network ')
+    assert set(report['mean']) == {'raw', 'calibrated', 'network'}
+    assert len(report['recordings']) == (6 if name.startswith('euroc') else 3)
+
+
+def test_shipped_euroc_is_the_ensemble_of_five_trainings():
+    loaded = load_model('euroc')
+    assert loaded.model.config.members == 5
+    assert sorted(m['seed'] for m in loaded.meta['members']) == [0, 1, 2, 3, 4]
