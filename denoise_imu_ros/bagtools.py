@@ -27,11 +27,10 @@ import tempfile
 
 import numpy as np
 from rosbags.convert import convert, ConverterError
-from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
 from . import msgs
-from .bags import BAG_TYPES, CORRUPT, IMU_TYPE, pick_connections, TYPESTORE
+from .bags import BAG_TYPES, CORRUPT, IMU_TYPE, open_bag, pick_connections, TYPESTORE
 from .errors import DatasetError
 from .limits import check_rate
 from .modelfile import gyro_covariance, read_model_file
@@ -72,7 +71,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
         try:
-            with AnyReader([_ros2_source(src, Path(tmp))], default_typestore=TYPESTORE) as rd, \
+            with open_bag(_ros2_source(src, Path(tmp))) as rd, \
                     Writer(partial, version=9, storage_plugin=plugin) as wr:
                 imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
                 check_rate([stamp_ns(rd.deserialize(raw, c.msgtype).header)

@@ -165,7 +165,8 @@ def align(rec: Recording, max_gt_gap_s: float | None = None,
     rel = (t - t_gt[0]) * 1e-9
     rel_gt = (t_gt - t_gt[0]) * 1e-9
     rot_gt = Rotation.from_quat(rec.gt_quat)
-    quat = Slerp(rel_gt, rot_gt)(rel).as_quat()
+    quat = np.empty((len(t), 4))
+    splined = np.zeros(len(t), bool)
     pos = np.stack([np.interp(rel, rel_gt, rec.gt_pos[:, i]) for i in range(3)], axis=1)
     after = np.clip(np.searchsorted(t_gt, t, side='left'), 1, len(t_gt) - 1)
     gap = (t_gt[after] - t_gt[after - 1]) * 1e-9
@@ -183,6 +184,9 @@ def align(rec: Recording, max_gt_gap_s: float | None = None,
         if hi - lo >= 3 and inside.any():
             spline = RotationSpline(rel_gt[lo:hi], rot_gt[lo:hi])
             quat[inside] = spline(rel[inside]).as_quat()
+            splined |= inside
+    if not splined.all():  # holes (never trusted) and stretches too short for a spline
+        quat[~splined] = Slerp(rel_gt, rot_gt)(rel[~splined]).as_quat()
     return Sequence(name=rec.name, stamp_ns=t, imu=rec.imu[keep], gt_quat=quat,
                     gt_pos=pos, gt_valid=valid)
 

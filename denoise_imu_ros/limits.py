@@ -40,9 +40,7 @@ MAX_ACCEL_M_S2 = 2000.0   # ~200 g
 
 def in_range(gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
     """Whether each sample (last axis xyz) is finite and within the physical range."""
-    with np.errstate(invalid='ignore'):
-        return ((np.abs(gyro) <= MAX_GYRO_RAD_S).all(-1)
-                & (np.abs(accel) <= MAX_ACCEL_M_S2).all(-1))
+    return (np.abs(gyro) <= MAX_GYRO_RAD_S).all(-1) & (np.abs(accel) <= MAX_ACCEL_M_S2).all(-1)
 
 
 def describe() -> str:

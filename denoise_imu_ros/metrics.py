@@ -46,6 +46,27 @@ def integrate(q0: np.ndarray, gyro: np.ndarray, dt: np.ndarray) -> Rotation:
     return Rotation.concatenate([start, start * Rotation.from_quat(steps)])
 
 
+def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
+                        dt: np.ndarray, length: int) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Errors of the gyro's rotation increments over blocks of ``length`` samples.
+
+    Non-overlapping blocks with trusted ground truth at every stamp they span; returns
+    the rotation vectors (M, 3) rad of R_gt_inc^T R_gyro_inc and the blocks' durations
+    (M,) s. ``gyro`` holds one sample per stamp (the last drives nothing).
+    """
+    m = len(dt) // length
+    if m == 0:
+        return np.zeros((0, 3)), np.zeros(0)
+    est = integrate(gt_quat[0], gyro[:len(dt)], dt)
+    gt = Rotation.from_quat(gt_quat)
+    ok = gt_valid[:m * length].reshape(m, length).all(1) & gt_valid[length:m * length + 1:length]
+    i = np.arange(m)[ok] * length
+    res = ((gt[i].inv() * gt[i + length]).inv() * (est[i].inv() * est[i + length])).as_rotvec()
+    t = np.concatenate([[0.0], np.cumsum(dt)])
+    return res, t[i + length] - t[i]
+
+
 class AttitudeErrors(NamedTuple):
     """Errors of one estimated trajectory against ground truth, degrees."""
 

@@ -42,7 +42,7 @@ from std_srvs.srv import Trigger
 
 from . import msgs
 from .errors import DenoiseError
-from .limits import RATE_TOLERANCE
+from .limits import RATE_TOLERANCE, stream_rate_hz
 from .modelfile import gyro_covariance, read_model_file
 from .online import Drop, Event, OnlineDenoiser
 
@@ -139,8 +139,10 @@ class GyroDenoiser(Node):
         p = self.get_parameter
         self._embed = p('embed_attitude').value
         var = p('orientation_stddev').value ** 2
-        self._orientation_cov = [var, 0.0, 0.0, 0.0, var, 0.0, 0.0, 0.0, var]
-        self._gyro_cov = gyro_covariance(self._loaded, p('angular_velocity_stddev').value)
+        # arrays built here, once, not per message
+        self._orientation_cov = np.diag([var] * 3).ravel()
+        self._gyro_cov = np.array(gyro_covariance(self._loaded,
+                                                  p('angular_velocity_stddev').value))
         self._denoiser.max_gap_factor = p('max_gap_factor').value
         self._denoiser.time_jump_s = p('time_jump_threshold').value
         self._rate_tolerance = p('rate_tolerance').value
@@ -193,10 +195,7 @@ class GyroDenoiser(Node):
 
         The median, so that one gap (a 2 s dropout) does not read as a slow stream.
         """
-        if len(self._stamps) < 3:
-            return 0.0
-        step = float(np.median(np.diff(np.array(self._stamps))))
-        return 1e9 / step if step > 0 else 0.0
+        return stream_rate_hz(np.array(self._stamps)) if len(self._stamps) >= 3 else 0.0
 
     def _publish_diagnostics(self) -> None:
         counts = self._denoiser.counts

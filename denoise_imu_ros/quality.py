@@ -41,7 +41,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .dataset import align
-from .metrics import integrate
+from .metrics import increment_residuals
 from .records import Recording, Sequence
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
@@ -168,27 +168,17 @@ def alignment(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, A
     }
 
 
-def increment_residuals(seq: Sequence, gyro: np.ndarray, length: int) -> np.ndarray:
-    """(M, 3) rad: log(R_gt increment^T R_gyro increment) over trusted blocks of ``length``."""
-    est = integrate(seq.gt_quat[0], gyro[:-1], seq.dt)
-    gt = Rotation.from_quat(seq.gt_quat)
-    idx = np.arange((len(seq) - 1) // length) * length
-    ok = seq.gt_valid[idx] & seq.gt_valid[idx + length]
-    idx = idx[ok]
-    return ((gt[idx].inv() * gt[idx + length]).inv()
-            * (est[idx].inv() * est[idx + length])).as_rotvec()
-
-
 def label_noise(seq: Sequence) -> dict[str, Any]:
     """Constant gyro bias against the ground truth, and the increment residual per length."""
     gyro = seq.imu[:, :3]
     dt = float(np.mean(seq.dt))
-    bias = increment_residuals(seq, gyro, BIAS_FIT_LENGTH).mean(0) / (BIAS_FIT_LENGTH * dt)
+    res, _ = increment_residuals(seq.gt_quat, seq.gt_valid, gyro, seq.dt, BIAS_FIT_LENGTH)
+    bias = res.mean(0) / (BIAS_FIT_LENGTH * dt)
     profile = {}
     for j in LENGTHS:
         if (len(seq) - 1) // j < 2:
             break
-        res = increment_residuals(seq, gyro - bias, j)
+        res, _ = increment_residuals(seq.gt_quat, seq.gt_valid, gyro - bias, seq.dt, j)
         if len(res) == 0:
             continue
         rms = float(np.sqrt(np.mean(res ** 2)))  # per axis

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import DatasetError
-from .limits import describe, in_range
+from .limits import describe, in_range, stream_rate_hz
 
 
 @dataclass(frozen=True)
@@ -76,8 +76,8 @@ class Sequence:
 
     @property
     def rate_hz(self) -> float:
-        """Mean IMU sample rate."""
-        return (len(self) - 1) / ((self.stamp_ns[-1] - self.stamp_ns[0]) * 1e-9)
+        """IMU sample rate, from the median stamp interval (the one rate policy)."""
+        return stream_rate_hz(self.stamp_ns)
 
 
 def check_recording(rec: Recording, imu_file: object = None, gt_file: object = None) -> None:

@@ -62,7 +62,7 @@ def _gelu(x: np.ndarray) -> np.ndarray:
     with the tail at 0 and no weight below TINY_WEIGHT, no product in the engine is
     denormal, so the engine needs no flush-to-zero mode (and no torch to set it).
     """
-    return np.where(x > -10.0, x * ndtr(x), 0.0).astype(x.dtype)
+    return np.where(x > -10.0, x * ndtr(x), x.dtype.type(0))
 
 
 def _layers(cfg: ModelConfig, state: dict[str, np.ndarray]) -> list[_Layer]:

@@ -44,7 +44,7 @@ from . import parallel
 from .dataset import load_sequence
 from .errors import TrainingError
 from .loss import increment_loss, LossConfig
-from .metrics import attitude_errors, integrate
+from .metrics import attitude_errors, increment_residuals, integrate
 from .model import GyroNet, ModelConfig
 from .modelfile import code_version, save_model
 from .records import Sequence
@@ -316,7 +316,9 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
         err = attitude_errors(est, Rotation.from_quat(s.gt_quat[start:]), s.gt_pos[start:],
                               s.gt_valid[start:], distances=())
         aoes[s.name] = err.aoe
-        residuals.append(block_residual(w, s, start))
+        res, duration = increment_residuals(s.gt_quat[start:], s.gt_valid[start:], w,
+                                            s.dt[start:], RESIDUAL_BLOCK)
+        residuals.append(res / duration[:, None])  # mean rate error over each block
     model.train(was_training)
     res = np.concatenate(residuals)
     return {'loss': float(np.mean(losses)), 'aoe_deg': aoes,
@@ -324,24 +326,6 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
             # per-sample gyro error std (rad/s) if the error were white: from the error of
             # 16-sample increments, whose std shrinks by sqrt(16) over a block
             'gyro_residual_std': (res.std(axis=0) * math.sqrt(RESIDUAL_BLOCK)).tolist()}
-
-
-def block_residual(omega: np.ndarray, s: Sequence, start: int) -> np.ndarray:
-    """Mean angular-rate error (rad/s) over valid non-overlapping 16-sample blocks."""
-    m = (len(omega) - 1) // RESIDUAL_BLOCK
-    q = s.gt_quat[start:start + m * RESIDUAL_BLOCK + 1]
-    ok = s.gt_valid[start:start + m * RESIDUAL_BLOCK + 1]
-    dt = s.dt[start:start + m * RESIDUAL_BLOCK]
-    steps = Rotation.from_rotvec(omega[:m * RESIDUAL_BLOCK] * dt[:, None])
-    pred = [steps[i::RESIDUAL_BLOCK] for i in range(RESIDUAL_BLOCK)]
-    inc = pred[0]
-    for p in pred[1:]:
-        inc = inc * p
-    gt = (Rotation.from_quat(q[:-1:RESIDUAL_BLOCK]).inv()
-          * Rotation.from_quat(q[RESIDUAL_BLOCK::RESIDUAL_BLOCK]))
-    res = (inc.inv() * gt).as_rotvec() / dt.reshape(m, RESIDUAL_BLOCK).sum(1)[:, None]
-    keep = ok[:-1].reshape(m, RESIDUAL_BLOCK).all(1) & ok[RESIDUAL_BLOCK::RESIDUAL_BLOCK]
-    return res[keep]
 
 
 # ----------------------------------------------------------------------------------
@@ -535,7 +519,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     chosen = select(candidates, cfg.select)
     meta = {
         'dataset': cfg.dataset,
-        'sample_rate_hz': float(np.mean([s.rate_hz for s in seqs])),
+        'sample_rate_hz': float(np.median([s.rate_hz for s in seqs])),
         'train_sequences': cfg.sequences,
         'train_config': cfg.recipe(),
         'pose_alignment': {s.name: s.alignment for s in seqs if s.alignment is not None},
