@@ -151,20 +151,24 @@ def imu_message(stamp: int, gyro: np.ndarray, accel: np.ndarray,
 
 
 def write_bag(rec: Recording, out: str | Path, storage: str = 'mcap',
-              compress: bool = False) -> None:
+              compress: bool = False, imu_topic: str = IMU_TOPIC,
+              pose_topic: str = POSE_TOPIC) -> None:
     """
-    Write a recording as a ROS 2 bag: IMU on /imu0, ground truth on /groundtruth/pose.
+    Write a recording as a ROS 2 bag: IMU (``sensor_msgs/Imu``) and pose (``PoseStamped``).
 
-    ``compress`` uses zstd (inside the MCAP chunks, or per message for sqlite3).
+    The default topic names are EuRoC's; a robot's (``/imu/data_raw``, ``/mocap/pose``)
+    make bags like the ones users record. ``compress`` uses zstd (inside the MCAP
+    chunks, or per message for sqlite3).
     """
     plugin = {'mcap': StoragePlugin.MCAP, 'sqlite3': StoragePlugin.SQLITE3}.get(storage)
     if plugin is None:
         raise DatasetError(f'unknown bag storage {storage!r} (mcap or sqlite3)')
     with atomic_output(out) as tmp:
-        _write_bag(rec, tmp, plugin, compress)
+        _write_bag(rec, tmp, plugin, compress, imu_topic, pose_topic)
 
 
-def _write_bag(rec: Recording, out: Path, plugin: StoragePlugin, compress: bool) -> None:
+def _write_bag(rec: Recording, out: Path, plugin: StoragePlugin, compress: bool,
+               imu_topic: str, pose_topic: str) -> None:
     t = TYPESTORE.types
     try:
         writer = Writer(out, version=9, storage_plugin=plugin)
@@ -173,8 +177,8 @@ def _write_bag(rec: Recording, out: Path, plugin: StoragePlugin, compress: bool)
                 CompressionMode.STORAGE if plugin == StoragePlugin.MCAP
                 else CompressionMode.MESSAGE, CompressionFormat.ZSTD)
         with writer:
-            imu_conn = writer.add_connection(IMU_TOPIC, IMU_TYPE, typestore=TYPESTORE)
-            pose_conn = writer.add_connection(POSE_TOPIC, POSE_TYPES[0], typestore=TYPESTORE)
+            imu_conn = writer.add_connection(imu_topic, IMU_TYPE, typestore=TYPESTORE)
+            pose_conn = writer.add_connection(pose_topic, POSE_TYPES[0], typestore=TYPESTORE)
             for stamp, row in zip(rec.imu_stamp_ns, rec.imu):
                 msg = imu_message(stamp, row[:3], row[3:])
                 writer.write(imu_conn, int(stamp), TYPESTORE.serialize_cdr(msg, IMU_TYPE))

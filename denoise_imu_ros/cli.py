@@ -113,11 +113,12 @@ def _correct(args: argparse.Namespace) -> None:
 
 
 def _convert(args: argparse.Namespace) -> None:
-    from .bags import write_bag
+    from .bags import IMU_TOPIC, POSE_TOPIC, write_bag
     from .dataset import crop, overlap, read_asl
     rec = read_asl(args.asl_dir)
     rec = crop(overlap(rec) if args.overlap else rec, args.start, args.duration)
-    write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress)
+    write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress,
+              imu_topic=args.imu_topic or IMU_TOPIC, pose_topic=args.pose_topic or POSE_TOPIC)
     print(f'wrote {args.out_bag}')
 
 
@@ -147,6 +148,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--compress', action='store_true', help='zstd compression')
     p.add_argument('--overlap', action='store_true',
                    help='keep only the span both IMU and ground truth cover')
+    p.add_argument('--imu-topic', help='IMU topic to write (default /imu0, as EuRoC)')
+    p.add_argument('--pose-topic', help='pose topic to write (default /groundtruth/pose)')
     p.set_defaults(func=_convert)
 
     p = sub.add_parser('train', help='train a model from a YAML recipe')

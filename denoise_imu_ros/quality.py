@@ -52,9 +52,23 @@ GRID_S = 1e-3              # pose-rate grid
 MAX_OFFSET_S = 0.5         # default clock-offset search range (+-)
 MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
 MIN_DURATION_S = 30.0      # shorter recordings cannot train (window, tail, warm-up)
-OFFSET_TOLERANCE_S = 1e-3  # above: apply the offset
-ROTATION_TOLERANCE_DEG = 0.2  # above: apply the rotation
+OFFSET_TOLERANCE_S = 1e-3  # above, and SIGNIFICANCE standard errors: apply the offset
+ROTATION_TOLERANCE_DEG = 0.2  # above, and SIGNIFICANCE standard errors: apply the rotation
+SIGNIFICANCE = 2.0
+OFFSET_SPREAD_S = 2e-3     # quarters' offsets spread wider (max - min): a drifting clock
 QUARTERS = 4
+PAPER_INCREMENT_S = 0.08  # the paper's 16 samples at 200 Hz (and twice it, 32)
+
+
+def paper_increments(rate_hz: float) -> tuple[int, int]:
+    """
+    Return the paper's increments at this rate: the power of two nearest 0.08 s, and twice it.
+
+    16/32 samples at 200 Hz, 8/16 at 100 Hz, 64/128 at 1 kHz (0.064 s: the loss needs
+    powers of two).
+    """
+    first = 2 ** max(0, round(math.log2(PAPER_INCREMENT_S * rate_hz)))
+    return first, 2 * first
 
 
 class Rates:
@@ -154,6 +168,7 @@ def alignment(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, A
     return {
         'time_offset_s': offset,
         'time_offset_std_s': float(np.std(offsets) / math.sqrt(len(offsets))),
+        'time_offset_quarters_s': offsets,
         'time_offset_at_search_limit': bool(abs(offset) > max_offset_s - 2e-3),
         'imu_from_pose_rotation_xyzw': rot.as_quat().tolist(),
         'imu_from_pose_rotation_deg': math.degrees(rot.magnitude()),
@@ -213,12 +228,15 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     report.update(label_noise(seq))
     report.update(alignment(rec, max_offset_s))
     noisy = report['noise_dominated_increments']
-    clean = [j for j in report['increments'] if j >= 16 and j not in noisy]
+    paper = paper_increments(seq.rate_hz)
+    report['paper_increments'] = list(paper)
+    clean = [j for j in report['increments'] if j >= paper[0] and j not in noisy]
     report['shortest_clean_increment'] = clean[0] if clean else None
-    short = [j for j in (16, 32) if j in noisy]
+    short = [j for j in paper if j in noisy]
     if not short:
-        report['label_noise'] = ('the 16- and 32-sample increments of the paper are not '
-                                 'dominated by ground-truth noise')
+        report['label_noise'] = (f"the paper's {paper[0]}- and {paper[1]}-sample increments "
+                                 f'(0.08/0.16 s at {seq.rate_hz:.0f} Hz) are not dominated by '
+                                 'ground-truth noise')
     else:
         report['label_noise'] = (
             f'increments of {" and ".join(map(str, short))} samples are dominated by '
@@ -240,8 +258,10 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
             reasons.append(f'no rotation about the IMU {axis} axis ({rms:.2f} deg/s RMS)')
     if reasons:
         report['usable'], report['reasons'] = 'no', reasons
-    elif (abs(report['time_offset_s']) > OFFSET_TOLERANCE_S
-          or report['imu_from_pose_rotation_deg'] > ROTATION_TOLERANCE_DEG):
+    elif _significant(report['time_offset_s'], report['time_offset_std_s'],
+                      OFFSET_TOLERANCE_S) or _significant(
+            report['imu_from_pose_rotation_deg'], report['imu_from_pose_rotation_std_deg'],
+            ROTATION_TOLERANCE_DEG):
         report['usable'] = 'after alignment'
         report['reasons'] = [
             f'poses {1e3 * report["time_offset_s"]:+.1f} ms off the IMU clock and in a frame '
@@ -249,10 +269,21 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
             'before training']
     else:
         report['usable'], report['reasons'] = 'yes', []
+    quarters = report['time_offset_quarters_s']
+    if max(quarters) - min(quarters) > OFFSET_SPREAD_S:
+        report['reasons'].append(
+            'the clock offset is not constant: '
+            f'{", ".join(f"{1e3 * q:+.1f}" for q in quarters)} ms on the four quarters of the '
+            'recording (pose latency varies, or a clock drifts); one offset cannot fix that')
     report['verdict'] = {'yes': 'usable for training', 'after alignment':
                          'usable for training with alignment applied',
                          'no': 'not usable for training'}[report['usable']]
     return report
+
+
+def _significant(value: float, std: float, tolerance: float) -> bool:
+    """Whether an estimate is both beyond the tolerance and clear of its own noise."""
+    return abs(value) > tolerance and abs(value) > SIGNIFICANCE * std
 
 
 def markdown(report: dict[str, Any]) -> str:

@@ -18,10 +18,12 @@ Every choice follows a documented rule from what ``check-data`` measures on each
 recording; everything else is the reference recipe (``TrainConfig`` defaults):
 - rate: the recordings' IMU rate (they must agree within the rate tolerance); the
   network, window and increments are in samples, so the model is for that rate only;
-- increments: the paper's 16 and 32 samples where they are not dominated by
-  ground-truth noise on any recording, else the shortest clean length and its double;
-- window: 80 s of samples (the paper's), shortened to leave a third of the shortest
-  recording as validation tail, a multiple of the longest increment;
+- increments: the paper's 0.08 and 0.16 s (16 and 32 samples at 200 Hz; in samples,
+  the nearest powers of two: 8/16 at 100 Hz, 64/128 at 1 kHz) where they are not
+  dominated by ground-truth noise on any recording, else the shortest clean length and
+  its double;
+- window: 80 s (the paper's), shortened to leave a third of the shortest recording as
+  validation tail, in samples a multiple of the longest increment;
 - sigma_g: per axis 1.2 times the largest constant gyro bias against the poses, at
   least 0.2 deg/s (the output scale the paper sets by hand: EuRoC [1, 2, 5], TUM-VI 0.2);
 - align: ``auto`` when a recording's clock or frame is off (check-data), else ``none``.
@@ -40,7 +42,7 @@ from .dataset import load_recording
 from .errors import DatasetError
 from .limits import RATE_TOLERANCE
 from .outputs import atomic_output
-from .quality import check
+from .quality import check, paper_increments
 from .train import TrainConfig
 
 WINDOW_S = 80.0
@@ -63,9 +65,10 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                            f'{max(rates):.1f} Hz): one model is for one rate')
     rate = float(np.median(rates))
     noisy = set().union(*(r['noise_dominated_increments'] for r in reports.values()))
-    if not {16, 32} & noisy:
-        increments = [16, 32]
-        why_inc = '16 and 32 samples are clean on every recording'
+    paper = paper_increments(rate)
+    if not set(paper) & noisy:
+        increments = list(paper)
+        why_inc = "the paper's 0.08/0.16 s, clean on every recording"
     else:
         clean = [r['shortest_clean_increment'] for r in reports.values()]
         if None in clean:
@@ -73,8 +76,8 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                                'on every recording: the poses cannot supervise the loss')
         first = max(clean)
         increments = [first, 2 * first]
-        why_inc = (f'16/32 are noise-dominated ({sorted(noisy)}); {first} is clean on every '
-                   'recording')
+        why_inc = (f"the paper's {paper[0]}/{paper[1]} are noise-dominated "
+                   f'({sorted(noisy)}); {first} is clean on every recording')
     span = increments[-1]
     shortest = min(r['duration_s'] for r in reports.values()) * rate
     window = int(min(WINDOW_S * rate, shortest * 2 / 3) // span * span)
@@ -82,7 +85,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         raise DatasetError(f'the shortest recording ({shortest / rate:.0f} s) leaves no '
                            f'training window of {span} samples')
     bias = np.max(np.abs([r['gyro_bias_vs_pose_deg_s'] for r in reports.values()]), axis=0)
-    gyro_std = [max(MIN_GYRO_STD_DEG, round(1.2 * b, 2)) for b in bias]
+    gyro_std = [max(MIN_GYRO_STD_DEG, round(1.2 * float(b), 2)) for b in bias]
     off = [n for n, r in reports.items() if r['usable'] == 'after alignment']
     recipe = {k: v for k, v in asdict(TrainConfig()).items() if k != 'device'}
     recipe.update(
