@@ -43,6 +43,7 @@ import yaml
 from . import parallel
 from .dataset import load_sequence
 from .errors import TrainingError
+from .limits import RATE_TOLERANCE
 from .loss import increment_loss, LossConfig
 from .metrics import attitude_errors, increment_residuals, integrate
 from .model import GyroNet, ModelConfig
@@ -399,7 +400,7 @@ def _worker(cfg: TrainConfig, rank: int, port: int) -> None:
 
 def load_sequences(cfg: TrainConfig) -> list[Sequence]:
     """
-    Load and check the training sequences: each needs a window and a tail to validate.
+    Load and check the training sequences: one IMU rate, a window and a tail each.
 
     A sequence whose training window or validation tail holds no increment of the loss
     with trusted ground truth at every sample would train (or validate) on nothing, with
@@ -421,6 +422,12 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
                     f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
                     'IMU stamps have trusted ground truth): nothing to supervise the loss')
         seqs.append(seq)
+    rates = [s.rate_hz for s in seqs]
+    if max(rates) / min(rates) - 1 > RATE_TOLERANCE:
+        raise TrainingError(
+            f'{cfg.data}: the IMU rates of the recordings differ ('
+            + ', '.join(f'{n} {r:.1f} Hz' for n, r in zip(cfg.sequences, rates))
+            + '): one model is for one rate (its window and increments are in samples)')
     return seqs
 
 

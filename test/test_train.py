@@ -61,6 +61,20 @@ def test_a_recording_that_cannot_supervise_the_loss_is_named(euroc, tmp_path):
         train(cfg, progress=False)
 
 
+def test_recordings_of_different_rates_are_refused(euroc, tmp_path):
+    import dataclasses
+    from denoise_imu_ros.bags import write_bag
+    from denoise_imu_ros.dataset import read_asl
+    (tmp_path / 'MH_01_easy').symlink_to(euroc / 'MH_01_easy')
+    rec = read_asl(euroc / 'V1_02_medium')
+    write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[::2], imu=rec.imu[::2]),
+              tmp_path / 'V1_02_at_100_hz')
+    cfg = _short(euroc, data=str(tmp_path), sequences=['MH_01_easy', 'V1_02_at_100_hz'])
+    with pytest.raises(TrainingError, match=r'differ \(MH_01_easy 200.0 Hz, V1_02_at_100_hz '
+                                            r'100.0 Hz\): one model is for one rate'):
+        train(cfg, progress=False)
+
+
 def test_non_finite_loss_stops_with_a_clear_message(euroc, monkeypatch):
     real = train_module.increment_loss
     monkeypatch.setattr(train_module, 'increment_loss',
