@@ -40,6 +40,7 @@ import warnings
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from .architecture import ModelConfig
 from .dataset import align
 from .metrics import increment_residuals
 from .records import Recording, Sequence
@@ -58,6 +59,15 @@ SIGNIFICANCE = 2.0
 OFFSET_SPREAD_S = 4e-3     # quarters spread wider (clean ones: 3.2 ms at most): drift
 QUARTERS = 4
 PAPER_INCREMENT_S = 0.08  # the paper's 16 samples at 200 Hz (and twice it, 32)
+
+
+# what check() estimates beyond rates and holes (None for a recording too short for it)
+ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'time_offset_s',
+             'time_offset_std_s', 'time_offset_quarters_s', 'time_offset_at_search_limit',
+             'imu_from_pose_rotation_xyzw', 'imu_from_pose_rotation_deg',
+             'imu_from_pose_rotation_std_deg', 'gyro_bias_vs_pose_deg_s',
+             'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
+             'rate_window_s', 'paper_increments', 'shortest_clean_increment', 'label_noise')
 
 
 def paper_increments(rate_hz: float) -> tuple[int, int]:
@@ -225,6 +235,14 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
               'pose_holes': len(starts), 'pose_longest_hole_s': longest,
               'pose_hole_fraction': float(holes.mean()),
               'duration_s': float(imu_dt.sum())}
+    field = ModelConfig().receptive_field
+    if len(seq) < field:  # too little for any estimate below, and for the network
+        report.update(dict.fromkeys(ESTIMATES), usable='no',
+                      verdict='not usable for training', reasons=[
+                          f'too short: {len(seq)} IMU samples with poses '
+                          f'({report["duration_s"]:.2f} s), fewer than the network\'s '
+                          f'receptive field ({field} samples): nothing to estimate or train'])
+        return report
     report.update(label_noise(seq))
     report.update(alignment(rec, max_offset_s))
     noisy = report['noise_dominated_increments']
@@ -289,24 +307,28 @@ def _significant(value: float, std: float, tolerance: float) -> bool:
 def markdown(report: dict[str, Any]) -> str:
     """Human-readable report of :func:`check`."""
     r = report
-    rot = Rotation.from_quat(r['imu_from_pose_rotation_xyzw']).as_rotvec(degrees=True)
     lines = [f'{r["name"]}: {r["duration_s"]:.1f} s',
              f'  IMU {r["imu_rate_hz"]:.2f} Hz, stamp jitter {r["imu_stamp_jitter_ms"]:.3f} ms',
              f'  poses {r["pose_rate_hz"]:.1f} Hz, {r["pose_holes"]} holes (longest '
              f'{r["pose_longest_hole_s"]:.2f} s, {100 * r["pose_hole_fraction"]:.1f} % of '
-             'IMU stamps)',
-             f'  clock offset (t_imu = t_pose + offset): {1e3 * r["time_offset_s"]:+.2f} '
-             f'+- {1e3 * r["time_offset_std_s"]:.2f} ms',
-             f'  rotation pose body -> IMU: {r["imu_from_pose_rotation_deg"]:.3f} +- '
-             f'{r["imu_from_pose_rotation_std_deg"]:.3f} deg (rotation vector '
-             + ', '.join(f'{v:+.3f}' for v in rot) + ' deg)',
-             '  gyro bias against the poses (deg/s): '
-             + ', '.join(f'{b:+.3f}' for b in r['gyro_bias_vs_pose_deg_s']),
-             '  gyro scale error (%): '
-             + ', '.join('-' if v is None else f'{v:+.3f}' for v in r['gyro_scale_error_percent']),
-             '  excitation, RMS rate per IMU axis (deg/s): '
-             + ', '.join(f'{v:.1f}' for v in r['excitation_rms_deg_s']),
-             '  increment residual after a constant bias (samples: mrad per axis, as deg/s):']
+             'IMU stamps)']
+    if r['time_offset_s'] is None:  # too short for any estimate
+        lines.append(f'  verdict: {r["verdict"]}: ' + '; '.join(r['reasons']))
+        return '\n'.join(lines) + '\n'
+    rot = Rotation.from_quat(r['imu_from_pose_rotation_xyzw']).as_rotvec(degrees=True)
+    lines += [f'  clock offset (t_imu = t_pose + offset): {1e3 * r["time_offset_s"]:+.2f} '
+              f'+- {1e3 * r["time_offset_std_s"]:.2f} ms',
+              f'  rotation pose body -> IMU: {r["imu_from_pose_rotation_deg"]:.3f} +- '
+              f'{r["imu_from_pose_rotation_std_deg"]:.3f} deg (rotation vector '
+              + ', '.join(f'{v:+.3f}' for v in rot) + ' deg)',
+              '  gyro bias against the poses (deg/s): '
+              + ', '.join(f'{b:+.3f}' for b in r['gyro_bias_vs_pose_deg_s']),
+              '  gyro scale error (%): '
+              + ', '.join('-' if v is None else f'{v:+.3f}'
+                          for v in r['gyro_scale_error_percent']),
+              '  excitation, RMS rate per IMU axis (deg/s): '
+              + ', '.join(f'{v:.1f}' for v in r['excitation_rms_deg_s']),
+              '  increment residual after a constant bias (samples: mrad per axis, as deg/s):']
     lines += [f'    {j:4d}: {p["residual_mrad"]:7.3f}  {p["noise_rate_deg_s"]:7.3f}'
               for j, p in r['increments'].items()]
     lines.append(f'  label noise: {r["label_noise"]}')

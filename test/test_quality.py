@@ -90,6 +90,15 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
     short = dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:4000],
                                 imu=rec.imu[:4000])
     assert check(short)['reasons'][0].startswith('too short: 18.9 s of IMU with poses')
+    # shorter than the receptive field: nothing is estimated, the JSON says so with nulls
+    from denoise_imu_ros.bags import write_bag
+    write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:400], imu=rec.imu[:400]),
+              tmp_path / 'tiny')
+    assert main(['check-data', str(tmp_path / 'tiny'), '--json']) == 1
+    out, err = capsys.readouterr()
+    assert json.loads(out.splitlines()[-1])['time_offset_s'] is None
+    assert len(err.strip().splitlines()) == 1
+    assert "fewer than the network's receptive field (511 samples)" in err
     late = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns - 2_000_000_000)
     assert 'do not follow the gyro at any clock offset within +-0.5 s' in ' '.join(
         check(late)['reasons'])
