@@ -72,7 +72,8 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
             calib.save(out / f'fold{i}' / 'calibrated.safetensors')
         for name in held_out:
             seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
-                                cfg.max_gt_gap_s, min_samples=net.model.receptive_field)
+                                cfg.max_gt_gap_s, min_samples=net.model.receptive_field,
+                                align_poses=cfg.align)
             gyros = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib.model, seq.imu),
                      'network': correct_gyro(net.model, seq.imu)}
             per_recording[name] = {m: score(seq, g) for m, g in gyros.items()}

@@ -68,3 +68,32 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
                  'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0
     assert json.loads((tmp_path / 'ev' / 'results.json').read_text())['crossval'] == report
     assert report['verdict'] in (tmp_path / 'ev' / 'results.md').read_text()
+
+
+def test_held_out_recordings_are_aligned_like_the_training_ones(tmp_path):
+    import dataclasses
+    from denoise_imu_ros.bags import write_bag
+    from denoise_imu_ros.crossval import crossval
+    from denoise_imu_ros.dataset import read_asl
+    from scipy.spatial.transform import Rotation
+    marker = Rotation.from_rotvec([30.0, -20.0, 45.0], degrees=True)  # imu_from_pose
+    recipe = {'dataset': 'synthetic', 'sequences': ['rec0', 'rec1'], 'window': 1024,
+              'steps': 10, 'val_every': 10, 'restart_period': 10, 'workers': 1,
+              'gyro_std_deg': [1.0, 1.0, 1.0]}
+    for kind in ('plain', 'marker'):
+        (tmp_path / kind).mkdir()
+    for i, bias in enumerate((0.010, 0.012)):
+        rec = read_asl(write_asl(tmp_path / 'plain' / f'rec{i}', n_imu=2400, gyro_bias=bias))
+        write_bag(dataclasses.replace(rec, gt_quat=(Rotation.from_quat(rec.gt_quat)
+                                                    * marker).as_quat()),
+                  tmp_path / 'marker' / f'rec{i}')
+    reports = {}
+    for kind, align in (('plain', 'none'), ('marker', {
+            'time_offset_s': 0.0, 'imu_from_pose_rotation_xyzw': marker.as_quat().tolist()})):
+        config = tmp_path / f'{kind}.yaml'
+        config.write_text(yaml.safe_dump(dict(recipe, data=str(tmp_path / kind), align=align)))
+        reports[kind] = crossval(config, progress=False)['recordings']
+    for name, figures in reports['plain'].items():
+        for method, scores in figures.items():
+            assert reports['marker'][name][method]['aoe_deg'] == pytest.approx(
+                scores['aoe_deg'], rel=1e-3, abs=1e-4)
