@@ -40,6 +40,7 @@ import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
+from ros_link import wait_until_flowing  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc' / 'V1_01_easy'
@@ -64,15 +65,14 @@ def main():
         got[msgs.stamp_ns(m.header)] = (w.x, w.y, w.z)
     pub = bench.create_publisher(Imu, 'imu/data_raw', QoSProfile(
         depth=1000, reliability=ReliabilityPolicy.RELIABLE))
-    bench.create_subscription(Imu, 'imu/corrected', received,
-                              QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE))
+    sub = bench.create_subscription(Imu, 'imu/corrected', received, QoSProfile(
+        depth=10000, reliability=ReliabilityPolicy.RELIABLE))
     ex = SingleThreadedExecutor()
     ex.add_node(bench)
-    while pub.get_subscription_count() == 0 or bench.count_publishers('imu/corrected') == 0:
-        ex.spin_once(timeout_sec=0.1)
+    stamp = wait_until_flowing(ex, pub, sub, got, 10**18) + 10**10  # a fresh start
     rng = np.random.default_rng(0)
     real, injected = [], []
-    stamp, t0 = 10**18, time.perf_counter()
+    t0 = time.perf_counter()
     for k in range(int(200 * args.seconds)):
         due = t0 + k / 200.0
         while (now := time.perf_counter()) < due:

@@ -42,6 +42,7 @@ import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
+from ros_link import wait_until_flowing  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc' / 'V1_01_easy'
@@ -88,16 +89,7 @@ def run(kind, rates, seconds, imu, model='euroc'):
         if proc.poll() is not None:
             sys.exit(f'{kind} exited with status {proc.returncode}')
         ex.spin_once(timeout_sec=0.1)
-    # Matched is not yet flowing: what is published in the first tens of milliseconds
-    # after matching can be lost on the way in or out. Warm up until a sample comes back.
-    stamp = 10**18
-    while not got:
-        stamp += 10**7
-        msg = Imu()
-        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 10**9)
-        msg.linear_acceleration.z = 9.81
-        pub.publish(msg)
-        ex.spin_once(timeout_sec=0.01)
+    stamp = wait_until_flowing(ex, pub, sub, got, 10**18)
     results = []
     for rate in rates:
         sent.clear()
