@@ -219,7 +219,8 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     Everything check-data reports on one recording, with a verdict and its reasons.
 
     ``usable`` is ``yes``, ``after alignment`` (the clock offset or the frame rotation
-    exceed OFFSET_TOLERANCE_S / ROTATION_TOLERANCE_DEG) or ``no``.
+    exceed OFFSET_TOLERANCE_S / ROTATION_TOLERANCE_DEG and twice their standard error)
+    or ``no``; a clock offset that is not constant along the recording is a reason too.
     """
     seq = align(rec)
     imu_dt = np.diff(seq.stamp_ns) * 1e-9
