@@ -131,3 +131,15 @@ def test_convert_overlap_keeps_only_the_span_with_ground_truth(euroc, tmp_path):
     assert asl.gt_stamp_ns[0] > asl.imu_stamp_ns[0]  # the case this test is about
     assert rec.imu_stamp_ns[0] >= asl.gt_stamp_ns[0]
     assert len(load_sequence(tmp_path / 'b')) == len(load_sequence(seq))
+
+
+def test_convert_writes_the_topic_names_asked_for(tmp_path):
+    from denoise_imu_ros.bags import read_bag
+    from test_dataset import write_asl
+    seq = write_asl(tmp_path / 'a', n_imu=600)
+    assert main(['convert', str(seq), str(tmp_path / 'b'), '--imu-topic', '/imu/data_raw',
+                 '--pose-topic', '/mocap/pose']) == 0
+    with pytest.raises(DatasetError, match=r"no topic '/imu0' \(topics: /imu/data_raw"):
+        read_bag(tmp_path / 'b', imu_topic='/imu0')
+    rec = read_bag(tmp_path / 'b', imu_topic='/imu/data_raw', pose_topic='/mocap/pose')
+    assert len(rec.imu) == 600
