@@ -69,7 +69,7 @@ def main():
         depth=10000, reliability=ReliabilityPolicy.RELIABLE))
     ex = SingleThreadedExecutor()
     ex.add_node(bench)
-    stamp = wait_until_flowing(ex, pub, sub, got, 10**18) + 10**10  # a fresh start
+    stamp = wait_until_flowing(ex, pub, sub, got, 10**18, node) + 10**10  # a fresh start
     rng = np.random.default_rng(0)
     real, injected = [], []
     t0 = time.perf_counter()

@@ -85,11 +85,7 @@ def run(kind, rates, seconds, imu, model='euroc'):
         QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE))
     ex = SingleThreadedExecutor()
     ex.add_node(bench)
-    while pub.get_subscription_count() == 0 or sub.get_publisher_count() == 0:
-        if proc.poll() is not None:
-            sys.exit(f'{kind} exited with status {proc.returncode}')
-        ex.spin_once(timeout_sec=0.1)
-    stamp = wait_until_flowing(ex, pub, sub, got, 10**18)
+    stamp = wait_until_flowing(ex, pub, sub, got, 10**18, proc)
     results = []
     for rate in rates:
         sent.clear()

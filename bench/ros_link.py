@@ -13,6 +13,9 @@
 # limitations under the License.
 """Shared by the node benches: wait until samples flow through the node under test."""
 
+import subprocess
+import sys
+
 from rclpy.executors import Executor
 from rclpy.publisher import Publisher
 from rclpy.subscription import Subscription
@@ -20,15 +23,18 @@ from sensor_msgs.msg import Imu
 
 
 def wait_until_flowing(ex: Executor, pub: Publisher, sub: Subscription, got: dict,
-                       stamp_ns: int) -> int:
+                       stamp_ns: int, proc: subprocess.Popen | None = None) -> int:
     """
     Publish still samples until one comes back; return the last stamp used.
 
     Matched (both ways) is not yet flowing: what is published in the first tens of
     milliseconds after matching can be lost on the way in or out, which a bench would
-    count as the node's losses (6 to 33 of the first messages, before this).
+    count as the node's losses (6 to 33 of the first messages, before this). With
+    ``proc`` (the process under test), its early exit ends the bench.
     """
     while pub.get_subscription_count() == 0 or sub.get_publisher_count() == 0:
+        if proc is not None and proc.poll() is not None:
+            sys.exit(f'the process under test exited with status {proc.returncode}')
         ex.spin_once(timeout_sec=0.1)
     while not got:
         stamp_ns += 10_000_000

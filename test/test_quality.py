@@ -8,7 +8,8 @@ import math
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.dataset import align, read_asl
-from denoise_imu_ros.quality import alignment, check, label_noise, paper_increments
+from denoise_imu_ros.quality import alignment, check, ESTIMATES, label_noise, \
+    paper_increments
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -40,6 +41,7 @@ def test_check_data_on_real_recordings(data_dir, capsys):
     assert main(['check-data', str(data_dir / 'tumvi' / 'dataset-room1_512_16'),
                  '--json']) == 0
     tumvi = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert set(ESTIMATES) <= set(tumvi)  # what a too-short recording reports as null
     assert {16, 32} <= set(map(int, tumvi['noise_dominated_increments']))
     assert abs(tumvi['time_offset_s']) < 1e-3 and tumvi['usable'] == 'yes'
     assert tumvi['imu_from_pose_rotation_deg'] < 0.2
