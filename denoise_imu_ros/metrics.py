@@ -46,6 +46,18 @@ def integrate(q0: np.ndarray, gyro: np.ndarray, dt: np.ndarray) -> Rotation:
     return Rotation.concatenate([start, start * Rotation.from_quat(steps)])
 
 
+def _block_errors(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
+                  dt: np.ndarray, length: int) -> tuple[np.ndarray, Rotation, np.ndarray]:
+    """Return the trusted blocks' starts, the integrated gyro and the blocks' errors."""
+    m = len(dt) // length
+    est = integrate(gt_quat[0], gyro[:len(dt)], dt)
+    ok = gt_valid[:m * length].reshape(m, length).all(1) & gt_valid[length:m * length + 1:length]
+    i = np.arange(m)[ok] * length
+    gt = Rotation.from_quat(gt_quat)
+    res = ((gt[i].inv() * gt[i + length]).inv() * (est[i].inv() * est[i + length])).as_rotvec()
+    return i, est, res.reshape(-1, 3)
+
+
 def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
                         dt: np.ndarray, length: int) -> tuple[np.ndarray, np.ndarray]:
     """
@@ -55,16 +67,33 @@ def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndar
     the rotation vectors (M, 3) rad of R_gt_inc^T R_gyro_inc and the blocks' durations
     (M,) s. ``gyro`` holds one sample per stamp (the last drives nothing).
     """
-    m = len(dt) // length
-    if m == 0:
+    if len(dt) // length == 0:
         return np.zeros((0, 3)), np.zeros(0)
-    est = integrate(gt_quat[0], gyro[:len(dt)], dt)
-    gt = Rotation.from_quat(gt_quat)
-    ok = gt_valid[:m * length].reshape(m, length).all(1) & gt_valid[length:m * length + 1:length]
-    i = np.arange(m)[ok] * length
-    res = ((gt[i].inv() * gt[i + length]).inv() * (est[i].inv() * est[i + length])).as_rotvec()
+    i, _, res = _block_errors(gt_quat, gt_valid, gyro, dt, length)
     t = np.concatenate([[0.0], np.cumsum(dt)])
     return res, t[i + length] - t[i]
+
+
+def fit_constant_bias(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
+                      dt: np.ndarray, length: int) -> np.ndarray | None:
+    """
+    Return the least-squares constant gyro bias (3,) rad/s from ``length``-sample blocks.
+
+    To first order a bias b gives a block the error sum_k Q_k^T b dt_k, Q_k the rotation
+    from sample k + 1 to the block's end: the bias as seen from a turning frame. Dividing
+    the error by the duration instead is right only while the body barely turns within a
+    block. None when no block has trusted ground truth.
+    """
+    if len(dt) // length == 0:
+        return None
+    i, est, res = _block_errors(gt_quat, gt_valid, gyro, dt, length)
+    if len(i) == 0:
+        return None
+    k = (i[:, None] + np.arange(length)).ravel()  # every step of the trusted blocks
+    turn = (est[k + 1].inv() * est[np.repeat(i + length, length)]).as_matrix()
+    jac = (np.swapaxes(turn, 1, 2) * dt[k, None, None]).reshape(len(i), length, 3, 3).sum(1)
+    normal = np.einsum('mji,mjk->ik', jac, jac)
+    return np.linalg.solve(normal, np.einsum('mji,mj->i', jac, res))
 
 
 class AttitudeErrors(NamedTuple):

@@ -23,6 +23,12 @@ duration it is the gyro error (deg/s) the noise alone would stand for. Above
 NOISE_RATE_LIMIT_DEG_S, more than the corrections the method makes (at most ~1 deg/s,
 the paper), an increment length is noise-dominated.
 
+Supervision: noise that averages out is not the only way poses mislead the loss. A
+constant bias fitted on the poses' own increments (the paper's lengths and ~1 s) is
+removed and the whole recording integrated: if that never lowers the recording's own
+attitude error, the increments' disagreement with the gyro is the poses' error, and a
+network trained to remove it will not beat plain integration.
+
 Alignment: the mean angular rate over short windows (50 ms, or two pose periods) of the
 gyro and of the poses are compared; for each candidate clock offset the rotation from
 the pose body frame to the IMU frame and the gyro bias follow in closed form (Kabsch
@@ -42,7 +48,7 @@ from scipy.spatial.transform import Rotation
 
 from .architecture import ModelConfig
 from .dataset import align
-from .metrics import increment_residuals
+from .metrics import attitude_errors, fit_constant_bias, increment_residuals, integrate
 from .records import Recording, Sequence
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
@@ -59,6 +65,7 @@ SIGNIFICANCE = 2.0
 OFFSET_SPREAD_S = 4e-3     # quarters spread wider (clean ones: 3.2 ms at most): drift
 QUARTERS = 4
 PAPER_INCREMENT_S = 0.08  # the paper's 16 samples at 200 Hz (and twice it, 32)
+SUPERVISION_LONG_S = 1.0  # the longest increment the supervision check also fits on
 
 
 # what check() estimates beyond rates and holes (None for a recording too short for it)
@@ -67,7 +74,8 @@ ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'tim
              'imu_from_pose_rotation_xyzw', 'imu_from_pose_rotation_deg',
              'imu_from_pose_rotation_std_deg', 'gyro_bias_vs_pose_deg_s',
              'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
-             'rate_window_s', 'paper_increments', 'shortest_clean_increment', 'label_noise')
+             'rate_window_s', 'paper_increments', 'shortest_clean_increment', 'label_noise',
+             'supervision')
 
 
 def paper_increments(rate_hz: float) -> tuple[int, int]:
@@ -197,8 +205,9 @@ def label_noise(seq: Sequence) -> dict[str, Any]:
     """Constant gyro bias against the ground truth, and the increment residual per length."""
     gyro = seq.imu[:, :3]
     dt = float(np.mean(seq.dt))
-    res, _ = increment_residuals(seq.gt_quat, seq.gt_valid, gyro, seq.dt, BIAS_FIT_LENGTH)
-    bias = res.mean(0) / (BIAS_FIT_LENGTH * dt)
+    bias = fit_constant_bias(seq.gt_quat, seq.gt_valid, gyro, seq.dt, BIAS_FIT_LENGTH)
+    if bias is None:  # no trusted block that long: the profile shows the raw residual
+        bias = np.zeros(3)
     profile = {}
     for j in LENGTHS:
         if (len(seq) - 1) // j < 2:
@@ -212,6 +221,46 @@ def label_noise(seq: Sequence) -> dict[str, Any]:
     noisy = [j for j, p in profile.items() if p['noise_rate_deg_s'] > NOISE_RATE_LIMIT_DEG_S]
     return {'gyro_bias_deg_s': np.degrees(bias).tolist(), 'increments': profile,
             'noise_dominated_increments': noisy}
+
+
+def supervision(seq: Sequence, lengths: tuple[int, ...]) -> dict[str, Any]:
+    """
+    Whether the poses can supervise a correction of this gyro, at each increment length.
+
+    The smallest correction there is: one constant bias, fitted on the recording's own
+    j-sample increments (as the loss sees them). If removing it does not lower the
+    recording's own attitude error (AOE over the whole recording, from the first pose),
+    what the increments say about the gyro is the poses' error, not the gyro's; a
+    network trained on them has nothing right to learn, on this recording or another.
+    """
+    gyro = seq.imu[:, :3]
+    gt = Rotation.from_quat(seq.gt_quat)
+
+    def aoe(g: np.ndarray) -> float:
+        est = integrate(seq.gt_quat[0], g[:-1], seq.dt)
+        return attitude_errors(est, gt, seq.gt_pos, seq.gt_valid, distances=()).aoe
+
+    plain = aoe(gyro)
+    fits = {}
+    for j in lengths:
+        bias = fit_constant_bias(seq.gt_quat, seq.gt_valid, gyro, seq.dt, j)
+        if bias is not None:
+            fits[j] = {'bias_deg_s': np.degrees(bias).tolist(), 'aoe_deg': aoe(gyro - bias)}
+    best = min(fits, key=lambda j: fits[j]['aoe_deg'], default=None)
+    helps = best is not None and fits[best]['aoe_deg'] < plain
+    after = '/'.join(f'{f["aoe_deg"]:.2f}' for f in fits.values())
+    tried = ', '.join(map(str, fits))
+    if helps:
+        summary = (f"a constant gyro bias fitted on the poses' own {best}-sample increments "
+                   f"lowers this recording's attitude error from {plain:.2f} to "
+                   f'{fits[best]["aoe_deg"]:.2f} deg (lengths {tried}: {after})')
+    else:
+        summary = ("a constant gyro bias fitted on the poses' own increments does not lower "
+                   f"this recording's attitude error at any length tried ({tried} samples: "
+                   f'{plain:.2f} -> {after} deg): what the increments say about the gyro is '
+                   "the poses' error, so a network trained on them is not expected to beat "
+                   'plain integration')
+    return {'aoe_plain_deg': plain, 'fits': fits, 'helps': helps, 'summary': summary}
 
 
 def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
@@ -261,6 +310,8 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
             f'increments of {" and ".join(map(str, short))} samples are dominated by '
             'ground-truth noise' + (f'; from {clean[0]} samples on they are not'
                                     if clean else '; so are all up to 512 samples'))
+    long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
+    report['supervision'] = supervision(seq, (*paper, long))
     reasons = []
     if report['duration_s'] < MIN_DURATION_S:
         reasons.append(f'too short: {report["duration_s"]:.1f} s of IMU with poses, training '
@@ -294,6 +345,8 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
             'the clock offset is not constant: '
             f'{", ".join(f"{1e3 * q:+.1f}" for q in quarters)} ms on the four quarters of the '
             'recording (pose latency varies, or a clock drifts); one offset cannot fix that')
+    if not report['supervision']['helps']:
+        report['reasons'].append(report['supervision']['summary'])
     report['verdict'] = {'yes': 'usable for training', 'after alignment':
                          'usable for training with alignment applied',
                          'no': 'not usable for training'}[report['usable']]
@@ -333,6 +386,7 @@ def markdown(report: dict[str, Any]) -> str:
     lines += [f'    {j:4d}: {p["residual_mrad"]:7.3f}  {p["noise_rate_deg_s"]:7.3f}'
               for j, p in r['increments'].items()]
     lines.append(f'  label noise: {r["label_noise"]}')
+    lines.append(f'  supervision: {r["supervision"]["summary"]}')
     lines.append(f'  verdict: {r["verdict"]}' + (': ' + '; '.join(r['reasons'])
                                                  if r['reasons'] else ''))
     return '\n'.join(lines) + '\n'

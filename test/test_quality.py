@@ -9,7 +9,7 @@ import math
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.dataset import align, read_asl
 from denoise_imu_ros.quality import alignment, check, ESTIMATES, label_noise, \
-    paper_increments
+    paper_increments, supervision
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -37,6 +37,29 @@ def test_clean_and_jittery_ground_truth_are_told_apart(tmp_path):
         'increments of 16 and 32 samples are dominated by ground-truth noise; from 64')
 
 
+def test_poses_whose_increments_disagree_with_their_own_attitude_cannot_supervise(tmp_path):
+    rec = read_asl(write_asl(tmp_path / 's', n_imu=12000, gt_rate=120.0, gt_dir='mocap0',
+                             gyro_bias=0.01))
+    biased = supervision(align(rec), (16, 32, 256))
+    assert biased['helps'] and biased['aoe_plain_deg'] > 10 and biased['summary'].startswith(
+        "a constant gyro bias fitted on the poses' own")
+    for fit in biased['fits'].values():
+        np.testing.assert_allclose(fit['bias_deg_s'], [0, 0, np.degrees(0.01)], atol=1e-4)
+        assert fit['aoe_deg'] < 0.01
+    # an exact gyro, and mocap whose yaw creeps at 1 deg/s and jumps back in a 0.3 s hole
+    # every 5 s (a re-acquired marker): every trusted increment says "bias", none is one
+    rec = read_asl(write_asl(tmp_path / 'e', n_imu=12000, gt_rate=120.0, gt_dir='mocap0'))
+    t = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
+    keep = np.abs(t - 5.0 * np.round(t / 5.0)) > 0.15
+    creep = Rotation.from_rotvec(np.outer(np.radians(1.0) * (t % 5.0), [0, 0, 1]))
+    jumpy = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns[keep], gt_pos=rec.gt_pos[keep],
+                                gt_quat=(creep * Rotation.from_quat(rec.gt_quat)).as_quat()[keep])
+    report = supervision(align(jumpy), (16, 32, 256))
+    assert not report['helps']
+    assert all(f['aoe_deg'] > 5 * report['aoe_plain_deg'] for f in report['fits'].values())
+    assert report['summary'] in check(jumpy)['reasons']
+
+
 def test_check_data_on_real_recordings(data_dir, capsys):
     assert main(['check-data', str(data_dir / 'tumvi' / 'dataset-room1_512_16'),
                  '--json']) == 0
@@ -45,9 +68,15 @@ def test_check_data_on_real_recordings(data_dir, capsys):
     assert {16, 32} <= set(map(int, tumvi['noise_dominated_increments']))
     assert abs(tumvi['time_offset_s']) < 1e-3 and tumvi['usable'] == 'yes'
     assert tumvi['imu_from_pose_rotation_deg'] < 0.2
+    # room1's own mocap supervises a bias over 256 samples, room3's at no length tried
+    assert tumvi['supervision']['helps'] and tumvi['supervision']['fits']['256']['aoe_deg'] < 1
+    room3 = check(read_asl(data_dir / 'tumvi' / 'dataset-room3_512_16'))
+    assert not room3['supervision']['helps'] and room3['reasons'] == [
+        room3['supervision']['summary']]
     euroc = check(read_asl(data_dir / 'euroc' / 'V1_01_easy'))  # 20 Hz corrected poses
     assert 19.5 < euroc['pose_rate_hz'] < 20.5
     assert not {16, 32} & set(euroc['noise_dominated_increments'])
+    assert euroc['supervision']['fits'][16]['aoe_deg'] < 1.0  # from 114 deg of raw gyro
     assert abs(euroc['time_offset_s']) < 1e-3 and euroc['imu_from_pose_rotation_deg'] < 0.2
     # V2_03's poses lag by +2 to -4 ms along the recording: reported, not "fixed"
     drift = check(read_asl(data_dir / 'euroc' / 'V2_03_difficult'))
