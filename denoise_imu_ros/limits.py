@@ -54,6 +54,22 @@ def stream_rate_hz(stamps_ns: np.ndarray) -> float:
     return 1e9 / float(np.median(steps)) if len(steps) and np.median(steps) > 0 else 0.0
 
 
+def common_rate(rates_hz: dict[str, float], where: object) -> float:
+    """
+    Return the one rate of recordings trained together (their median), or raise.
+
+    A model is for one rate: its window, increments and receptive field are in samples;
+    rates further apart than RATE_TOLERANCE raise a DatasetError naming each one.
+    """
+    rates = list(rates_hz.values())
+    if max(rates) / min(rates) - 1 > RATE_TOLERANCE:
+        raise DatasetError(f'{where}: the IMU rates of the recordings differ ('
+                           + ', '.join(f'{n} {r:.1f} Hz' for n, r in rates_hz.items())
+                           + '): one model is for one rate (its window and increments are '
+                           'in samples)')
+    return float(np.median(rates))
+
+
 def check_rate(stamps_ns: np.ndarray, model_rate_hz: float | None, source: object) -> None:
     """Refuse a recording whose IMU rate is more than RATE_TOLERANCE off the model's."""
     rate = stream_rate_hz(stamps_ns)

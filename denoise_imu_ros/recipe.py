@@ -40,7 +40,7 @@ import yaml
 
 from .dataset import load_recording
 from .errors import DatasetError
-from .limits import RATE_TOLERANCE
+from .limits import common_rate
 from .outputs import atomic_output
 from .quality import check, paper_increments
 from .train import TrainConfig
@@ -59,11 +59,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
             raise DatasetError(f'{Path(data) / name}: not usable for training: '
                                + '; '.join(report['reasons']))
         reports[name] = report
-    rates = [r['imu_rate_hz'] for r in reports.values()]
-    if max(rates) / min(rates) - 1 > RATE_TOLERANCE:
-        raise DatasetError(f'the IMU rates of the recordings differ ({min(rates):.1f} to '
-                           f'{max(rates):.1f} Hz): one model is for one rate')
-    rate = float(np.median(rates))
+    rate = common_rate({n: r['imu_rate_hz'] for n, r in reports.items()}, data)
     noisy = set().union(*(r['noise_dominated_increments'] for r in reports.values()))
     paper = paper_increments(rate)
     if not set(paper) & noisy:

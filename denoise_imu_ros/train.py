@@ -43,7 +43,7 @@ import yaml
 from . import parallel
 from .dataset import load_sequence
 from .errors import TrainingError
-from .limits import RATE_TOLERANCE
+from .limits import common_rate
 from .loss import increment_loss, LossConfig
 from .metrics import attitude_errors, increment_residuals, integrate
 from .model import GyroNet, ModelConfig
@@ -422,12 +422,7 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
                     f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
                     'IMU stamps have trusted ground truth): nothing to supervise the loss')
         seqs.append(seq)
-    rates = [s.rate_hz for s in seqs]
-    if max(rates) / min(rates) - 1 > RATE_TOLERANCE:
-        raise TrainingError(
-            f'{cfg.data}: the IMU rates of the recordings differ ('
-            + ', '.join(f'{n} {r:.1f} Hz' for n, r in zip(cfg.sequences, rates))
-            + '): one model is for one rate (its window and increments are in samples)')
+    common_rate({s.name: s.rate_hz for s in seqs}, cfg.data)
     return seqs
 
 

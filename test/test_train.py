@@ -7,7 +7,7 @@ from pathlib import Path
 from denoise_imu_ros import train as train_module
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.dataset import load_sequence
-from denoise_imu_ros.errors import TrainingError
+from denoise_imu_ros.errors import DatasetError, TrainingError
 from denoise_imu_ros.modelfile import load_model
 from denoise_imu_ros.train import batch, load_config, train, training_split
 import numpy as np
@@ -70,8 +70,8 @@ def test_recordings_of_different_rates_are_refused(euroc, tmp_path):
     write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[::2], imu=rec.imu[::2]),
               tmp_path / 'V1_02_at_100_hz')
     cfg = _short(euroc, data=str(tmp_path), sequences=['MH_01_easy', 'V1_02_at_100_hz'])
-    with pytest.raises(TrainingError, match=r'differ \(MH_01_easy 200.0 Hz, V1_02_at_100_hz '
-                                            r'100.0 Hz\): one model is for one rate'):
+    with pytest.raises(DatasetError, match=r'differ \(MH_01_easy 200.0 Hz, V1_02_at_100_hz '
+                                           r'100.0 Hz\): one model is for one rate'):
         train(cfg, progress=False)
 
 
