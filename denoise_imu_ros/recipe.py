@@ -27,6 +27,9 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
 - sigma_g: per axis 1.2 times the largest constant gyro bias against the poses, at
   least 0.2 deg/s (the output scale the paper sets by hand: EuRoC [1, 2, 5], TUM-VI 0.2);
 - align: ``auto`` when a recording's clock or frame is off (check-data), else ``none``.
+Recordings whose poses cannot supervise even a constant bias (check-data's
+``supervision``) are named in the reasons: such a recipe is not expected to beat plain
+integration, whatever its other keys.
 """
 
 from __future__ import annotations
@@ -99,6 +102,13 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
            f'({", ".join(f"{b:.3f}" for b in bias)} deg/s), at least {MIN_GYRO_STD_DEG}',
            f'align {recipe["align"]}' + (f': {", ".join(off)} off in clock or frame'
                                          if off else ': clocks and frames agree')]
+    weak = [n for n, r in reports.items() if not r['supervision']['helps']]
+    why.append(f'supervision: the poses of {", ".join(weak)} do not lower their own '
+               'attitude error even with a constant bias fitted on them (check-data): a '
+               'network trained on them is not expected to beat plain integration; run '
+               'denoise-imu crossval before deploying it' if weak else
+               "supervision: a constant bias fitted on each recording's poses lowers its "
+               'attitude error')
     return recipe, why
 
 

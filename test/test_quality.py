@@ -151,3 +151,5 @@ def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
     assert cfg.window % 128 == 0 and 75 < cfg.window / 199.4 <= 80
     assert cfg.sequences == rooms
     assert '16/32 are noise-dominated' in out.read_text().splitlines()[2]
+    assert out.read_text().splitlines()[6].startswith(
+        '# supervision: the poses of dataset-room5_512_16 do not lower their own attitude')
