@@ -105,8 +105,16 @@ def _eval(args: argparse.Namespace) -> None:
              start_sample=args.start_sample, align_poses=args.align)
 
 
+def _warn_if_not_recommended(model: str) -> None:
+    from .modelfile import deployment_warning, read_model_file
+    warning = deployment_warning(read_model_file(model))
+    if warning:
+        print(f'warning: {warning}', file=sys.stderr)
+
+
 def _correct(args: argparse.Namespace) -> None:
     from .evaluate import correct_to_csv
+    _warn_if_not_recommended(args.model)
     n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic,
                        engine=args.engine)
     print(f'wrote {n} corrected gyro samples to {args.output}')
@@ -124,6 +132,7 @@ def _convert(args: argparse.Namespace) -> None:
 
 def _process_bag(args: argparse.Namespace) -> None:
     from .bagtools import process_bag
+    _warn_if_not_recommended(args.model)
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame)
     print(f'wrote {args.output}: ' + ', '.join(f'{k} {v}' for k, v in counts.items()))

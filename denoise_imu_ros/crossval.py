@@ -89,17 +89,18 @@ def summarize(per_recording: dict[str, dict[str, dict[str, float]]]) -> dict[str
     """Means per method and the verdict, from AOE figures per held-out recording."""
     mean = {m: {key: float(np.mean([r[m][key] for r in per_recording.values()]))
                 for key in ('aoe_deg', 'aoe_yaw_deg')} for m in METHODS}
-    return {'recordings': per_recording, 'mean': mean,
-            'verdict': verdict(per_recording, mean)}
+    deploy, line = verdict(per_recording, mean)
+    return {'recordings': per_recording, 'mean': mean, 'deploy': deploy, 'verdict': line}
 
 
 def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
-            mean: dict[str, dict[str, float]]) -> str:
+            mean: dict[str, dict[str, float]]) -> tuple[str, str]:
     """
-    One line: deploy the network only if it beats the baseline on most recordings and on average.
+    Return what to deploy (``network``, ``calibration`` or ``none``) and the verdict line.
 
-    The baseline is the better of the calibrated IMU and plain integration on average, so
-    a calibration that hurts new recordings (an already calibrated IMU) is not the bar.
+    The network only if it beats the baseline on most recordings and on average. The
+    baseline is the better of the calibrated IMU and plain integration on average, so a
+    calibration that hurts new recordings (an already calibrated IMU) is not the bar.
     """
     base = min(('calibrated', 'raw'), key=lambda m: mean[m]['aoe_deg'])
     label = {'calibrated': 'the calibrated IMU', 'raw': 'plain integration'}[base]
@@ -107,11 +108,12 @@ def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
     wins = sum(r['network']['aoe_deg'] < r[base]['aoe_deg'] for r in per_recording.values())
     gain = 100 * (1 - mean['network']['aoe_deg'] / mean[base]['aoe_deg'])
     if wins > n / 2 and gain > 0:
-        return (f'the network beats {label} on {wins} of {n} unseen recordings, by '
-                f'{gain:.0f} % in mean AOE: deploy the network')
-    deploy = 'the calibration' if base == 'calibrated' else 'no correction'
-    return (f'the network does not beat {label} on unseen recordings ({wins} of {n}, '
-            f'{gain:+.0f} % in mean AOE): deploy {deploy}')
+        return 'network', (f'the network beats {label} on {wins} of {n} unseen recordings, '
+                           f'by {gain:.0f} % in mean AOE: deploy the network')
+    deploy = 'calibration' if base == 'calibrated' else 'none'
+    return deploy, (f'the network does not beat {label} on unseen recordings ({wins} of {n}, '
+                    f'{gain:+.0f} % in mean AOE): deploy '
+                    + ('the calibration' if deploy == 'calibration' else 'no correction'))
 
 
 def markdown(report: dict[str, Any]) -> str:

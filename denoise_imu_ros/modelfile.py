@@ -88,6 +88,24 @@ def gyro_covariance(loaded: ModelFile | LoadedModel, stddev: float = -1.0) -> li
     return [std[i] ** 2 if i == j else 0.0 for i in range(3) for j in range(3)]
 
 
+def deployment_warning(loaded: ModelFile) -> str | None:
+    """
+    Why this model should not be deployed, from its cross-recording validation, or None.
+
+    The stored report names what did best on unseen recordings (the network, the
+    calibration or no correction); a model of another kind still runs (benchmarks and
+    comparisons need it) but says so. None when it is the kind recommended, or when the
+    file has no report (``crossval --attach`` stores one).
+    """
+    report = loaded.meta.get('crossval')
+    deploy = report.get('deploy') if isinstance(report, dict) else None
+    kind = 'calibration' if loaded.config.calibration_only else 'network'
+    if deploy not in ('network', 'calibration', 'none') or deploy == kind:
+        return None
+    return (f'{loaded.path.name} is a {kind} model, but its cross-recording validation '
+            f'says: {report.get("verdict")}')
+
+
 def shipped_models() -> list[str]:
     """Names accepted by ``--model`` besides paths."""
     return sorted(p.stem for p in SHIPPED_DIR.glob('*.safetensors'))

@@ -43,7 +43,7 @@ from std_srvs.srv import Trigger
 from . import msgs
 from .errors import DenoiseError
 from .limits import RATE_TOLERANCE, stream_rate_hz
-from .modelfile import gyro_covariance, read_model_file
+from .modelfile import deployment_warning, gyro_covariance, read_model_file
 from .online import Drop, Event, OnlineDenoiser
 
 
@@ -104,6 +104,7 @@ class GyroDenoiser(Node):
         self._denoiser = OnlineDenoiser.from_model_file(loaded)
         self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
+        self._not_recommended = deployment_warning(loaded)  # kept as a diagnostics WARN
         self._types = msgs.rclpy_types()
         self._fixed_frame = p('fixed_frame').value
         self.add_post_set_parameters_callback(self._on_parameters)
@@ -133,6 +134,8 @@ class GyroDenoiser(Node):
         self.get_logger().info(
             f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field '
             f'{loaded.config.receptive_field} samples); imu/data_raw -> imu/corrected')
+        if self._not_recommended:
+            self.get_logger().warning(self._not_recommended)
 
     # -- parameters ---------------------------------------------------------------
     def _apply_parameters(self) -> None:
@@ -215,6 +218,8 @@ class GyroDenoiser(Node):
             status.level, status.message = DiagnosticStatus.WARN, 'no input yet'
         elif fill < self._denoiser.engine.receptive_field:
             status.level, status.message = DiagnosticStatus.WARN, 'warming up'
+        elif self._not_recommended:
+            status.level, status.message = DiagnosticStatus.WARN, self._not_recommended
         infer = np.array(self._infer_s) if self._infer_s else np.zeros(1)
         values = {'input_rate_hz': f'{rate:.2f}', 'model_rate_hz': f'{self._model_rate:.2f}',
                   'buffer_fill': f'{fill}/{self._denoiser.engine.receptive_field}',

@@ -32,12 +32,14 @@ def test_verdict_follows_the_figures():
     assert wins['mean']['network']['aoe_deg'] == pytest.approx(5.5 / 3)
     assert wins['verdict'] == ('the network beats the calibrated IMU on 2 of 3 unseen '
                                'recordings, by 8 % in mean AOE: deploy the network')
+    assert wins['deploy'] == 'network'
     loses = summarize({'a': _figures(1.0, 2.0, 9.0), 'b': _figures(4.0, 2.0, 9.0)})
     assert loses['verdict'].endswith('(1 of 2, -25 % in mean AOE): deploy the calibration')
+    assert loses['deploy'] == 'calibration'
     # an IMU calibrated already: plain integration is the bar, not a refitted calibration
     plain = summarize({'a': _figures(1.2, 3.0, 1.0), 'b': _figures(1.1, 3.0, 1.0)})
     assert plain['verdict'].startswith('the network does not beat plain integration')
-    assert plain['verdict'].endswith('deploy no correction')
+    assert plain['verdict'].endswith('deploy no correction') and plain['deploy'] == 'none'
 
 
 def test_crossval_command_trains_folds_scores_and_stores_the_report(

@@ -33,6 +33,25 @@ def test_round_trip_rebuilds_the_same_model_from_the_file_alone(tmp_path):
     assert not loaded.model.training
 
 
+@pytest.mark.parametrize('calibration_only, deploy, warns', [
+    (False, 'network', False), (False, 'calibration', True), (False, 'none', True),
+    (True, 'calibration', False), (True, 'network', True), (False, None, False)])
+def test_a_model_of_another_kind_than_its_validation_recommends_says_so(
+        tmp_path, calibration_only, deploy, warns):
+    from denoise_imu_ros.modelfile import deployment_warning, read_model_file
+    model = GyroNet(ModelConfig(calibration_only=calibration_only)).eval()
+    meta = {'sample_rate_hz': 200.0}
+    if deploy:
+        meta['crossval'] = {'deploy': deploy, 'verdict': f'... deploy {deploy}'}
+    save_model(tmp_path / 'm.safetensors', model, meta)
+    warning = deployment_warning(read_model_file(tmp_path / 'm.safetensors'))
+    assert (warning is not None) == warns
+    if warns:
+        kind = 'calibration' if calibration_only else 'network'
+        assert warning == (f'm.safetensors is a {kind} model, but its cross-recording '
+                           f'validation says: ... deploy {deploy}')
+
+
 def test_corrupt_foreign_and_missing_files_raise_model_file_error(tmp_path):
     good = tmp_path / 'good.safetensors'
     save_model(good, _model(), {})

@@ -112,6 +112,25 @@ def test_one_long_gap_is_not_a_slow_stream(harness):
     assert values['attitude_withheld'] == '1'
 
 
+def test_a_model_its_cross_recording_validation_advises_against_warns(model_file, harness):
+    from denoise_imu_ros.modelfile import add_metadata
+    add_metadata(model_file, crossval={'deploy': 'none', 'verdict': 'the network does not beat '
+                                       'plain integration on unseen recordings (1 of 3, '
+                                       '-61 % in mean AOE): deploy no correction'})
+    h = harness()
+    rec = load_imu(SAMPLE)
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:600], rec.imu[:600])])
+    h.diagnostics.clear()
+    h.spin_until(lambda: h.diagnostics, timeout=5.0)
+    status = h.diagnostics[-1].status[0]
+    assert status.level == DiagnosticStatus.WARN
+    assert status.message == ('model.safetensors is a network model, but its cross-recording '
+                              'validation says: the network does not beat plain integration '
+                              'on unseen recordings (1 of 3, -61 % in mean AOE): deploy no '
+                              'correction')
+    assert len(h.corrected) == 600  # it still runs: the user decides
+
+
 def test_reset_attitude_service_and_embedded_attitude(harness):
     from scipy.spatial.transform import Rotation
     h = harness(embed_attitude=True, orientation_stddev=0.1)

@@ -5,7 +5,8 @@
 from conftest import SAMPLE
 from denoise_imu_ros import evaluate as evaluate_module
 from denoise_imu_ros.evaluate import correct_gyro
-from denoise_imu_ros.modelfile import load_model, shipped_models
+from denoise_imu_ros.modelfile import deployment_warning, load_model, read_model_file, \
+    shipped_models
 from denoise_imu_ros.streaming import StreamingCorrector
 import numpy as np
 import pytest
@@ -50,6 +51,12 @@ def test_every_shipped_model_carries_its_cross_recording_report(name):
     assert report['verdict'].startswith('the network ')
     assert set(report['mean']) == {'raw', 'calibrated', 'network'}
     assert len(report['recordings']) == (6 if name.startswith('euroc') else 3)
+    assert report['deploy'] in ('network', 'calibration', 'none')
+    kind = 'calibration' if name.endswith('_calibrated') else 'network'
+    warning = deployment_warning(read_model_file(name))
+    assert (warning is None) == (report['deploy'] == kind)
+    if name.startswith('tumvi'):  # on unseen rooms neither beats plain integration
+        assert report['deploy'] == 'none' and warning.endswith('deploy no correction')
 
 
 def test_shipped_euroc_is_the_ensemble_of_five_trainings():
