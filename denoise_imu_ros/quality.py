@@ -250,7 +250,10 @@ def supervision(seq: Sequence, lengths: tuple[int, ...]) -> dict[str, Any]:
     helps = best is not None and fits[best]['aoe_deg'] < plain
     after = '/'.join(f'{f["aoe_deg"]:.2f}' for f in fits.values())
     tried = ', '.join(map(str, fits))
-    if helps:
+    if not fits:
+        summary = (f'no increment of {", ".join(map(str, lengths))} samples has trusted poses '
+                   'at every stamp: nothing supervises a correction')
+    elif helps:
         summary = (f"a constant gyro bias fitted on the poses' own {best}-sample increments "
                    f"lowers this recording's attitude error from {plain:.2f} to "
                    f'{fits[best]["aoe_deg"]:.2f} deg (lengths {tried}: {after})')

@@ -46,6 +46,12 @@ def test_poses_whose_increments_disagree_with_their_own_attitude_cannot_supervis
     for fit in biased['fits'].values():
         np.testing.assert_allclose(fit['bias_deg_s'], [0, 0, np.degrees(0.01)], atol=1e-4)
         assert fit['aoe_deg'] < 0.01
+    holes = align(rec)
+    holes = dataclasses.replace(holes, gt_valid=np.arange(len(holes)) % 10 > 0)
+    none = supervision(holes, (16, 32))
+    assert not none['helps'] and none['fits'] == {} and none['summary'] == (
+        'no increment of 16, 32 samples has trusted poses at every stamp: nothing supervises '
+        'a correction')
     # an exact gyro, and mocap whose yaw creeps at 1 deg/s and jumps back in a 0.3 s hole
     # every 5 s (a re-acquired marker): every trusted increment says "bias", none is one
     rec = read_asl(write_asl(tmp_path / 'e', n_imu=12000, gt_rate=120.0, gt_dir='mocap0'))
