@@ -32,7 +32,7 @@ import torch
 from .dataset import load_imu, load_sequence
 from .errors import DatasetError
 from .limits import check_rate
-from .metrics import attitude_errors, AttitudeErrors, integrate, ROE_DISTANCES_M
+from .metrics import ROE_DISTANCES_M, sequence_errors
 from .model import GyroNet
 from .modelfile import load_model, shipped_models
 from .outputs import atomic_output
@@ -84,15 +84,9 @@ def correct_to_csv(model_spec: str, source: str, output: str,
     return len(omega)
 
 
-def _errors(seq: Sequence, gyro: np.ndarray) -> tuple[Rotation, AttitudeErrors]:
-    est = integrate(seq.gt_quat[0], gyro[:-1], seq.dt)
-    return est, attitude_errors(est, Rotation.from_quat(seq.gt_quat), seq.gt_pos,
-                                seq.gt_valid)
-
-
 def score(seq: Sequence, gyro: np.ndarray) -> dict[str, float]:
     """AOE 3-D and yaw (deg) of one method's gyro integrated over a whole sequence."""
-    err = _errors(seq, gyro)[1]
+    err = sequence_errors(seq, gyro, distances=())[1]
     return {'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw}
 
 
@@ -138,7 +132,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         gyros = {m: g[start_sample:] for m, g in gyros.items()}
         estimates, results[name] = {}, {}
         for method, gyro in gyros.items():
-            estimates[method], err = _errors(seq, gyro)
+            estimates[method], err = sequence_errors(seq, gyro)
             results[name][method] = {
                 'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw,
                 'roe_median_deg': {str(int(d)): v for d, v in err.roe_median().items()}}

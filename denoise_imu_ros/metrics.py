@@ -21,10 +21,13 @@ at the first stamp. The training loss uses the same convention.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import NamedTuple, TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+if TYPE_CHECKING:
+    from .records import Sequence
 
 ROE_DISTANCES_M = (7.0, 21.0, 35.0)
 
@@ -141,3 +144,12 @@ def attitude_errors(est: Rotation, gt: Rotation, gt_pos: np.ndarray, valid: np.n
         aoe_yaw=float(np.sqrt(np.mean(yaw[valid] ** 2))),
         roe=roe,
         error_deg=np.where(valid, angle, np.nan))
+
+
+def sequence_errors(seq: Sequence, gyro: np.ndarray,
+                    distances: tuple[float, ...] = ROE_DISTANCES_M
+                    ) -> tuple[Rotation, AttitudeErrors]:
+    """Integrate a gyro (N, 3) over a whole sequence from its first pose; its errors too."""
+    est = integrate(seq.gt_quat[0], gyro[:-1], seq.dt)
+    return est, attitude_errors(est, Rotation.from_quat(seq.gt_quat), seq.gt_pos,
+                                seq.gt_valid, distances)

@@ -48,7 +48,7 @@ from scipy.spatial.transform import Rotation
 
 from .architecture import ModelConfig
 from .dataset import align
-from .metrics import attitude_errors, fit_constant_bias, increment_residuals, integrate
+from .metrics import fit_constant_bias, increment_residuals, sequence_errors
 from .records import Recording, Sequence
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
@@ -234,11 +234,9 @@ def supervision(seq: Sequence, lengths: tuple[int, ...]) -> dict[str, Any]:
     network trained on them has nothing right to learn, on this recording or another.
     """
     gyro = seq.imu[:, :3]
-    gt = Rotation.from_quat(seq.gt_quat)
 
     def aoe(g: np.ndarray) -> float:
-        est = integrate(seq.gt_quat[0], g[:-1], seq.dt)
-        return attitude_errors(est, gt, seq.gt_pos, seq.gt_valid, distances=()).aoe
+        return sequence_errors(seq, g, distances=())[1].aoe
 
     plain = aoe(gyro)
     fits = {}

@@ -34,7 +34,6 @@ import time
 from typing import Any
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 import torch
 import torch.distributed as dist
 from tqdm import tqdm
@@ -45,7 +44,7 @@ from .dataset import load_sequence
 from .errors import TrainingError
 from .limits import common_rate
 from .loss import increment_loss, LossConfig
-from .metrics import attitude_errors, increment_residuals, integrate
+from .metrics import increment_residuals, sequence_errors
 from .model import GyroNet, ModelConfig
 from .modelfile import code_version, save_model
 from .records import Sequence
@@ -313,10 +312,7 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
             torch.tensor(s.gt_quat[start:start + n + 1])[None],
             torch.tensor(s.gt_valid[start:start + n + 1])[None], tail_cfg)))
         w = omega.numpy()[start:]
-        est = integrate(s.gt_quat[start], w[:-1], s.dt[start:])
-        err = attitude_errors(est, Rotation.from_quat(s.gt_quat[start:]), s.gt_pos[start:],
-                              s.gt_valid[start:], distances=())
-        aoes[s.name] = err.aoe
+        aoes[s.name] = sequence_errors(s.tail(start), w, distances=())[1].aoe
         res, duration = increment_residuals(s.gt_quat[start:], s.gt_valid[start:], w,
                                             s.dt[start:], RESIDUAL_BLOCK)
         residuals.append(res / duration[:, None])  # mean rate error over each block

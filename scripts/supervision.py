@@ -28,7 +28,7 @@ from pathlib import Path
 import sys
 
 from denoise_imu_ros.dataset import align, load_recording, load_sequence
-from denoise_imu_ros.metrics import attitude_errors, fit_constant_bias, integrate
+from denoise_imu_ros.metrics import fit_constant_bias, sequence_errors
 from denoise_imu_ros.quality import supervision
 from denoise_imu_ros.records import Recording
 import numpy as np
@@ -72,9 +72,8 @@ def main(data: str, names: list[str]) -> None:
     print(f'bias fitted on the other recordings ({LENGTHS[-1]} samples, align: auto)')
     for name, s in seqs.items():
         other = np.mean([b for n, b in bias.items() if n != name], axis=0)
-        aoe = [attitude_errors(integrate(s.gt_quat[0], g[:-1], s.dt),
-                               Rotation.from_quat(s.gt_quat), s.gt_pos, s.gt_valid,
-                               distances=()).aoe for g in (s.imu[:, :3], s.imu[:, :3] - other)]
+        aoe = [sequence_errors(s, g, distances=())[1].aoe
+               for g in (s.imu[:, :3], s.imu[:, :3] - other)]
         print(f'  {name}: plain {aoe[0]:.2f}, after {aoe[1]:.2f} (bias '
               + ', '.join(f'{v:+.4f}' for v in np.degrees(other)) + ' deg/s)')
 
