@@ -40,7 +40,7 @@ crossval() {  # name, recipe, folds, models to attach the report to...
     --quiet --attach "$@" > "$out/$name.log" 2>&1
   tail -n 1 "$out/$name.log"
 }
-crossval crossval_euroc config/train_euroc.yaml 3 "$out/euroc_ensemble.safetensors" \
+crossval crossval_euroc config/train_euroc.yaml 6 "$out/euroc_ensemble.safetensors" \
   "$out/euroc_calibrated.safetensors"
 crossval crossval_tumvi config/train_tumvi.yaml 3 "$out"/tumvi_s*.safetensors \
   "$out/tumvi_calibrated.safetensors"
