@@ -339,10 +339,11 @@ class TrainResult:
     def save(self, path: str | Path, candidates_dir: str | Path | None = None) -> None:
         """Write the chosen model, and with ``candidates_dir`` every candidate beside it."""
         save_model(path, self.model, self.meta)
+        if candidates_dir is None:
+            return
         for name, (model, figures) in self.candidates.items():
-            if candidates_dir is not None:
-                save_model(Path(candidates_dir) / f'{name}.safetensors', model,
-                           dict(self.meta, selected=name, validation=figures))
+            save_model(Path(candidates_dir) / f'{name}.safetensors', model,
+                       dict(self.meta, selected=name, validation=figures))
 
 
 def select(candidates: dict[str, dict[str, Any]], rule: str) -> str:
