@@ -49,16 +49,23 @@ def integrate(q0: np.ndarray, gyro: np.ndarray, dt: np.ndarray) -> Rotation:
     return Rotation.concatenate([start, start * Rotation.from_quat(steps)])
 
 
-def _block_errors(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
-                  dt: np.ndarray, length: int) -> tuple[np.ndarray, Rotation, np.ndarray]:
-    """Return the trusted blocks' starts, the integrated gyro and the blocks' errors."""
-    m = len(dt) // length
-    est = integrate(gt_quat[0], gyro[:len(dt)], dt)
+def trusted_blocks(gt_valid: np.ndarray, length: int) -> np.ndarray:
+    """Return the starts of the non-overlapping ``length``-sample blocks trusted throughout."""
+    m = (len(gt_valid) - 1) // length
+    if m == 0:
+        return np.zeros(0, dtype=int)
     ok = gt_valid[:m * length].reshape(m, length).all(1) & gt_valid[length:m * length + 1:length]
-    i = np.arange(m)[ok] * length
+    return np.arange(m)[ok] * length
+
+
+def _block_errors(gt_quat: np.ndarray, starts: np.ndarray, gyro: np.ndarray,
+                  dt: np.ndarray, length: int) -> tuple[Rotation, np.ndarray]:
+    """Return the integrated gyro and the errors (rotation vectors) of the given blocks."""
+    est = integrate(gt_quat[0], gyro[:len(dt)], dt)
     gt = Rotation.from_quat(gt_quat)
-    res = ((gt[i].inv() * gt[i + length]).inv() * (est[i].inv() * est[i + length])).as_rotvec()
-    return i, est, res.reshape(-1, 3)
+    i, j = starts, starts + length
+    res = ((gt[i].inv() * gt[j]).inv() * (est[i].inv() * est[j])).as_rotvec()
+    return est, res.reshape(-1, 3)
 
 
 def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
@@ -70,9 +77,10 @@ def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndar
     the rotation vectors (M, 3) rad of R_gt_inc^T R_gyro_inc and the blocks' durations
     (M,) s. ``gyro`` holds one sample per stamp (the last drives nothing).
     """
-    if len(dt) // length == 0:
+    i = trusted_blocks(gt_valid, length)
+    if len(i) == 0:
         return np.zeros((0, 3)), np.zeros(0)
-    i, _, res = _block_errors(gt_quat, gt_valid, gyro, dt, length)
+    _, res = _block_errors(gt_quat, i, gyro, dt, length)
     t = np.concatenate([[0.0], np.cumsum(dt)])
     return res, t[i + length] - t[i]
 
@@ -87,11 +95,10 @@ def fit_constant_bias(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarra
     the error by the duration instead is right only while the body barely turns within a
     block. None when no block has trusted ground truth.
     """
-    if len(dt) // length == 0:
-        return None
-    i, est, res = _block_errors(gt_quat, gt_valid, gyro, dt, length)
+    i = trusted_blocks(gt_valid, length)
     if len(i) == 0:
         return None
+    est, res = _block_errors(gt_quat, i, gyro, dt, length)
     k = (i[:, None] + np.arange(length)).ravel()  # every step of the trusted blocks
     turn = (est[k + 1].inv() * est[np.repeat(i + length, length)]).as_matrix()
     jac = (np.swapaxes(turn, 1, 2) * dt[k, None, None]).reshape(len(i), length, 3, 3).sum(1)

@@ -44,7 +44,7 @@ from .dataset import load_sequence
 from .errors import TrainingError
 from .limits import common_rate
 from .loss import increment_loss, LossConfig
-from .metrics import increment_residuals, sequence_errors
+from .metrics import increment_residuals, sequence_errors, trusted_blocks
 from .model import GyroNet, ModelConfig
 from .modelfile import code_version, save_model
 from .records import Sequence
@@ -413,7 +413,7 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
         head = cfg.window + cfg.max_offset
         for part, valid in (('training window', seq.gt_valid[:head + 1]),
                             ('validation tail', seq.gt_valid[head:])):
-            if valid_increments(valid, cfg.increments[0]) == 0:
+            if len(trusted_blocks(valid, cfg.increments[0])) == 0:
                 raise TrainingError(
                     f'{Path(cfg.data) / name}: no {cfg.increments[0]}-sample increment with '
                     f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
@@ -421,15 +421,6 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
         seqs.append(seq)
     common_rate({s.name: s.rate_hz for s in seqs}, cfg.data)
     return seqs
-
-
-def valid_increments(valid: np.ndarray, length: int) -> int:
-    """Count non-overlapping increments of ``length`` samples trusted at every stamp."""
-    m = (len(valid) - 1) // length
-    if m == 0:
-        return 0
-    ok = valid[:m * length].reshape(m, length).all(1) & valid[length:m * length + 1:length]
-    return int(ok.sum())
 
 
 def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
