@@ -19,9 +19,11 @@ $(VENV)/.installed: requirements.txt setup.py
 
 venv: $(VENV)/.installed
 
-# Unit, integration and lint tests (tests needing ../shared/data skip without it).
+# Unit, integration and lint tests (tests needing ../shared/data skip without it), on
+# two processes (each its own DDS domain); prints the wall time of the tests alone.
 test: venv
-	$(ROS_ENV) $(BIN)/python -m pytest test
+	@start=$$(date +%s); $(ROS_ENV) $(BIN)/python -m pytest -n 2 test; status=$$?; \
+	echo "make test: tests took $$(( $$(date +%s) - start )) s"; exit $$status
 
 # The bundled EuRoC test-sequence sample (90 s of V1_03): offline evaluation with the
 # shipped model, then the live run: gyro_denoiser + bag player + monitor over DDS.

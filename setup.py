@@ -25,7 +25,7 @@ setup(
     entry_points={
         'console_scripts': [
             'denoise-imu = denoise_imu_ros.cli:main',
-            'gyro_denoiser = denoise_imu_ros.node:main',
+            'gyro_denoiser = denoise_imu_ros.runtime.node:main',
         ],
     },
 )

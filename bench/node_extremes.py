@@ -34,8 +34,8 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 os.environ.setdefault('FASTDDS_BUILTIN_TRANSPORTS', 'UDPv4')
 os.environ.setdefault('ROS_DOMAIN_ID', '58')
 
-from denoise_imu_ros import msgs  # noqa: E402
-from denoise_imu_ros.dataset import load_imu  # noqa: E402
+from denoise_imu_ros.core import msgs  # noqa: E402
+from denoise_imu_ros.data.load import load_imu  # noqa: E402
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
@@ -53,7 +53,7 @@ def main():
     parser.add_argument('--every', type=int, default=10, help='inject after every N-th sample')
     args = parser.parse_args()
     imu = load_imu(DATA).imu
-    node = subprocess.Popen([sys.executable, '-m', 'denoise_imu_ros.node', '--ros-args',
+    node = subprocess.Popen([sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args',
                              '-p', 'model:=euroc', '--log-level', 'error'])
     rclpy.init()
     bench = rclpy.create_node('extremes_bench')

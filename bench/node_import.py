@@ -14,7 +14,7 @@
 """
 Node start-up cost: import time, resident memory, whether torch was loaded.
 
-Each run is a fresh process that imports denoise_imu_ros.node and starts the node with
+Each run is a fresh process that imports denoise_imu_ros.runtime.node and starts the node with
 a shipped model. With --other PATH (another checkout, e.g. an older commit made with
 ``git worktree add``), the same is measured for that code in the same run, alternating.
 Run: .venv/bin/python bench/node_import.py [--model euroc] [--runs 5] [--other PATH]
@@ -32,7 +32,7 @@ import numpy as np
 PROBE = """
 import json, resource, sys, time
 t = time.perf_counter()
-import denoise_imu_ros.node as node_module
+import denoise_imu_ros.runtime.node as node_module
 imported = time.perf_counter() - t
 import rclpy
 from rclpy.parameter import Parameter

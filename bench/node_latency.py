@@ -36,8 +36,8 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 os.environ.setdefault('FASTDDS_BUILTIN_TRANSPORTS', 'UDPv4')
 os.environ.setdefault('ROS_DOMAIN_ID', '57')
 
-from denoise_imu_ros.dataset import load_imu  # noqa: E402
-from denoise_imu_ros.msgs import stamp_ns  # noqa: E402
+from denoise_imu_ros.core.msgs import stamp_ns  # noqa: E402
+from denoise_imu_ros.data.load import load_imu  # noqa: E402
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
@@ -71,8 +71,9 @@ def cpu_seconds(pid):
 
 def run(kind, rates, seconds, imu, model='euroc'):
     """Start the node (or the relay); measure every rate; stop it."""
-    cmd = ([sys.executable, '-m', 'denoise_imu_ros.node', '--ros-args', '-p', f'model:={model}',
-            '--log-level', 'error'] if kind == 'node' else [sys.executable, '-c', RELAY])
+    cmd = ([sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args',
+            '-p', f'model:={model}', '--log-level', 'error'] if kind == 'node'
+           else [sys.executable, '-c', RELAY])
     proc = subprocess.Popen(cmd)
     rclpy.init()
     bench = rclpy.create_node('latency_bench')

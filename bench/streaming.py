@@ -28,11 +28,11 @@ import argparse
 from pathlib import Path
 import time
 
-from denoise_imu_ros.dataset import load_imu
-from denoise_imu_ros.evaluate import correct_gyro
-from denoise_imu_ros.model import merge
-from denoise_imu_ros.modelfile import load_model
-from denoise_imu_ros.streaming import StreamingCorrector
+from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.learn.model import merge
+from denoise_imu_ros.runtime.streaming import StreamingCorrector
 import numpy as np
 import torch
 

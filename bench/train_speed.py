@@ -29,8 +29,10 @@ import argparse
 from pathlib import Path
 import time
 
-from denoise_imu_ros.model import GyroNet, ModelConfig
-from denoise_imu_ros.train import load_config, train
+from denoise_imu_ros.core.architecture import ModelConfig
+from denoise_imu_ros.learn.config import load_config
+from denoise_imu_ros.learn.model import GyroNet
+from denoise_imu_ros.learn.train import train
 import torch
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -25,15 +25,16 @@ import os
 from pathlib import Path
 import sys
 
-from .errors import DenoiseError
+from .core.errors import DenoiseError
 
 # Commands that run the torch network; the others (process-bag, play, check-data,
-# convert) never import torch.
-TORCH_COMMANDS = ('train', 'crossval', 'eval', 'correct', 'ensemble')
+# convert, init-recipe, correct --engine streaming) never import torch.
+TORCH_COMMANDS = ('train', 'crossval', 'eval', 'ensemble')
 
 
 def _train(args: argparse.Namespace) -> None:
-    from .train import load_config, train
+    from .learn.config import load_config
+    from .learn.train import train
     cfg = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps,
                       calibration_only=True if args.calibration_only else None,
                       whole_sequences=True if args.whole_sequences else None,
@@ -60,34 +61,35 @@ def _check_writable(folder: str | Path | None) -> None:
 
 
 def _crossval(args: argparse.Namespace) -> None:
-    from .crossval import crossval, markdown
-    from .modelfile import add_metadata
+    from .core.modelfile import add_metadata
+    from .evaluation.crossval import crossval
+    from .evaluation.reports import crossval_table
     report = crossval(args.config, args.folds, args.out, progress=not args.quiet,
                       seed=args.seed, data=args.data, steps=args.steps, workers=args.workers,
                       device=args.device)
-    sys.stdout.write(markdown(report))
+    sys.stdout.write(crossval_table(report))
     for path in args.attach or []:
         add_metadata(path, crossval=report)
         print(f'stored the cross-recording figures in {path}')
 
 
 def _init_recipe(args: argparse.Namespace) -> None:
-    from .recipe import init_recipe, write_recipe
+    from .learn.recipe import init_recipe, write_recipe
     recipe, why = init_recipe(args.data, args.sequences, args.imu_topic, args.pose_topic)
     write_recipe(args.out, recipe, why)
     print(f'wrote {args.out}:\n' + ''.join(f'  {line}\n' for line in why), end='')
 
 
 def _ensemble(args: argparse.Namespace) -> None:
-    from .modelfile import save_ensemble
+    from .learn.checkpoint import save_ensemble
     loaded = save_ensemble(args.out, args.models)
     print(f'wrote {args.out}: the mean of {loaded.model.config.members} networks')
 
 
 def _check_data(args: argparse.Namespace) -> None:
     import json
-    from .dataset import load_recording
-    from .quality import check, markdown
+    from .data.check import check, markdown
+    from .data.load import load_recording
     rec = load_recording(args.input, args.imu_topic, args.pose_topic)
     report = check(rec, args.max_offset)
     sys.stdout.write(markdown(report))
@@ -99,21 +101,21 @@ def _check_data(args: argparse.Namespace) -> None:
 
 
 def _eval(args: argparse.Namespace) -> None:
-    from .evaluate import evaluate
+    from .evaluation.evaluate import evaluate
     evaluate(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
              imu_topic=args.imu_topic, pose_topic=args.pose_topic, plots=not args.no_plots,
              start_sample=args.start_sample, align_poses=args.align)
 
 
 def _warn_if_not_recommended(model: str) -> None:
-    from .modelfile import deployment_warning, read_model_file
+    from .core.modelfile import deployment_warning, read_model_file
     warning = deployment_warning(read_model_file(model))
     if warning:
         print(f'warning: {warning}', file=sys.stderr)
 
 
 def _correct(args: argparse.Namespace) -> None:
-    from .evaluate import correct_to_csv
+    from .evaluation.correct import correct_to_csv
     _warn_if_not_recommended(args.model)
     n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic,
                        engine=args.engine)
@@ -121,8 +123,9 @@ def _correct(args: argparse.Namespace) -> None:
 
 
 def _convert(args: argparse.Namespace) -> None:
-    from .bags import IMU_TOPIC, POSE_TOPIC, write_bag
-    from .dataset import crop, overlap, read_asl
+    from .data.asl import read_asl
+    from .data.bags import IMU_TOPIC, POSE_TOPIC, write_bag
+    from .data.timebase import crop, overlap
     rec = read_asl(args.asl_dir)
     rec = crop(overlap(rec) if args.overlap else rec, args.start, args.duration)
     write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress,
@@ -131,7 +134,7 @@ def _convert(args: argparse.Namespace) -> None:
 
 
 def _process_bag(args: argparse.Namespace) -> None:
-    from .bagtools import process_bag
+    from .runtime.process_bag import process_bag
     _warn_if_not_recommended(args.model)
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame)
@@ -139,8 +142,8 @@ def _process_bag(args: argparse.Namespace) -> None:
 
 
 def _play(args: argparse.Namespace) -> None:
-    from .player import main as play
-    play(args.bag, args.imu_topic, args.topic, args.rate, args.clock)
+    from .runtime.player import main as play
+    play(args.bag, args.imu_topic, args.topic, args.rate, args.clock, args.wait)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -259,6 +262,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--topic', default='imu/data_raw', help='topic to publish on')
     p.add_argument('--rate', type=float, default=1.0, help='playback speed factor')
     p.add_argument('--clock', action='store_true', help='also publish /clock')
+    p.add_argument('--wait', type=float, default=10.0,
+                   help='s to wait for a subscriber before playing (default 10)')
     p.set_defaults(func=_play)
     return parser
 
@@ -266,7 +271,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``denoise-imu`` console script."""
     args = build_parser().parse_args(argv)
-    if args.command in TORCH_COMMANDS:
+    if args.command in TORCH_COMMANDS or getattr(args, 'engine', None) == 'batch':
         import torch
         # Denormal floats in the network's activations slow its CPU convolutions tenfold.
         torch.set_flush_denormal(True)

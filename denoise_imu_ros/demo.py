@@ -16,11 +16,13 @@ Live demo: the node, a bag player and a monitor, over DDS on this machine.
 
 ``make demo`` runs ``gyro_denoiser`` (shipped EuRoC model) as its own process, plays the
 bundled EuRoC test-sequence sample into ``imu/data_raw`` in real time, and monitors
-``imu/attitude`` against the ground truth stored in the same bag. It prints the
-attitude error of raw-gyro integration and of the node as the recording plays, then
-writes a plot. Both trajectories start from the ground truth at the node's first
-output (the node's own start is gravity-aligned with yaw 0, a constant world rotation
-the monitor removes), the convention of ``denoise-imu eval``.
+``imu/attitude`` against the ground truth stored in the same bag. As the recording
+plays it prints the attitude error of the node beside the raw gyro and the calibrated
+IMU a user would otherwise integrate (both computed here, by the node's own numpy
+engine for the calibration), then writes a plot of all three. Every trajectory starts
+from the ground truth at the node's first output (the node's own start is
+gravity-aligned with yaw 0, a constant world rotation the monitor removes), the
+convention of ``denoise-imu eval``.
 """
 
 from __future__ import annotations
@@ -41,16 +43,21 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from scipy.spatial.transform import Rotation
 
-from .dataset import load_sequence
-from .metrics import integrate
-from .msgs import stamp_ns
-from .player import Player, read_imu_messages
+from .core.metrics import error_components, integrate
+from .core.modelfile import read_model_file, shipped_models
+from .core.msgs import stamp_ns
+from .core.records import Sequence
+from .data.load import load_sequence
+from .evaluation.plots import plot_errors
+from .runtime.player import Player, read_imu_messages
+from .runtime.streaming import StreamingCorrector
 
 SAMPLE = Path(__file__).parent / 'sample' / 'euroc_V1_03_90s'
 
 
-def _errors(seq, stamps: np.ndarray, quats: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Raw and node attitude errors (deg) at the node's output stamps."""
+def _errors(seq: Sequence, stamps: np.ndarray, quats: np.ndarray,
+            calibrated: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, dict[str, tuple]]:
+    """Time, trusted stamps and (angle, tilt, yaw) errors per method at the node's stamps."""
     idx = np.searchsorted(seq.stamp_ns, stamps)
     keep = (idx < len(seq)) & (seq.stamp_ns[np.minimum(idx, len(seq) - 1)] == stamps)
     idx, quats = idx[keep], quats[keep]
@@ -58,29 +65,24 @@ def _errors(seq, stamps: np.ndarray, quats: np.ndarray) -> tuple[np.ndarray, ...
     node = Rotation.from_quat(quats)
     node = (gt[0] * node[0].inv()) * node  # same start as the ground truth
     first = idx[0]
-    raw = integrate(seq.gt_quat[first], seq.imu[first:-1, :3], seq.dt[first:])[idx - first]
+    gyros = {'raw gyro': seq.imu[:, :3]}
+    if calibrated is not None:
+        gyros['calibrated IMU'] = calibrated
+    errors = {label: error_components(integrate(seq.gt_quat[first], g[first:-1],
+                                                seq.dt[first:])[idx - first], gt)
+              for label, g in gyros.items()}
+    errors['gyro_denoiser imu/attitude'] = error_components(node, gt)
     t = (seq.stamp_ns[idx] - seq.stamp_ns[first]) * 1e-9
-    valid = seq.gt_valid[idx]
-    return (t, np.degrees((gt.inv() * raw).magnitude()),
-            np.degrees((gt.inv() * node).magnitude()), valid)
+    return t, seq.gt_valid[idx], errors
 
 
-def _plot(path: Path, t, raw, node, valid) -> None:
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(9, 4))
-    ax.plot(t, np.where(valid, raw, np.nan), label='raw gyro integration')
-    ax.plot(t, np.where(valid, node, np.nan), label='gyro_denoiser imu/attitude')
-    ax.set_xlabel('time (s)')
-    ax.set_ylabel('attitude error (deg)')
-    ax.set_yscale('log')
-    ax.set_ylim(bottom=0.01)
-    ax.grid(True, alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+def _calibrated(model: str, imu: np.ndarray) -> np.ndarray | None:
+    """Return the gyro of ``<dataset>_calibrated``, the model's calibrated IMU, if shipped."""
+    name = f'{read_model_file(model).meta.get("dataset")}_calibrated'
+    if name not in shipped_models():
+        return None
+    calib = read_model_file(name)
+    return StreamingCorrector(calib.config, calib.arrays).process(imu)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -93,6 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--out', default='demo_out')
     args = parser.parse_args(argv)
     seq = load_sequence(args.bag)
+    calibrated = _calibrated(args.model, seq.imu)
     messages = read_imu_messages(args.bag)
     if args.seconds is not None:
         t0 = stamp_ns(messages[0].header)
@@ -102,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
 
     node_proc = subprocess.Popen(
-        [sys.executable, '-m', 'denoise_imu_ros.node', '--ros-args', '-p',
+        [sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args', '-p',
          f'model:={args.model}', '-p', 'fixed_frame:=world', '--log-level', 'warn'],
         env=dict(os.environ))
     rclpy.init()
@@ -134,7 +137,8 @@ def main(argv: list[str] | None = None) -> int:
                          daemon=True).start()
         print(f'playing {len(messages)} IMU messages of {Path(args.bag).name} '
               f'at {args.rate:g}x', flush=True)
-        print(f'{"time":>7s}  {"raw gyro":>9s}  {"denoised":>9s}   attitude error vs ground truth')
+        print(f'{"time":>7s}  {"raw gyro":>9s}  {"calibrated":>10s}  {"denoised":>9s}   '
+              'attitude error vs ground truth (deg)')
         next_report = 10.0
         quiet_since = None
         while True:
@@ -142,21 +146,23 @@ def main(argv: list[str] | None = None) -> int:
             if len(received) > 1:
                 elapsed = (received[-1][0] - received[0][0]) * 1e-9
                 if elapsed >= next_report:
-                    t, raw, node, _ = _errors(seq, *map(np.array, zip(*received)))
-                    print(f'{t[-1]:6.1f}s  {raw[-1]:8.2f}°  {node[-1]:8.2f}°', flush=True)
+                    t, _, errors = _errors(seq, *map(np.array, zip(*received)), calibrated)
+                    print(f'{t[-1]:6.1f}s  ' + '  '.join(
+                        f'{e[0][-1]:9.2f}' for e in errors.values()), flush=True)
                     next_report += 10.0
             if done.is_set():
                 quiet_since = quiet_since or time.monotonic()
                 if len(received) >= len(messages) or time.monotonic() - quiet_since > 2.0:
                     break
         stamps, quats = map(np.array, zip(*received))
-        t, raw, node, valid = _errors(seq, stamps, quats)
-        rms = lambda e: float(np.sqrt(np.mean(e[valid] ** 2)))  # noqa: E731
+        t, valid, errors = _errors(seq, stamps, quats, calibrated)
         print(f'\n{len(received)}/{len(messages)} samples corrected live over DDS; '
-              f'attitude error over {t[-1]:.0f} s (RMS / final):')
-        print(f'  raw gyro integration : {rms(raw):7.2f}° / {raw[-1]:7.2f}°')
-        print(f'  gyro_denoiser        : {rms(node):7.2f}° / {node[-1]:7.2f}°')
-        _plot(out / 'live_attitude_error.png', t, raw, node, valid)
+              f'attitude error over {t[-1]:.0f} s (RMS / final, deg):')
+        for label, (angle, _, _) in errors.items():
+            rms = float(np.sqrt(np.mean(angle[valid] ** 2)))
+            print(f'  {label:27s}: {rms:7.2f} / {angle[-1]:7.2f}')
+        plot_errors(out / 'live_attitude_error.png',
+                    f'{Path(args.bag).name}: live, against its ground truth', t, valid, errors)
         print(f'plot: {out / "live_attitude_error.png"}')
     finally:
         node_proc.send_signal(signal.SIGINT)

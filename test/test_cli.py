@@ -2,13 +2,13 @@
 # Licensed under the Apache License, Version 2.0
 """denoise-imu correct / eval end to end, and one-line errors with exit code 1."""
 
-from conftest import SAMPLE
 from denoise_imu_ros.cli import main
-from denoise_imu_ros.dataset import load_imu
-from denoise_imu_ros.evaluate import correct_gyro
-from denoise_imu_ros.modelfile import load_model
+from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.model import correct_gyro
+from helpers import SAMPLE
+from helpers import write_asl
 import numpy as np
-from test_dataset import write_asl
 
 SAMPLE_DIR = SAMPLE.parent
 
@@ -66,11 +66,11 @@ def test_errors_are_one_line_naming_the_file(model_file, tmp_path, capsys):
 def test_one_absurd_imu_row_is_an_error_offline_and_a_counted_drop_in_process_bag(
         model_file, tmp_path, capsys):
     import dataclasses
-    from denoise_imu_ros.bags import TYPESTORE, write_bag
-    from denoise_imu_ros.dataset import read_asl
-    from test_dataset import _break, T0
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import TYPESTORE, write_bag
+    from helpers import break_line, T0
     root = write_asl(tmp_path / 'seq', n_imu=1200)
-    _break(root / 'mav0' / 'imu0' / 'data.csv', 700, f'{T0 + 3_495_000_000},5e38,0,0,0,0,9.8')
+    break_line(root / 'mav0' / 'imu0' / 'data.csv', 700, f'{T0 + 3_495_000_000},5e38,0,0,0,0,9.8')
     for cmd in (['correct', '--model', str(model_file), '--input', str(root), '--output',
                  str(tmp_path / 'o.csv')],
                 ['eval', '--model', str(model_file), '--data', str(tmp_path), '--sequences',

@@ -1,0 +1,90 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The network's geometry without torch: configuration, receptive field, weight layout.
+
+The online runtime (streaming engine, node, bag tools) builds the network from a model
+file's arrays with this alone; :mod:`denoise_imu_ros.learn.model` builds the torch module for
+training and batch evaluation from the same configuration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+BN_EPS = 1e-5  # BatchNorm epsilon (torch's default), also used by the streaming engine
+BLOCK = 4      # modules per hidden block in GyroNet.net: conv, BatchNorm, GELU, dropout
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """Architecture; defaults are the paper's network (77,052 trainable parameters)."""
+
+    in_channels: int = 6                         # gyro xyz (rad/s) + accel xyz (m/s^2)
+    channels: tuple[int, ...] = (16, 32, 64, 128)  # hidden widths, doubling per layer
+    kernels: tuple[int, ...] = (7, 7, 7, 7)      # hidden kernel sizes
+    dilations: tuple[int, ...] = (1, 4, 16, 64)  # cumulative products of [4, 4, 4]
+    dropout: float = 0.1                         # after each hidden block
+    bn_momentum: float = 0.1
+    # sigma_g, rad/s: scales f(u) so that early outputs are small (EuRoC [1, 2, 5] deg/s)
+    gyro_std: tuple[float, float, float] = tuple(math.radians(d) for d in (1.0, 2.0, 5.0))
+    # The paper's "calibrated IMU" baseline: no network, only I + Delta and a bias (12).
+    calibration_only: bool = False
+    members: int = 1                             # ensemble size (networks averaged)
+
+    def __post_init__(self) -> None:
+        """Reject inconsistent layer lists early (config files are user input)."""
+        if not len(self.channels) == len(self.kernels) == len(self.dilations):
+            raise ValueError('channels, kernels and dilations must have the same length')
+        if len(self.gyro_std) != 3 or min(self.gyro_std) <= 0:
+            raise ValueError('gyro_std must be three positive values (rad/s)')
+        if not isinstance(self.members, int) or self.members < 1 or (
+                self.calibration_only and self.members > 1):
+            raise ValueError('members must be a positive integer (1 for calibration_only)')
+
+    @property
+    def receptive_field(self) -> int:
+        """Count the samples one output depends on: the newest plus the left padding."""
+        if self.calibration_only:
+            return 1
+        return 1 + sum(d * (k - 1) for k, d in zip(self.kernels, self.dilations))
+
+    def convolutions(self) -> list[tuple[int, int, int, int, int]]:
+        """(c_in, c_out, kernel, dilation, groups) of every convolution, input to output."""
+        m, convs = self.members, []
+        c_in, groups = self.in_channels, 1  # the first layer reads the shared input
+        for c_out, k, d in zip(self.channels, self.kernels, self.dilations):
+            convs.append((c_in * groups, c_out * m, k, d, groups))
+            c_in, groups = c_out, m
+        convs.append((c_in * m, 3 * m, 1, 1, m))
+        return convs
+
+    def state_shapes(self) -> dict[str, tuple[int, ...]]:
+        """Name and shape of every array of the state dict, as GyroNet names them."""
+        shapes: dict[str, tuple[int, ...]] = {
+            'input_mean': (self.in_channels,), 'input_std': (self.in_channels,),
+            'gyro_std': (3,), 'delta': (3, 3)}
+        if self.calibration_only:
+            return dict(shapes, bias=(3,))
+        convs = self.convolutions()
+        for i, (c_in, c_out, k, _, groups) in enumerate(convs):
+            shapes[f'net.{BLOCK * i}.weight'] = (c_out, c_in // groups, k)
+            shapes[f'net.{BLOCK * i}.bias'] = (c_out,)
+            if i < len(convs) - 1:
+                bn = f'net.{BLOCK * i + 1}.'
+                shapes.update({bn + 'weight': (c_out,), bn + 'bias': (c_out,),
+                               bn + 'running_mean': (c_out,), bn + 'running_var': (c_out,),
+                               bn + 'num_batches_tracked': ()})
+        return shapes

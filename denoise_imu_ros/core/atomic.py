@@ -1,0 +1,54 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Atomic outputs: a file or bag appears complete under its name, or not at all.
+
+A crash, a full disk or bad input half-way through must not leave a half-written bag
+(which then blocks the retry: "exists already") or a truncated CSV or model file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+import os
+from pathlib import Path
+import shutil
+import tempfile
+
+from .errors import OutputError
+
+
+@contextmanager
+def atomic_output(path: str | Path, overwrite: bool = False) -> Iterator[Path]:
+    """
+    Yield a temporary path to write ``path``'s content to; moved into place on success.
+
+    The temporary path is in a hidden folder beside ``path`` (same file system, so the
+    final rename is atomic) and has ``path``'s own name, so a bag's inner files are
+    named as they would be. On any failure nothing is left behind.
+    """
+    path = Path(path)
+    if path.exists() and not (overwrite and path.is_file()):
+        raise OutputError(f'{path}: exists already')
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        scratch = Path(tempfile.mkdtemp(prefix=f'.{path.name}.', dir=path.parent))
+    except OSError as err:
+        raise OutputError(f'{path}: cannot write here ({err.strerror})') from err
+    try:
+        yield scratch / path.name
+        os.replace(scratch / path.name, path)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)

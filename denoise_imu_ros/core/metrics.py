@@ -1,0 +1,205 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Open-loop attitude integration and the paper's error metrics (numpy + scipy).
+
+One index convention everywhere: gyro sample k drives the attitude from stamp k to
+stamp k + 1 (R_{k+1} = R_k Exp(omega_k dt_k)), starting from the ground-truth attitude
+at the first stamp. The training loss uses the same convention.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple, TYPE_CHECKING
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+if TYPE_CHECKING:
+    from .records import Sequence
+
+ROE_DISTANCES_M = (7.0, 21.0, 35.0)
+SCAN_BLOCK = 16  # steps composed per block by integrate (4x faster than one scan)
+
+
+def _prefix_products(q: np.ndarray) -> np.ndarray:
+    """Inclusive ordered products q_0 ... q_k of (M, 4) xyzw quaternions, in place."""
+    shift = 1
+    while shift < len(q):
+        r = Rotation.from_quat(q)
+        q[shift:] = (r[:-shift] * r[shift:]).as_quat()
+        shift *= 2
+    return q
+
+
+def integrate(q0: np.ndarray, gyro: np.ndarray, dt: np.ndarray) -> Rotation:
+    """
+    Attitudes at N stamps from an xyzw start ``q0``, (N-1, 3) rad/s and (N-1,) s.
+
+    The ordered products Exp(w_0 dt_0) ... Exp(w_k dt_k) are formed by vectorised
+    compositions rather than a Python loop: prefix products within blocks of
+    SCAN_BLOCK steps (log2 of it compositions of every step), a prefix scan over the
+    blocks' totals, then one composition of each step with all the blocks before it.
+    """
+    n = len(gyro)
+    q = np.tile([0.0, 0.0, 0.0, 1.0], (-(-n // SCAN_BLOCK) * SCAN_BLOCK, 1))
+    q[:n] = Rotation.from_rotvec(gyro * dt[:, None]).as_quat()
+    q = q.reshape(-1, SCAN_BLOCK, 4)                                # (blocks, SCAN_BLOCK, 4)
+    shift = 1
+    while shift < SCAN_BLOCK:
+        head = Rotation.from_quat(q[:, :-shift].reshape(-1, 4))
+        tail = Rotation.from_quat(q[:, shift:].reshape(-1, 4))
+        q[:, shift:] = (head * tail).as_quat().reshape(len(q), -1, 4)
+        shift *= 2
+    totals = _prefix_products(q[:, -1].copy())                      # (blocks, 4)
+    start = Rotation.from_quat(q0)
+    before = start * Rotation.from_quat(np.concatenate([[[0.0, 0.0, 0.0, 1.0]], totals[:-1]]))
+    steps = Rotation.from_quat(np.repeat(before.as_quat(), SCAN_BLOCK, axis=0)[:n])
+    return Rotation.concatenate([start, steps * Rotation.from_quat(q.reshape(-1, 4)[:n])])
+
+
+def trusted_blocks(gt_valid: np.ndarray, length: int) -> np.ndarray:
+    """Return the starts of the non-overlapping ``length``-sample blocks trusted throughout."""
+    m = (len(gt_valid) - 1) // length
+    if m == 0:
+        return np.zeros(0, dtype=int)
+    ok = gt_valid[:m * length].reshape(m, length).all(1) & gt_valid[length:m * length + 1:length]
+    return np.arange(m)[ok] * length
+
+
+def _block_errors(gt_quat: np.ndarray, starts: np.ndarray, est: Rotation,
+                  length: int) -> np.ndarray:
+    """Return the errors (rotation vectors) of the given blocks of a trajectory."""
+    gt = Rotation.from_quat(gt_quat[np.concatenate([starts, starts + length])])
+    m = len(starts)
+    i, j = starts, starts + length
+    return ((gt[:m].inv() * gt[m:]).inv() * (est[i].inv() * est[j])).as_rotvec().reshape(-1, 3)
+
+
+def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
+                        dt: np.ndarray, length: int, est: Rotation | None = None
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Errors of the gyro's rotation increments over blocks of ``length`` samples.
+
+    Non-overlapping blocks with trusted ground truth at every stamp they span; returns
+    the rotation vectors (M, 3) rad of R_gt_inc^T R_gyro_inc and the blocks' durations
+    (M,) s. ``gyro`` holds one sample per stamp (the last drives nothing); ``est``, when
+    given, is its integration from ``gt_quat[0]`` (callers share one between lengths).
+    """
+    i = trusted_blocks(gt_valid, length)
+    if len(i) == 0:
+        return np.zeros((0, 3)), np.zeros(0)
+    est = integrate(gt_quat[0], gyro[:len(dt)], dt) if est is None else est
+    res = _block_errors(gt_quat, i, est, length)
+    t = np.concatenate([[0.0], np.cumsum(dt)])
+    return res, t[i + length] - t[i]
+
+
+def fit_constant_bias(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
+                      dt: np.ndarray, length: int, est: Rotation | None = None
+                      ) -> np.ndarray | None:
+    """
+    Return the least-squares constant gyro bias (3,) rad/s from ``length``-sample blocks.
+
+    To first order a bias b gives a block the error sum_k Q_k^T b dt_k, Q_k the rotation
+    from sample k + 1 to the block's end: the bias as seen from a turning frame. Dividing
+    the error by the duration instead is right only while the body barely turns within a
+    block. None when no block has trusted ground truth. ``est`` as in
+    :func:`increment_residuals`.
+    """
+    i = trusted_blocks(gt_valid, length)
+    if len(i) == 0:
+        return None
+    est = integrate(gt_quat[0], gyro[:len(dt)], dt) if est is None else est
+    res = _block_errors(gt_quat, i, est, length)
+    k = (i[:, None] + np.arange(length)).ravel()  # every step of the trusted blocks
+    turn = (est[k + 1].inv() * est[np.repeat(i + length, length)]).as_matrix()
+    jac = (np.swapaxes(turn, 1, 2) * dt[k, None, None]).reshape(len(i), length, 3, 3).sum(1)
+    normal = np.einsum('mji,mjk->ik', jac, jac)
+    return np.linalg.solve(normal, np.einsum('mji,mj->i', jac, res))
+
+
+class AttitudeErrors(NamedTuple):
+    """Errors of one estimated trajectory against ground truth, degrees."""
+
+    aoe: float                 # RMS of the 3-D orientation error angle
+    aoe_yaw: float             # RMS of the yaw error (about world z)
+    roe: dict[float, np.ndarray]  # relative orientation errors per distance (m)
+    error_deg: np.ndarray      # (N,) 3-D error angle at each stamp (NaN in GT holes)
+
+    def roe_median(self) -> dict[float, float]:
+        """Median ROE per distance (the paper's figure); NaN if never travelled."""
+        return {d: float(np.median(e)) if len(e) else float('nan')
+                for d, e in self.roe.items()}
+
+
+def error_components(est: Rotation, gt: Rotation) -> tuple[np.ndarray, ...]:
+    """
+    Angle, tilt and yaw (deg, each (N,)) of the world-frame error E = R_est R_gt^T.
+
+    The angle is that of E; the tilt is how far E moves the vertical (what gravity can
+    correct); the yaw is the first angle of E's intrinsic Z-Y-X decomposition, its
+    rotation about the world z axis, in [-180, 180).
+    """
+    err = est * gt.inv()
+    tilt = np.degrees(np.arccos(np.clip(err.as_matrix()[:, 2, 2], -1.0, 1.0)))
+    return np.degrees(err.magnitude()), tilt, np.degrees(err.as_euler('ZYX')[:, 0])
+
+
+def attitude_errors(est: Rotation, gt: Rotation, gt_pos: np.ndarray, valid: np.ndarray,
+                    distances: tuple[float, ...] = ROE_DISTANCES_M) -> AttitudeErrors:
+    """
+    AOE (3-D and yaw) and ROE, skipping stamps where ground truth is not valid.
+
+    Yaw error is the first angle of the intrinsic Z-Y-X decomposition of the world-frame
+    error R_est R_gt^T, i.e. its rotation about the world z axis.
+    """
+    angle, _, yaw = error_components(est, gt)
+    roe = {}
+    travelled = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(gt_pos, axis=0),
+                                                                axis=1))])
+    for d in distances:
+        i = np.arange(len(travelled))
+        j = np.searchsorted(travelled, travelled + d)
+        ok = j < len(travelled)
+        i, j = i[ok], j[ok]
+        ok = valid[i] & valid[j]
+        i, j = i[ok], j[ok]
+        if len(i) == 0:
+            roe[d] = np.zeros(0)
+            continue
+        rel_gt = gt[i].inv() * gt[j]
+        rel_est = est[i].inv() * est[j]
+        roe[d] = np.degrees((rel_gt.inv() * rel_est).magnitude())
+    return AttitudeErrors(
+        aoe=float(np.sqrt(np.mean(angle[valid] ** 2))),
+        aoe_yaw=float(np.sqrt(np.mean(yaw[valid] ** 2))),
+        roe=roe,
+        error_deg=np.where(valid, angle, np.nan))
+
+
+def sequence_errors(seq: Sequence, gyro: np.ndarray,
+                    distances: tuple[float, ...] = ROE_DISTANCES_M
+                    ) -> tuple[Rotation, AttitudeErrors]:
+    """Integrate a gyro (N, 3) over a whole sequence from its first pose; its errors too."""
+    est = integrate(seq.gt_quat[0], gyro[:-1], seq.dt)
+    return est, attitude_errors(est, Rotation.from_quat(seq.gt_quat), seq.gt_pos,
+                                seq.gt_valid, distances)
+
+
+def score(seq: Sequence, gyro: np.ndarray) -> dict[str, float]:
+    """AOE 3-D and yaw (deg) of one method's gyro integrated over a whole sequence."""
+    err = sequence_errors(seq, gyro, distances=())[1]
+    return {'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw}

@@ -1,0 +1,106 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+What the package's readers produce: recordings as read, sequences on the IMU time base.
+
+A :class:`Recording` is what a file holds (IMU and pose streams on their own clocks),
+checked by :func:`check_recording` whichever reader made it (ASL folders or bags, in
+:mod:`denoise_imu_ros.data`); a :class:`Sequence` is the same data on the IMU's time
+base, which every consumer (training, evaluation, correction) uses.
+
+Conventions: stamps are int64 nanoseconds; gyro rad/s, accel m/s^2; quaternions are
+scalar-last ``(x, y, z, w)`` and rotate body (IMU) vectors into the world frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import DatasetError
+from .limits import describe, in_range, stream_rate_hz
+
+
+@dataclass(frozen=True)
+class Recording:
+    """IMU and pose streams as read from a file, each on its own stamps."""
+
+    name: str
+    source: str                 # file or folder it came from, for error messages
+    imu_stamp_ns: np.ndarray    # (N,) int64, strictly increasing
+    imu: np.ndarray             # (N, 6) float64: gyro xyz rad/s, accel xyz m/s^2
+    gt_stamp_ns: np.ndarray     # (M,) int64, strictly increasing
+    gt_quat: np.ndarray         # (M, 4) float64 xyzw, body to world
+    gt_pos: np.ndarray          # (M, 3) float64, m
+
+
+@dataclass(frozen=True)
+class Sequence:
+    """A recording on the IMU time base, cropped to where ground truth exists."""
+
+    name: str
+    stamp_ns: np.ndarray        # (N,) int64
+    imu: np.ndarray             # (N, 6) float64
+    gt_quat: np.ndarray         # (N, 4) float64 xyzw, slerped to the IMU stamps
+    gt_pos: np.ndarray          # (N, 3) float64, linearly interpolated
+    gt_valid: np.ndarray        # (N,) bool: False inside ground-truth holes
+    pose_alignment: dict | None = None  # clock offset and frame rotation applied to poses
+
+    def __len__(self) -> int:
+        """Return the number of IMU samples."""
+        return len(self.stamp_ns)
+
+    @property
+    def dt(self) -> np.ndarray:
+        """(N - 1,) s: sample k drives the attitude from stamp k to stamp k + 1."""
+        return np.diff(self.stamp_ns).astype(np.float64) * 1e-9
+
+    def tail(self, start: int) -> Sequence:
+        """Return the samples from index ``start`` on."""
+        return Sequence(self.name, self.stamp_ns[start:], self.imu[start:],
+                        self.gt_quat[start:], self.gt_pos[start:], self.gt_valid[start:],
+                        self.pose_alignment)
+
+    @property
+    def rate_hz(self) -> float:
+        """IMU sample rate, from the median stamp interval (the one rate policy)."""
+        return stream_rate_hz(self.stamp_ns)
+
+
+def check_recording(rec: Recording, imu_file: object = None, gt_file: object = None) -> None:
+    """Reject what would corrupt training or evaluation: NaN, absurd values, bad stamps."""
+    for what, stamps, values, where in (
+            ('IMU', rec.imu_stamp_ns, rec.imu, imu_file or rec.source),
+            ('ground truth', rec.gt_stamp_ns, np.hstack([rec.gt_quat, rec.gt_pos]),
+             gt_file or rec.source)):
+        bad = np.flatnonzero(~np.isfinite(values).all(axis=1))
+        if len(bad):
+            raise DatasetError(f'{where}: non-finite {what} values in sample {bad[0]} '
+                               f'({len(bad)} such samples)')
+        back = np.flatnonzero(np.diff(stamps) <= 0)
+        if len(back):
+            i = back[0]
+            kind = 'duplicate' if stamps[i + 1] == stamps[i] else 'non-monotonic'
+            raise DatasetError(f'{where}: {kind} {what} stamp at sample {i + 1} '
+                               f'({stamps[i]} then {stamps[i + 1]} ns)')
+    bad = np.flatnonzero(~in_range(rec.imu[:, :3], rec.imu[:, 3:]))
+    if len(bad):
+        raise DatasetError(f'{imu_file or rec.source}: IMU values out of the physical range '
+                           f'({describe()}) in sample {bad[0]}: {rec.imu[bad[0]].tolist()} '
+                           f'({len(bad)} such samples)')
+    norms = np.linalg.norm(rec.gt_quat, axis=1)
+    if np.any(norms < 0.5) or np.any(norms > 1.5):
+        raise DatasetError(f'{gt_file or rec.source}: ground-truth quaternions are not unit '
+                           f'quaternions (norm {norms.min():.3g}..{norms.max():.3g})')

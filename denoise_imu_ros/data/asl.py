@@ -1,0 +1,96 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+ASL folders (EuRoC, TUM-VI): the IMU CSV and the ground-truth CSV of one recording.
+
+Conventions: stamps are int64 nanoseconds; gyro rad/s, accel m/s^2; quaternions are
+scalar-last ``(x, y, z, w)`` and rotate body (IMU) vectors into the world frame.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..core.errors import DatasetError
+from ..core.records import check_recording, Recording
+
+
+def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Read an ASL CSV: int64 ns stamps (column 0) and float64 columns 1..ncols-1.
+
+    Parsed by hand because the stamps (~1.4e18 ns) do not survive a float64 parse, and
+    so that every error names the file and line.
+    """
+    if not path.is_file():
+        raise DatasetError(f'{path}: file not found')
+    stamps: list[int] = []
+    rows: list[list[float]] = []
+    with path.open(encoding='utf-8', errors='strict') as f:
+        lines = _lines(f, path)
+        for lineno, line in enumerate(lines, 1):
+            if line.startswith('#') or not line.strip():
+                continue
+            parts = line.split(',')
+            if len(parts) < ncols:
+                raise DatasetError(
+                    f'{path}:{lineno}: expected {ncols} columns, found {len(parts)}')
+            try:
+                stamps.append(int(parts[0]))
+                rows.append([float(x) for x in parts[1:ncols]])
+            except ValueError:
+                raise DatasetError(
+                    f'{path}:{lineno}: unparsable row {line.strip()[:60]!r}') from None
+    if not stamps:
+        raise DatasetError(f'{path}: no data rows')
+    return np.array(stamps, dtype=np.int64), np.array(rows, dtype=np.float64)
+
+
+def _lines(f: object, path: Path) -> list[str]:
+    """All lines of a text file; a binary or non-UTF-8 one is a one-line error."""
+    try:
+        return f.readlines()
+    except UnicodeDecodeError as err:
+        raise DatasetError(f'{path}: not a text CSV file (byte {err.start} is not UTF-8)'
+                           ) from err
+
+
+def read_asl(path: str | Path, with_gt: bool = True) -> Recording:
+    """
+    Read an ASL folder: EuRoC (imu0 + state_groundtruth_estimate0) or TUM-VI (mocap0).
+
+    With ``with_gt=False`` only the IMU is read (the ground-truth arrays are empty).
+    """
+    root = Path(path)
+    mav = root / 'mav0'
+    if not mav.is_dir():
+        raise DatasetError(f'{root}: not an ASL sequence folder (no mav0/ inside)')
+    imu_stamp, imu = read_csv(mav / 'imu0' / 'data.csv', 7)
+    if not with_gt:
+        rec = Recording(root.name, str(root), imu_stamp, imu, np.zeros(0, np.int64),
+                        np.zeros((0, 4)), np.zeros((0, 3)))
+        check_recording(rec, imu_file=mav / 'imu0' / 'data.csv')
+        return rec
+    for gt_dir in ('state_groundtruth_estimate0', 'mocap0'):
+        if (mav / gt_dir).is_dir():
+            break
+    else:
+        raise DatasetError(f'{mav}: no ground truth (state_groundtruth_estimate0/ or mocap0/)')
+    gt_stamp, gt = read_csv(mav / gt_dir / 'data.csv', 8)  # t, p xyz, q wxyz
+    rec = Recording(name=root.name, source=str(root), imu_stamp_ns=imu_stamp, imu=imu,
+                    gt_stamp_ns=gt_stamp, gt_quat=gt[:, [4, 5, 6, 3]], gt_pos=gt[:, :3])
+    check_recording(rec, imu_file=mav / 'imu0' / 'data.csv', gt_file=mav / gt_dir / 'data.csv')
+    return rec

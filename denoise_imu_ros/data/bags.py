@@ -1,0 +1,192 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+ROS 1 / ROS 2 bags through ``rosbags``: read a recording, write one.
+
+Reading takes an IMU topic (``sensor_msgs/Imu``) and a pose topic
+(``geometry_msgs/PoseStamped``, ``geometry_msgs/TransformStamped`` or
+``nav_msgs/Odometry``); either is auto-detected when it is the only topic of its kind.
+Message header stamps are used, not the bag's receive times.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+import struct
+from typing import Any
+
+import numpy as np
+from rosbags.highlevel import AnyReader, AnyReaderError
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer, WriterError
+from rosbags.typesys import get_typestore, Stores
+
+from ..core import msgs
+from ..core.atomic import atomic_output
+from ..core.errors import DatasetError
+from ..core.msgs import stamp_ns
+from ..core.records import check_recording, Recording
+
+IMU_TYPE = 'sensor_msgs/msg/Imu'
+POSE_TYPES = ('geometry_msgs/msg/PoseStamped', 'geometry_msgs/msg/TransformStamped',
+              'nav_msgs/msg/Odometry')
+# Topic names `denoise-imu convert` writes (EuRoC's bags also call the IMU /imu0).
+IMU_TOPIC = '/imu0'
+POSE_TOPIC = '/groundtruth/pose'
+
+TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+BAG_TYPES = msgs.bag_types(TYPESTORE)
+
+
+def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
+    """(position, orientation) of any supported pose message."""
+    if msgtype == 'geometry_msgs/msg/TransformStamped':
+        return msg.transform.translation, msg.transform.rotation
+    if msgtype == 'nav_msgs/msg/Odometry':
+        return msg.pose.pose.position, msg.pose.pose.orientation
+    return msg.pose.position, msg.pose.orientation
+
+
+def pick_connections(reader: AnyReader, topic: str | None, types: tuple[str, ...],
+                     what: str, path: Path) -> Any:
+    """Return the connections of ``topic``, checked against ``types``, or the only candidate."""
+    conns = reader.connections
+    listing = ', '.join(sorted({f'{c.topic} [{c.msgtype}]' for c in conns})) or 'none'
+    if topic is None:
+        cands = {c.topic for c in conns if c.msgtype in types}
+        if len(cands) != 1:
+            raise DatasetError(f'{path}: {len(cands)} candidate {what} topics, pass the '
+                               f'topic name explicitly (topics: {listing})')
+        topic = cands.pop()
+    norm = '/' + topic.lstrip('/')  # 'imu0' and '/imu0' name the same topic
+    chosen = [c for c in conns if '/' + c.topic.lstrip('/') == norm]
+    if not chosen:
+        raise DatasetError(f'{path}: no topic {topic!r} (topics: {listing})')
+    if chosen[0].msgtype not in types:
+        raise DatasetError(f'{path}: topic {topic!r} has type {chosen[0].msgtype}, '
+                           f'expected {" or ".join(types)}')
+    return chosen
+
+
+# What rosbags' parsers raise on a file that is not a bag (a garbage .bag gives
+# UnicodeDecodeError in the ROS 1 reader, for one).
+CORRUPT = (AnyReaderError, UnicodeDecodeError, ValueError, EOFError, IndexError, KeyError,
+           struct.error)
+
+
+@contextmanager
+def open_bag(path: str | Path) -> Iterator[AnyReader]:
+    """Open a ROS 1 or ROS 2 bag for reading; a missing or corrupt one is a DatasetError."""
+    path = Path(path)
+    if not path.exists():
+        raise DatasetError(f'{path}: bag not found')
+    reader = AnyReader([path], default_typestore=TYPESTORE)
+    try:
+        reader.open()
+    except CORRUPT as err:
+        raise DatasetError(f'{path}: not a readable bag ({type(err).__name__}: '
+                           f'{" ".join(str(err).split())[:120]})') from err
+    try:
+        yield reader
+    finally:
+        reader.close()
+
+
+def read_bag(path: str | Path, imu_topic: str | None = None,
+             pose_topic: str | None = None, with_pose: bool = True) -> Recording:
+    """
+    Read IMU and ground-truth pose from a ROS 1 or ROS 2 (sqlite3/mcap) bag.
+
+    With ``with_pose=False`` only the IMU is read (the ground-truth arrays are empty).
+    """
+    path = Path(path)
+    try:
+        with open_bag(path) as reader:
+            imu_conns = pick_connections(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
+            pose_conns = (pick_connections(reader, pose_topic, POSE_TYPES, 'pose', path)
+                          if with_pose else [])
+            imu_t, imu, gt_t, gt = [], [], [], []
+            for conn, _, raw in reader.messages(connections=imu_conns + pose_conns):
+                msg = reader.deserialize(raw, conn.msgtype)
+                if conn.msgtype == IMU_TYPE:
+                    w, a = msg.angular_velocity, msg.linear_acceleration
+                    imu_t.append(stamp_ns(msg.header))
+                    imu.append((w.x, w.y, w.z, a.x, a.y, a.z))
+                else:
+                    p, q = _pose(msg, conn.msgtype)
+                    gt_t.append(stamp_ns(msg.header))
+                    gt.append((q.x, q.y, q.z, q.w, p.x, p.y, p.z))
+    except CORRUPT as err:
+        raise DatasetError(f'{path}: cannot read bag: {" ".join(str(err).split())}') from err
+    if not imu or (with_pose and not gt):
+        raise DatasetError(f'{path}: {len(imu)} IMU and {len(gt)} pose messages, need both')
+    gt_arr = np.array(gt, dtype=np.float64).reshape(-1, 7)
+    name = path.stem if path.is_file() else path.name
+    rec = Recording(name=name, source=str(path),
+                    imu_stamp_ns=np.array(imu_t, dtype=np.int64),
+                    imu=np.array(imu, dtype=np.float64),
+                    gt_stamp_ns=np.array(gt_t, dtype=np.int64),
+                    gt_quat=gt_arr[:, :4], gt_pos=gt_arr[:, 4:])
+    check_recording(rec)
+    return rec
+
+
+def imu_message(stamp: int, gyro: np.ndarray, accel: np.ndarray,
+                frame_id: str = 'imu0') -> Any:
+    """Build a rosbags ``sensor_msgs/Imu`` with no orientation (covariance[0] = -1)."""
+    return msgs.imu(BAG_TYPES, msgs.header(BAG_TYPES, stamp, frame_id), gyro, accel)
+
+
+def write_bag(rec: Recording, out: str | Path, storage: str = 'mcap',
+              compress: bool = False, imu_topic: str = IMU_TOPIC,
+              pose_topic: str = POSE_TOPIC) -> None:
+    """
+    Write a recording as a ROS 2 bag: IMU (``sensor_msgs/Imu``) and pose (``PoseStamped``).
+
+    The default topic names are EuRoC's; a robot's (``/imu/data_raw``, ``/mocap/pose``)
+    make bags like the ones users record. ``compress`` uses zstd (inside the MCAP
+    chunks, or per message for sqlite3).
+    """
+    plugin = {'mcap': StoragePlugin.MCAP, 'sqlite3': StoragePlugin.SQLITE3}.get(storage)
+    if plugin is None:
+        raise DatasetError(f'unknown bag storage {storage!r} (mcap or sqlite3)')
+    with atomic_output(out) as tmp:
+        _write_bag(rec, tmp, plugin, compress, imu_topic, pose_topic)
+
+
+def _write_bag(rec: Recording, out: Path, plugin: StoragePlugin, compress: bool,
+               imu_topic: str, pose_topic: str) -> None:
+    t = TYPESTORE.types
+    try:
+        writer = Writer(out, version=9, storage_plugin=plugin)
+        if compress:
+            writer.set_compression(
+                CompressionMode.STORAGE if plugin == StoragePlugin.MCAP
+                else CompressionMode.MESSAGE, CompressionFormat.ZSTD)
+        with writer:
+            imu_conn = writer.add_connection(imu_topic, IMU_TYPE, typestore=TYPESTORE)
+            pose_conn = writer.add_connection(pose_topic, POSE_TYPES[0], typestore=TYPESTORE)
+            for stamp, row in zip(rec.imu_stamp_ns, rec.imu):
+                msg = imu_message(stamp, row[:3], row[3:])
+                writer.write(imu_conn, int(stamp), TYPESTORE.serialize_cdr(msg, IMU_TYPE))
+            for stamp, q, p in zip(rec.gt_stamp_ns, rec.gt_quat, rec.gt_pos):
+                msg = t[POSE_TYPES[0]](header=msgs.header(BAG_TYPES, stamp, 'world'), pose=t[
+                    'geometry_msgs/msg/Pose'](
+                    position=t['geometry_msgs/msg/Point'](x=p[0], y=p[1], z=p[2]),
+                    orientation=t['geometry_msgs/msg/Quaternion'](
+                        x=q[0], y=q[1], z=q[2], w=q[3])))
+                writer.write(pose_conn, int(stamp), TYPESTORE.serialize_cdr(msg, POSE_TYPES[0]))
+    except (WriterError, FileExistsError) as err:
+        raise DatasetError(f'{out.name}: cannot write bag: {err}') from err

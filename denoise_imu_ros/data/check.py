@@ -1,0 +1,276 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Data quality before training (``denoise-imu check-data``): clocks, frames, label noise.
+
+The loss compares gyro increments with ground-truth increments over j samples. If the
+ground truth jitters (mocap) or is interpolated between sparse poses (VIO at 10-20 Hz),
+the short increments measure that noise rather than the gyro's error. The label-noise
+profile integrates the gyro with one constant bias removed (fitted to the ground truth)
+and reports the RMS increment residual per length j; divided by the increment's
+duration it is the gyro error (deg/s) the noise alone would stand for. Above
+NOISE_RATE_LIMIT_DEG_S, more than the corrections the method makes (at most ~1 deg/s,
+the paper), an increment length is noise-dominated.
+
+Supervision: noise that averages out is not the only way poses mislead the loss. A
+constant bias fitted on the poses' own increments (the paper's lengths and ~1 s) is
+removed and the whole recording integrated: if that never lowers the recording's own
+attitude error, the increments' disagreement with the gyro is the poses' error, and a
+network trained to remove it will not beat plain integration.
+
+Clock offset and frame rotation: :mod:`denoise_imu_ros.data.pose_alignment`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .pose_alignment import estimate_pose_alignment, MAX_OFFSET_S
+from .timebase import onto_imu_stamps
+from ..core.architecture import ModelConfig
+from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residuals, integrate,
+                            sequence_errors)
+from ..core.records import Recording, Sequence
+
+LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
+BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)
+NOISE_RATE_LIMIT_DEG_S = 1.0
+MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
+MIN_DURATION_S = 30.0      # shorter recordings cannot train (window, tail, warm-up)
+OFFSET_TOLERANCE_S = 1e-3  # above, and SIGNIFICANCE standard errors: apply the offset
+ROTATION_TOLERANCE_DEG = 0.2  # above, and SIGNIFICANCE standard errors: apply the rotation
+SIGNIFICANCE = 2.0
+OFFSET_SPREAD_S = 4e-3     # quarters spread wider (clean ones: 3.2 ms at most): drift
+PAPER_INCREMENT_S = 0.08  # the paper's 16 samples at 200 Hz (and twice it, 32)
+SUPERVISION_LONG_S = 1.0  # the longest increment the supervision check also fits on
+
+
+# what check() estimates beyond rates and holes (None for a recording too short for it)
+ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'time_offset_s',
+             'time_offset_std_s', 'time_offset_quarters_s', 'time_offset_at_search_limit',
+             'imu_from_pose_rotation_xyzw', 'imu_from_pose_rotation_deg',
+             'imu_from_pose_rotation_std_deg', 'gyro_bias_vs_pose_deg_s',
+             'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
+             'rate_window_s', 'paper_increments', 'shortest_clean_increment', 'label_noise',
+             'supervision')
+
+
+def paper_increments(rate_hz: float) -> tuple[int, int]:
+    """
+    Return the paper's increments at this rate: the power of two nearest 0.08 s, and twice it.
+
+    16/32 samples at 200 Hz, 8/16 at 100 Hz, 64/128 at 1 kHz (0.064 s: the loss needs
+    powers of two).
+    """
+    first = 2 ** max(0, round(math.log2(PAPER_INCREMENT_S * rate_hz)))
+    return first, 2 * first
+
+
+def label_noise(seq: Sequence) -> dict[str, Any]:
+    """Constant gyro bias against the ground truth, and the increment residual per length."""
+    gyro = seq.imu[:, :3]
+    dt = float(np.mean(seq.dt))
+    bias = fit_constant_bias(seq.gt_quat, seq.gt_valid, gyro, seq.dt, BIAS_FIT_LENGTH)
+    if bias is None:  # no trusted block that long: the profile shows the raw residual
+        bias = np.zeros(3)
+    profile = {}
+    est = integrate(seq.gt_quat[0], gyro[:-1] - bias, seq.dt)  # one for every length
+    for j in LENGTHS:
+        if (len(seq) - 1) // j < 2:
+            break
+        res, _ = increment_residuals(seq.gt_quat, seq.gt_valid, gyro - bias, seq.dt, j, est)
+        if len(res) == 0:
+            continue
+        rms = float(np.sqrt(np.mean(res ** 2)))  # per axis
+        profile[j] = {'residual_mrad': 1e3 * rms,
+                      'noise_rate_deg_s': math.degrees(rms / (j * dt))}
+    noisy = [j for j, p in profile.items() if p['noise_rate_deg_s'] > NOISE_RATE_LIMIT_DEG_S]
+    return {'gyro_bias_deg_s': np.degrees(bias).tolist(), 'increments': profile,
+            'noise_dominated_increments': noisy}
+
+
+def supervision(seq: Sequence, lengths: tuple[int, ...]) -> dict[str, Any]:
+    """
+    Whether the poses can supervise a correction of this gyro, at each increment length.
+
+    The smallest correction there is: one constant bias, fitted on the recording's own
+    j-sample increments (as the loss sees them). If removing it does not lower the
+    recording's own attitude error (AOE over the whole recording, from the first pose),
+    what the increments say about the gyro is the poses' error, not the gyro's; a
+    network trained on them has nothing right to learn, on this recording or another.
+    """
+    gyro = seq.imu[:, :3]
+
+    def aoe(g: np.ndarray) -> float:
+        return sequence_errors(seq, g, distances=())[1].aoe
+
+    est = integrate(seq.gt_quat[0], gyro[:-1], seq.dt)  # plain integration, shared
+    plain = attitude_errors(est, Rotation.from_quat(seq.gt_quat), seq.gt_pos, seq.gt_valid,
+                            distances=()).aoe
+    fits = {}
+    for j in lengths:
+        bias = fit_constant_bias(seq.gt_quat, seq.gt_valid, gyro, seq.dt, j, est)
+        if bias is not None:
+            fits[j] = {'bias_deg_s': np.degrees(bias).tolist(), 'aoe_deg': aoe(gyro - bias)}
+    best = min(fits, key=lambda j: fits[j]['aoe_deg'], default=None)
+    helps = best is not None and fits[best]['aoe_deg'] < plain
+    after = '/'.join(f'{f["aoe_deg"]:.2f}' for f in fits.values())
+    tried = ', '.join(map(str, fits))
+    if not fits:
+        summary = (f'no increment of {", ".join(map(str, lengths))} samples has trusted poses '
+                   'at every stamp: nothing supervises a correction')
+    elif helps:
+        summary = (f"a constant gyro bias fitted on the poses' own {best}-sample increments "
+                   f"lowers this recording's attitude error from {plain:.2f} to "
+                   f'{fits[best]["aoe_deg"]:.2f} deg (lengths {tried}: {after})')
+    else:
+        summary = ("a constant gyro bias fitted on the poses' own increments does not lower "
+                   f"this recording's attitude error at any length tried ({tried} samples: "
+                   f'{plain:.2f} -> {after} deg): what the increments say about the gyro is '
+                   "the poses' error, so a network trained on them is not expected to beat "
+                   'plain integration')
+    return {'aoe_plain_deg': plain, 'fits': fits, 'helps': helps, 'summary': summary}
+
+
+def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
+    """
+    Everything check-data reports on one recording, with a verdict and its reasons.
+
+    ``usable`` is ``yes``, ``after alignment`` (the clock offset or the frame rotation
+    exceed OFFSET_TOLERANCE_S / ROTATION_TOLERANCE_DEG and twice their standard error)
+    or ``no``; a clock offset that is not constant along the recording is a reason too.
+    """
+    seq = onto_imu_stamps(rec)
+    imu_dt = np.diff(seq.stamp_ns) * 1e-9
+    gt_dt = np.diff(rec.gt_stamp_ns) * 1e-9
+    holes = ~seq.gt_valid
+    starts = np.flatnonzero(np.diff(np.r_[0, holes.astype(np.int8)]) == 1)
+    ends = np.flatnonzero(np.diff(np.r_[holes.astype(np.int8), 0]) == -1)
+    longest = float(max(((seq.stamp_ns[e] - seq.stamp_ns[max(s - 1, 0)]) * 1e-9
+                         for s, e in zip(starts, ends)), default=0.0))
+    report = {'name': seq.name, 'imu_rate_hz': seq.rate_hz,
+              'imu_stamp_jitter_ms': 1e3 * float(imu_dt.std()),
+              'pose_rate_hz': 1.0 / float(np.median(gt_dt)),
+              'pose_holes': len(starts), 'pose_longest_hole_s': longest,
+              'pose_hole_fraction': float(holes.mean()),
+              'duration_s': float(imu_dt.sum())}
+    field = ModelConfig().receptive_field
+    if len(seq) < field:  # too little for any estimate below, and for the network
+        report.update(dict.fromkeys(ESTIMATES), usable='no',
+                      verdict='not usable for training', reasons=[
+                          f'too short: {len(seq)} IMU samples with poses '
+                          f'({report["duration_s"]:.2f} s), fewer than the network\'s '
+                          f'receptive field ({field} samples): nothing to estimate or train'])
+        return report
+    report.update(label_noise(seq))
+    report.update(estimate_pose_alignment(rec, max_offset_s))
+    noisy = report['noise_dominated_increments']
+    paper = paper_increments(seq.rate_hz)
+    report['paper_increments'] = list(paper)
+    clean = [j for j in report['increments'] if j >= paper[0] and j not in noisy]
+    report['shortest_clean_increment'] = clean[0] if clean else None
+    short = [j for j in paper if j in noisy]
+    if not short:
+        report['label_noise'] = (f"the paper's {paper[0]}- and {paper[1]}-sample increments "
+                                 f'(0.08/0.16 s at {seq.rate_hz:.0f} Hz) are not dominated by '
+                                 'ground-truth noise')
+    else:
+        report['label_noise'] = (
+            f'increments of {" and ".join(map(str, short))} samples are dominated by '
+            'ground-truth noise' + (f'; from {clean[0]} samples on they are not'
+                                    if clean else '; so are all up to 512 samples'))
+    long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
+    report['supervision'] = supervision(seq, (*paper, long))
+    reasons = []
+    if report['duration_s'] < MIN_DURATION_S:
+        reasons.append(f'too short: {report["duration_s"]:.1f} s of IMU with poses, training '
+                       f'needs {MIN_DURATION_S:g} s')
+    motion = float(np.sqrt(np.mean(np.square(report['excitation_rms_deg_s']))))
+    if report['time_offset_at_search_limit'] or report['rate_residual_rms_deg_s'] > 0.5 * motion:
+        reasons.append(
+            f'the poses do not follow the gyro at any clock offset within +-{max_offset_s:g} s '
+            f'(rate residual {report["rate_residual_rms_deg_s"]:.1f} deg/s RMS against '
+            f'{motion:.1f} deg/s of motion): the offset is beyond the search range, or the '
+            'poses are not of this IMU')
+    for axis, rms in zip('xyz', report['excitation_rms_deg_s']):
+        if rms < MIN_EXCITATION_DEG_S:
+            reasons.append(f'no rotation about the IMU {axis} axis ({rms:.2f} deg/s RMS)')
+    if reasons:
+        report['usable'], report['reasons'] = 'no', reasons
+    elif _significant(report['time_offset_s'], report['time_offset_std_s'],
+                      OFFSET_TOLERANCE_S) or _significant(
+            report['imu_from_pose_rotation_deg'], report['imu_from_pose_rotation_std_deg'],
+            ROTATION_TOLERANCE_DEG):
+        report['usable'] = 'after alignment'
+        report['reasons'] = [
+            f'poses {1e3 * report["time_offset_s"]:+.1f} ms off the IMU clock and in a frame '
+            f'{report["imu_from_pose_rotation_deg"]:.2f} deg from the IMU\'s: apply both '
+            'before training']
+    else:
+        report['usable'], report['reasons'] = 'yes', []
+    quarters = report['time_offset_quarters_s']
+    if max(quarters) - min(quarters) > OFFSET_SPREAD_S:
+        report['reasons'].append(
+            'the clock offset is not constant: '
+            f'{", ".join(f"{1e3 * q:+.1f}" for q in quarters)} ms on the four quarters of the '
+            'recording (pose latency varies, or a clock drifts); one offset cannot fix that')
+    if not report['supervision']['helps']:
+        report['reasons'].append(report['supervision']['summary'])
+    report['verdict'] = {'yes': 'usable for training', 'after alignment':
+                         'usable for training with alignment applied',
+                         'no': 'not usable for training'}[report['usable']]
+    return report
+
+
+def _significant(value: float, std: float, tolerance: float) -> bool:
+    """Whether an estimate is both beyond the tolerance and clear of its own noise."""
+    return abs(value) > tolerance and abs(value) > SIGNIFICANCE * std
+
+
+def markdown(report: dict[str, Any]) -> str:
+    """Human-readable report of :func:`check`."""
+    r = report
+    lines = [f'{r["name"]}: {r["duration_s"]:.1f} s',
+             f'  IMU {r["imu_rate_hz"]:.2f} Hz, stamp jitter {r["imu_stamp_jitter_ms"]:.3f} ms',
+             f'  poses {r["pose_rate_hz"]:.1f} Hz, {r["pose_holes"]} holes (longest '
+             f'{r["pose_longest_hole_s"]:.2f} s, {100 * r["pose_hole_fraction"]:.1f} % of '
+             'IMU stamps)']
+    if r['time_offset_s'] is None:  # too short for any estimate
+        lines.append(f'  verdict: {r["verdict"]}: ' + '; '.join(r['reasons']))
+        return '\n'.join(lines) + '\n'
+    rot = Rotation.from_quat(r['imu_from_pose_rotation_xyzw']).as_rotvec(degrees=True)
+    lines += [f'  clock offset (t_imu = t_pose + offset): {1e3 * r["time_offset_s"]:+.2f} '
+              f'+- {1e3 * r["time_offset_std_s"]:.2f} ms',
+              f'  rotation pose body -> IMU: {r["imu_from_pose_rotation_deg"]:.3f} +- '
+              f'{r["imu_from_pose_rotation_std_deg"]:.3f} deg (rotation vector '
+              + ', '.join(f'{v:+.3f}' for v in rot) + ' deg)',
+              '  gyro bias against the poses (deg/s): '
+              + ', '.join(f'{b:+.3f}' for b in r['gyro_bias_vs_pose_deg_s']),
+              '  gyro scale error (%): '
+              + ', '.join('-' if v is None else f'{v:+.3f}'
+                          for v in r['gyro_scale_error_percent']),
+              '  excitation, RMS rate per IMU axis (deg/s): '
+              + ', '.join(f'{v:.1f}' for v in r['excitation_rms_deg_s']),
+              '  increment residual after a constant bias (samples: mrad per axis, as deg/s):']
+    lines += [f'    {j:4d}: {p["residual_mrad"]:7.3f}  {p["noise_rate_deg_s"]:7.3f}'
+              for j, p in r['increments'].items()]
+    lines.append(f'  label noise: {r["label_noise"]}')
+    lines.append(f'  supervision: {r["supervision"]["summary"]}')
+    lines.append(f'  verdict: {r["verdict"]}' + (': ' + '; '.join(r['reasons'])
+                                                 if r['reasons'] else ''))
+    return '\n'.join(lines) + '\n'

@@ -1,0 +1,84 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Read a recording from an ASL folder or a bag, and put it on the IMU time base.
+
+Every command takes either source; the reader is chosen by the path
+(:func:`is_bag`), the topics are auto-detected when they are the only ones of their kind.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from .asl import read_asl
+from .bags import read_bag
+from .pose_alignment import apply_pose_alignment, estimate_pose_alignment
+from .timebase import onto_imu_stamps
+from ..core.errors import DatasetError
+from ..core.records import Recording, Sequence
+
+
+def is_bag(path: str | Path) -> bool:
+    """ROS 1 .bag, ROS 2 .mcap/.db3 file, or a ROS 2 bag folder (metadata.yaml)."""
+    p = Path(path)
+    return p.suffix in ('.bag', '.mcap', '.db3') or (p / 'metadata.yaml').is_file()
+
+
+def load_imu(path: str | Path, imu_topic: str | None = None) -> Recording:
+    """IMU stream only (no ground truth needed) from an ASL folder or a bag."""
+    if is_bag(path):
+        return read_bag(path, imu_topic=imu_topic, with_pose=False)
+    if not Path(path).exists():
+        raise DatasetError(f'{path}: no such sequence folder or bag')
+    return read_asl(path, with_gt=False)
+
+
+def load_recording(path: str | Path, imu_topic: str | None = None,
+                   pose_topic: str | None = None) -> Recording:
+    """Read an ASL folder or a bag (IMU and poses); topics are auto-detected when None."""
+    if is_bag(path):
+        return read_bag(path, imu_topic=imu_topic, pose_topic=pose_topic)
+    if not Path(path).exists():
+        raise DatasetError(f'{path}: no such sequence folder or bag')
+    return read_asl(path)
+
+
+def load_sequence(path: str | Path, imu_topic: str | None = None,
+                  pose_topic: str | None = None,
+                  max_gt_gap_s: float | None = None,
+                  min_samples: int = 1, align_poses: str | dict = 'none') -> Sequence:
+    """
+    Read an ASL folder or a bag and align it; topics are auto-detected when None.
+
+    ``align_poses``: ``none``, ``auto`` (clock offset and frame rotation estimated as
+    ``check-data`` does) or ``{time_offset_s, imu_from_pose_rotation_xyzw}``; what was
+    applied is kept in :attr:`Sequence.pose_alignment`.
+    """
+    rec = load_recording(path, imu_topic, pose_topic)
+    used = None
+    if align_poses == 'auto':
+        found = estimate_pose_alignment(rec)
+        used = {k: found[k] for k in ('time_offset_s', 'time_offset_std_s',
+                                      'imu_from_pose_rotation_xyzw',
+                                      'imu_from_pose_rotation_std_deg')}
+    elif isinstance(align_poses, dict):
+        used = dict(align_poses)
+    elif align_poses != 'none':
+        raise DatasetError(f'align must be none, auto or a mapping, not {align_poses!r}')
+    if used is not None:
+        rec = apply_pose_alignment(rec, used['time_offset_s'], used['imu_from_pose_rotation_xyzw'])
+    seq = onto_imu_stamps(rec, max_gt_gap_s=max_gt_gap_s, min_samples=min_samples)
+    return dataclasses.replace(seq, pose_alignment=used)

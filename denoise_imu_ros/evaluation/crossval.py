@@ -1,0 +1,117 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Cross-recording validation (``denoise-imu crossval``): does a recipe hold on new days.
+
+The validation tails come from the training recordings, so they cannot say how a model
+does on a recording it never saw (another bias, another temperature). Here the recipe's
+recordings are split into folds by recording; each fold trains the network and the
+12-parameter calibrated-IMU baseline on the other recordings and scores the held-out
+ones whole (AOE from the ground truth at their first stamp), against plain integration
+of the input gyro too. The verdict says which of the three to deploy.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+import sys
+from typing import Any
+
+import numpy as np
+
+from .reports import CROSSVAL_METHODS
+from ..core.errors import TrainingError
+from ..core.metrics import score
+from ..data.load import load_sequence
+from ..learn.config import load_config
+from ..learn.model import correct_gyro
+from ..learn.train import train
+
+
+def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:
+    """Held-out groups, round-robin over the recipe's list; None = leave one out."""
+    k = len(recordings) if k is None else k
+    if not 2 <= k <= len(recordings):
+        raise TrainingError(f'folds must be between 2 and {len(recordings)} (one per '
+                            f'recording of the recipe), got {k}')
+    return [recordings[i::k] for i in range(k)]
+
+
+def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
+             progress: bool = True, **overrides: Any) -> dict[str, Any]:
+    """
+    Train and score every fold of the recipe at ``config``; return the report.
+
+    ``overrides`` are recipe keys (seed, steps, workers, data). With ``out``, each fold's
+    two models are written to ``out/fold<i>/`` and the report to ``out/crossval.json``.
+    """
+    recipe = load_config(config, **overrides)
+    per_recording: dict[str, dict[str, dict[str, float]]] = {}
+    fold_list = folds(recipe.sequences, k)
+    for i, held_out in enumerate(fold_list):
+        train_on = [s for s in recipe.sequences if s not in held_out]
+        print(f'fold {i + 1}/{len(fold_list)}: training on {", ".join(train_on)}',
+              file=sys.stderr)
+        cfg = load_config(config, **overrides, sequences=train_on)
+        net = train(cfg, progress=progress)
+        calib = train(load_config(config, **overrides, sequences=train_on,
+                                  calibration_only=True), progress=False)
+        if out is not None:
+            net.save(out / f'fold{i}' / 'network.safetensors')
+            calib.save(out / f'fold{i}' / 'calibrated.safetensors')
+        for name in held_out:
+            seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
+                                cfg.max_gt_gap_s, min_samples=net.model.receptive_field,
+                                align_poses=cfg.align)
+            gyros = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib.model, seq.imu),
+                     'network': correct_gyro(net.model, seq.imu)}
+            per_recording[name] = {m: score(seq, g) for m, g in gyros.items()}
+    report = summarize(per_recording)
+    report.update(recipe=str(config), folds=fold_list, seed=recipe.seed, steps=recipe.steps)
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / 'crossval.json').write_text(json.dumps(report, indent=2))
+    return report
+
+
+def summarize(per_recording: dict[str, dict[str, dict[str, float]]]) -> dict[str, Any]:
+    """Means per method and the verdict, from AOE figures per held-out recording."""
+    mean = {m: {key: float(np.mean([r[m][key] for r in per_recording.values()]))
+                for key in ('aoe_deg', 'aoe_yaw_deg')} for m in CROSSVAL_METHODS}
+    deploy, line = verdict(per_recording, mean)
+    return {'recordings': per_recording, 'mean': mean, 'deploy': deploy, 'verdict': line}
+
+
+def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
+            mean: dict[str, dict[str, float]]) -> tuple[str, str]:
+    """
+    Return what to deploy (``network``, ``calibration`` or ``none``) and the verdict line.
+
+    The network only if it beats the baseline on most recordings and on average. The
+    baseline is the better of the calibrated IMU and plain integration on average, so a
+    calibration that hurts new recordings (an already calibrated IMU) is not the bar.
+    """
+    base = min(('calibrated', 'raw'), key=lambda m: mean[m]['aoe_deg'])
+    label = {'calibrated': 'the calibrated IMU', 'raw': 'plain integration'}[base]
+    n = len(per_recording)
+    wins = sum(r['network']['aoe_deg'] < r[base]['aoe_deg'] for r in per_recording.values())
+    gain = 100 * (1 - mean['network']['aoe_deg'] / mean[base]['aoe_deg'])
+    if wins > n / 2 and gain > 0:
+        return 'network', (f'the network beats {label} on {wins} of {n} unseen recordings, '
+                           f'by {gain:.0f} % in mean AOE: deploy the network')
+    deploy = 'calibration' if base == 'calibrated' else 'none'
+    return deploy, (f'the network does not beat {label} on unseen recordings ({wins} of {n}, '
+                    f'{gain:+.0f} % in mean AOE): deploy '
+                    + ('the calibration' if deploy == 'calibration' else 'no correction'))

@@ -1,0 +1,57 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""The Markdown tables of ``eval`` and ``crossval``: AOE per recording and method."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..core.metrics import ROE_DISTANCES_M
+
+CROSSVAL_METHODS = ('raw', 'calibrated', 'network')
+
+
+def eval_table(results: dict[str, Any], average: dict[str, Any]) -> str:
+    """AOE 3-D / yaw (deg) per sequence and method, plus median ROE at 7/21/35 m."""
+    methods = list(average)
+    head = '| method | ' + ' | '.join(results) + ' | average |\n'
+    lines = [head, '|---' * (len(results) + 2) + '|\n']
+    for m in methods:
+        cells = [f'{results[s][m]["aoe_deg"]:.2f}/{results[s][m]["aoe_yaw_deg"]:.2f}'
+                 for s in results]
+        avg = f'**{average[m]["aoe_deg"]:.2f}/{average[m]["aoe_yaw_deg"]:.2f}**'
+        lines.append(f'| {m} | ' + ' | '.join(cells) + f' | {avg} |\n')
+    lines.append('\nAOE 3-D / yaw in degrees. Median ROE (deg) at '
+                 + '/'.join(f'{d:g}' for d in ROE_DISTANCES_M) + ' m:\n\n')
+    for m in methods:
+        cells = ['/'.join(f'{v:.2f}' for v in results[s][m]['roe_median_deg'].values())
+                 for s in results]
+        lines.append(f'- {m}: ' + ', '.join(f'{s} {c}' for s, c in zip(results, cells)) + '\n')
+    return ''.join(lines)
+
+
+def crossval_table(report: dict[str, Any]) -> str:
+    """AOE 3-D / yaw (deg) of each method per held-out recording, the mean, the verdict."""
+    names = list(report['recordings'])
+    lines = ['| method | ' + ' | '.join(names) + ' | mean |\n',
+             '|---' * (len(names) + 2) + '|\n']
+    for m in CROSSVAL_METHODS:
+        cells = [f'{report["recordings"][s][m]["aoe_deg"]:.2f}/'
+                 f'{report["recordings"][s][m]["aoe_yaw_deg"]:.2f}' for s in names]
+        avg = report['mean'][m]
+        lines.append(f'| {m} | ' + ' | '.join(cells)
+                     + f' | **{avg["aoe_deg"]:.2f}/{avg["aoe_yaw_deg"]:.2f}** |\n')
+    lines.append(f'\nUnseen recordings (leave-out folds), AOE 3-D / yaw in degrees. '
+                 f'Verdict: {report["verdict"]}.\n')
+    return ''.join(lines)

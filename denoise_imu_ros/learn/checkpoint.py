@@ -1,0 +1,91 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The torch side of model files: save a trained network, rebuild one, average several.
+
+The file format and its checks are numpy-only (:mod:`denoise_imu_ros.core.modelfile`);
+this module turns a file's arrays into an eval-mode :class:`GyroNet` and back.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+import time
+from typing import Any, NamedTuple
+
+import numpy as np
+import torch
+
+from .model import GyroNet, merge
+from ..core.errors import ModelFileError
+from ..core.modelfile import code_version, read_model_file, sample_rate, write_model_file
+
+
+class LoadedModel(NamedTuple):
+    """A torch model in eval mode plus the metadata it was saved with."""
+
+    model: GyroNet
+    meta: dict[str, Any]
+    path: Path
+
+
+def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:
+    """Write a torch model's weights and metadata (JSON-serialisable values)."""
+    write_model_file(path, model.config, {k: v.detach().cpu().numpy()
+                                          for k, v in model.state_dict().items()}, meta)
+
+
+def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
+    """
+    Write one model file averaging the outputs of trained model files (see model.merge).
+
+    The metadata keeps each member's seed and validation figures; the residual std the
+    node publishes as covariance is the members' mean (the ensemble's own is lower).
+    """
+    members = [load_model(spec) for spec in specs]
+    if len(members) < 2:
+        raise ModelFileError('an ensemble needs at least two model files')
+    rates = [m.meta.get('sample_rate_hz') for m in members]
+    rate = sample_rate(members[0])
+    if any(not isinstance(r, (int, float)) or abs(r / rate - 1) > 1e-3 for r in rates):
+        raise ModelFileError(f'ensemble members were trained at different rates: {rates}')
+    try:
+        model = merge([m.model for m in members])
+    except ValueError as err:
+        raise ModelFileError(f'cannot average {", ".join(map(str, specs))}: {err}') from err
+    first = members[0].meta
+    residual = np.mean([m.meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3)
+                        for m in members], axis=0)
+    meta = {
+        'dataset': first.get('dataset'), 'sample_rate_hz': rate,
+        'train_sequences': first.get('train_sequences'),
+        'train_config': first.get('train_config'),
+        'validation': {'gyro_residual_std': residual.tolist()},
+        'members': [{'file': str(m.path), 'seed': m.meta.get('train_config', {}).get('seed'),
+                     'validation': m.meta.get('validation'),
+                     'code_version': m.meta.get('code_version')} for m in members],
+        'code_version': code_version(),
+        'created': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
+    }
+    save_model(path, model, meta)
+    return load_model(path)
+
+
+def load_model(spec: str | Path) -> LoadedModel:
+    """Rebuild the torch model of a file, in eval mode (training, batch evaluation)."""
+    mf = read_model_file(spec)
+    model = GyroNet(mf.config)
+    model.load_state_dict({k: torch.from_numpy(v.copy()) for k, v in mf.arrays.items()})
+    model.eval()
+    return LoadedModel(model=model, meta=mf.meta, path=mf.path)

@@ -1,0 +1,216 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The training recipe without torch: ``TrainConfig``, its YAML file and every check of it.
+
+``init-recipe`` writes recipes from these defaults and ``train`` reads them; neither
+needs torch to know what a recipe may hold. Whether a device exists is checked where
+the training starts (:func:`denoise_imu_ros.learn.train.resolve_device`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields
+import math
+from pathlib import Path
+import re
+from typing import Any
+
+import yaml
+
+from ..core.architecture import ModelConfig
+from ..core.errors import TrainingError
+
+RUN_KEYS = ('data', 'threads', 'workers', 'device')  # where it runs, not what it learns
+DEVICE = re.compile(r'cpu|cuda(:\d+)?')             # the devices training supports
+
+
+@dataclass(frozen=True)
+class LossConfig:
+    """Reference values: Huber 0.005 rad, scale 1e6, L16 + 0.5 * L32, skip 5 blocks."""
+
+    huber_delta: float = 0.005   # rad, Huber threshold per log component
+    scale: float = 1e6           # keeps losses O(1) for the optimiser
+    increments: tuple[int, ...] = (16, 32)  # samples per increment, powers of two, rising
+    weights: tuple[float, ...] = (1.0, 0.5)  # per increment length (the reference code's)
+    skip_blocks: int = 5         # first blocks of a window are warm-up (padded input)
+
+    def __post_init__(self) -> None:
+        """Check the increment lengths (user input through the training recipe)."""
+        levels = [math.log2(j) for j in self.increments]
+        if (len(self.weights) != len(self.increments) or not self.increments
+                or any(v != int(v) or v < 0 for v in levels) or sorted(set(levels)) != levels):
+            raise ValueError('increments must be rising powers of two, one weight each')
+
+    @property
+    def span(self) -> int:
+        """Return the longest increment (samples): windows must be a multiple of it."""
+        return self.increments[-1]
+
+
+@dataclass
+class TrainConfig:
+    """
+    Everything a training run depends on.
+
+    The recipe (all but RUN_KEYS) is stored in the model file; the run environment (the
+    local data folder, threads, workers, device) is stored apart, as how it was made.
+    """
+
+    dataset: str = 'euroc'             # name of the data family (picks eval baselines)
+    data: str = '../shared/data/euroc'  # folder holding the sequences (or bags)
+    sequences: list[str] = field(default_factory=list)  # ASL folders or bags in `data`
+    imu_topic: str | None = None       # bags only; None = the only Imu topic
+    pose_topic: str | None = None      # bags only; None = the only pose topic
+    # ground-truth holes longer than this (s) are masked; None: 2.5 of its own periods
+    max_gt_gap_s: float | None = None
+    # poses onto the IMU clock and frame: none, auto (estimated per recording, as
+    # check-data does) or {time_offset_s: s, imu_from_pose_rotation_xyzw: [x, y, z, w]}
+    align: str | dict = 'none'
+    gyro_std_deg: list[float] = field(default_factory=lambda: [1.0, 2.0, 5.0])  # sigma_g
+    dropout: float = 0.1
+    calibration_only: bool = False     # the 12-parameter "calibrated IMU" baseline
+    steps: int = 1800                  # one step = one batch of every sequence
+    lr: float = 0.01                   # Adam
+    weight_decay: float = 0.1          # L2 added to the gradient (not AdamW)
+    lr_min: float = 1e-3               # cosine annealing floor
+    restart_period: int = 600          # first cosine cycle (steps)
+    restart_mult: int = 2              # each cycle this many times longer
+    window: int = 16000                # training samples per sequence (80 s at 200 Hz)
+    max_offset: int = 32               # window start drawn in [0, max_offset)
+    # True: draw each window anywhere in its whole sequence instead (more data, but the
+    # validation tails are then training data and validation figures are in-sample).
+    whole_sequences: bool = False
+    gyro_noise: float = 8e-5           # rad/s, white noise added to the gyro input
+    accel_noise: float = 1e-3          # m/s^2
+    gyro_bias: float = 1e-3            # rad/s, uniform +- per sequence and step
+    accel_bias: float = 1e-3           # m/s^2
+    huber_delta: float = 0.005         # rad
+    increments: list[int] = field(default_factory=lambda: [16, 32])  # loss increments
+    increment_weights: list[float] = field(default_factory=lambda: [1.0, 0.5])
+    skip_blocks: int = 5               # warm-up blocks left out of the training loss
+    val_every: int = 100               # steps between validations (and at the end)
+    swa_start: int = 0                 # > 0: average weights from this step on (SWA)
+    select: str = 'best_validation'    # kept: best_validation (of all candidates), final, swa
+    seed: int = 0
+    threads: int = 2                   # torch intra-op threads, shared by the workers
+    workers: int = 1                   # data-parallel processes (parallel.py), CPU only
+    device: str | None = None          # cpu or cuda[:N]; None: cuda when available
+
+    def model_config(self) -> ModelConfig:
+        """Return the network this recipe trains."""
+        return ModelConfig(gyro_std=tuple(math.radians(d) for d in self.gyro_std_deg),
+                           dropout=self.dropout, calibration_only=self.calibration_only)
+
+    def loss_config(self) -> LossConfig:
+        """Return the loss constants of this recipe."""
+        return LossConfig(huber_delta=self.huber_delta, increments=tuple(self.increments),
+                          weights=tuple(self.increment_weights), skip_blocks=self.skip_blocks)
+
+    def recipe(self) -> dict[str, Any]:
+        """Return what the model learns from: every key but the run environment."""
+        return {k: v for k, v in asdict(self).items() if k not in RUN_KEYS}
+
+    def run_environment(self) -> dict[str, Any]:
+        """Return where and how this run was made (data folder, threads, workers, device)."""
+        return {k: getattr(self, k) for k in RUN_KEYS}
+
+
+# Allowed range of each numeric recipe key: (lowest, highest, whether lowest is allowed).
+RANGES = {
+    'steps': (1, None, True), 'lr': (0, None, False), 'weight_decay': (0, None, True),
+    'lr_min': (0, None, True), 'restart_period': (1, None, True),
+    'restart_mult': (1, None, True), 'window': (1, None, True), 'max_offset': (1, None, True),
+    'gyro_noise': (0, None, True), 'accel_noise': (0, None, True),
+    'gyro_bias': (0, None, True), 'accel_bias': (0, None, True),
+    'huber_delta': (0, None, False), 'skip_blocks': (0, None, True),
+    'val_every': (1, None, True), 'swa_start': (0, None, True), 'threads': (1, None, True),
+    'workers': (1, None, True), 'dropout': (0, 1, True), 'max_gt_gap_s': (0, None, False),
+}
+
+
+def _is(value: Any, kind: str) -> bool:
+    """Whether a YAML value fits a TrainConfig annotation (bool is not a number here)."""
+    number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    checks = {
+        'str': isinstance(value, str), 'bool': isinstance(value, bool),
+        'int': isinstance(value, int) and not isinstance(value, bool),
+        'float': number and math.isfinite(value),
+        'list[str]': isinstance(value, list) and all(isinstance(v, str) for v in value),
+        'list[int]': isinstance(value, list) and all(_is(v, 'int') for v in value),
+        'list[float]': isinstance(value, list) and all(_is(v, 'float') for v in value),
+        'dict': isinstance(value, dict),
+    }
+    return any(value is None if k == 'None' else checks[k] for k in kind.split(' | '))
+
+
+def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
+    """
+    Read a YAML recipe and check every value's type and range.
+
+    Unknown keys are errors (a typo must not train silently), and so are values of the
+    wrong type (``steps: 3.7``, ``calibration_only: "no"``) or out of range.
+    """
+    try:
+        raw = yaml.safe_load(Path(path).read_text(encoding='utf-8'))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+        raise TrainingError(f'{path}: cannot read training config '
+                            f'({" ".join(str(err).split())})') from err
+    raw = {} if raw is None else raw
+    if not isinstance(raw, dict):
+        raise TrainingError(f'{path}: a training config is a mapping of keys, '
+                            f'not {type(raw).__name__}')
+    types = {f.name: f.type for f in fields(TrainConfig)}
+    unknown = sorted(set(map(str, raw)) - set(types))
+    if unknown:
+        raise TrainingError(f'{path}: unknown keys {unknown}')
+    raw.update({k: v for k, v in overrides.items() if v is not None})
+    for key, value in raw.items():
+        if not _is(value, types[key]):
+            raise TrainingError(f'{path}: {key} must be {types[key]}, not {value!r}')
+        if key in RANGES and value is not None:
+            low, high, closed = RANGES[key]
+            if value < low or (value == low and not closed) or (
+                    high is not None and value >= high):
+                bound = ('at least' if closed else 'above') + f' {low}'
+                bound += f' and below {high}' if high is not None else ''
+                raise TrainingError(f'{path}: {key} must be {bound}, not {value!r}')
+    if 'gyro_std_deg' in raw and (len(raw['gyro_std_deg']) != 3
+                                  or min(raw['gyro_std_deg']) <= 0):
+        raise TrainingError(f'{path}: gyro_std_deg must be three positive values (deg/s)')
+    cfg = TrainConfig(**raw)
+    try:
+        span = cfg.loss_config().span
+    except ValueError as err:
+        raise TrainingError(f'{path}: {err}') from err
+    if cfg.window % span:
+        raise TrainingError(f'{path}: window must be a multiple of {span}')
+    if not cfg.sequences:
+        raise TrainingError(f'{path}: no training sequences')
+    if not (cfg.align in ('none', 'auto') or (
+            isinstance(cfg.align, dict)
+            and set(cfg.align) == {'time_offset_s', 'imu_from_pose_rotation_xyzw'})):
+        raise TrainingError(f'{path}: align must be none, auto or a mapping with '
+                            'time_offset_s and imu_from_pose_rotation_xyzw')
+    cfg.workers = min(cfg.workers, len(cfg.sequences))  # each worker needs a sequence
+    if cfg.device is not None and not DEVICE.fullmatch(cfg.device):
+        raise TrainingError(f'device {cfg.device!r}: not a torch device (use cpu or cuda)')
+    if cfg.select not in ('best_validation', 'final', 'swa') or (
+            cfg.select == 'swa' and cfg.swa_start <= 0):
+        raise TrainingError(f'{path}: select must be best_validation, final or swa '
+                            '(swa needs swa_start > 0)')
+    if cfg.swa_start > cfg.steps:
+        raise TrainingError(f'{path}: swa_start {cfg.swa_start} is after the last step '
+                            f'{cfg.steps}')
+    return cfg

@@ -1,0 +1,394 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Train the gyro-correcting network: ``denoise-imu train --config FILE``.
+
+Read top to bottom, as nanoGPT's train.py: set-up, data, model, optimiser, helpers, then
+one visible loop. The recipe (config/train_euroc.yaml) is the reference code's: every
+training sequence in one batch per step, an 80 s window per sequence at a random
+offset, noise augmentation, Adam with L2 weight decay and cosine warm restarts.
+Validation uses the tails of the training sequences (after the training window), never
+test sequences. The model kept is, per ``select``: the candidate (best-validation
+checkpoint, final weights, weight average) with the lowest validation loss, the final
+weights, or the weight average.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+from dataclasses import dataclass
+import math
+from pathlib import Path
+import time
+from typing import Any
+
+import numpy as np
+import torch
+import torch.distributed as dist
+from tqdm import tqdm
+
+from . import parallel
+from .checkpoint import save_model
+from .config import LossConfig, TrainConfig
+from .loss import increment_loss
+from .model import GyroNet
+from ..core.errors import TrainingError
+from ..core.limits import common_rate
+from ..core.metrics import increment_residuals, sequence_errors, trusted_blocks
+from ..core.modelfile import code_version
+from ..core.records import Sequence
+from ..data.load import load_sequence
+
+RESIDUAL_BLOCK = 16  # samples per block of the gyro residual estimate (validation)
+RANK_SEED_STRIDE = 7919  # data-parallel process r draws its batches from seed + r * this
+
+
+# ----------------------------------------------------------------------------------
+# Set-up: device, process, threads
+
+def resolve_device(device: str | None) -> str:
+    """Check a ``--device`` value; None picks cuda when torch sees a GPU, else cpu."""
+    if device is None:
+        return 'cuda' if torch.cuda.is_available() else 'cpu'
+    try:
+        dev = torch.device(device)
+    except (RuntimeError, TypeError) as err:
+        raise TrainingError(f'device {device!r}: not a torch device (use cpu or cuda)') from err
+    if dev.type == 'cuda' and not torch.cuda.is_available():
+        raise TrainingError(f'device {device!r}: torch sees no CUDA GPU on this machine')
+    if dev.type not in ('cpu', 'cuda'):
+        raise TrainingError(f'device {device!r}: only cpu and cuda are supported')
+    return str(dev)
+
+
+def _setup_process(cfg: TrainConfig, rank: int) -> None:
+    """Seed, share the threads, and flush denormal floats, in every process alike."""
+    # the same initial weights everywhere; denormals: tiny gradients far in GELU's tail
+    # made the CPU convolutions up to 50x slower
+    torch.manual_seed(cfg.seed)
+    torch.set_num_threads(max(1, cfg.threads // cfg.workers))
+    torch.set_flush_denormal(True)
+
+
+# ----------------------------------------------------------------------------------
+# Data: the whole of every sequence in memory as float tensors
+
+def load_sequences(cfg: TrainConfig) -> list[Sequence]:
+    """
+    Load and check the training sequences: one IMU rate, a window and a tail each.
+
+    A sequence whose training window or validation tail holds no increment of the loss
+    with trusted ground truth at every sample would train (or validate) on nothing, with
+    a loss of exactly 0: that is an error naming it.
+    """
+    min_len = cfg.window + cfg.max_offset + 1 + 2 * cfg.loss_config().span
+    receptive_field = cfg.model_config().receptive_field
+    seqs = []
+    for name in cfg.sequences:
+        seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
+                            cfg.max_gt_gap_s, min_samples=max(min_len, receptive_field),
+                            align_poses=cfg.align)
+        head = cfg.window + cfg.max_offset
+        for part, valid in (('training window', seq.gt_valid[:head + 1]),
+                            ('validation tail', seq.gt_valid[head:])):
+            if len(trusted_blocks(valid, cfg.increments[0])) == 0:
+                raise TrainingError(
+                    f'{Path(cfg.data) / name}: no {cfg.increments[0]}-sample increment with '
+                    f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
+                    'IMU stamps have trusted ground truth): nothing to supervise the loss')
+        seqs.append(seq)
+    common_rate({s.name: s.rate_hz for s in seqs}, cfg.data)
+    return seqs
+
+
+@dataclass
+class Split:
+    """
+    Training windows' source arrays, stacked (S sequences of L samples).
+
+    Shorter sequences are zero-padded at the end (padding is never drawn: valid=False).
+    """
+
+    imu: torch.Tensor        # (S, L, 6) float32
+    dt: torch.Tensor         # (S, L - 1) float64
+    quat: torch.Tensor       # (S, L, 4) float64
+    valid: torch.Tensor      # (S, L) bool
+    max_start: torch.Tensor  # (S,) int64: window starts are drawn in [0, max_start)
+
+
+def training_split(seqs: list[Sequence], cfg: TrainConfig) -> Split:
+    """Stack the samples windows may be drawn from: the head of each sequence, or all."""
+    head = cfg.window + cfg.max_offset  # the window may end at sample head - 1
+    lengths = [len(s) if cfg.whole_sequences else head for s in seqs]
+    n = max(lengths)
+
+    def stack(arrays: list[np.ndarray], length: int) -> np.ndarray:
+        out = np.zeros((len(arrays), length) + arrays[0].shape[1:], arrays[0].dtype)
+        for row, a in zip(out, arrays):
+            row[:min(len(a), length)] = a[:length]
+        return out
+
+    return Split(
+        imu=torch.tensor(stack([s.imu for s in seqs], n), dtype=torch.float32),
+        dt=torch.tensor(stack([s.dt for s in seqs], n - 1)),
+        quat=torch.tensor(stack([s.gt_quat for s in seqs], n)),
+        valid=torch.tensor(stack([s.gt_valid[:m] for s, m in zip(seqs, lengths)], n)),
+        max_start=torch.tensor([m - cfg.window for m in lengths]))
+
+
+def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.Tensor, ...]:
+    """One window per sequence at a random offset, with noise and bias augmentation."""
+    s, w = split.imu.shape[0], cfg.window
+    n0 = (torch.rand(s, generator=gen, dtype=torch.float64) * split.max_start).long()
+    idx = n0[:, None] + torch.arange(w + 1)[None]                 # (S, W + 1)
+    rows = torch.arange(s)[:, None]
+    u = split.imu[rows, idx[:, :-1]]                              # (S, W, 6)
+    noise_std = torch.tensor([cfg.gyro_noise] * 3 + [cfg.accel_noise] * 3)
+    bias_max = torch.tensor([cfg.gyro_bias] * 3 + [cfg.accel_bias] * 3)
+    bias = (2 * torch.rand(s, 1, 6, generator=gen) - 1) * bias_max
+    u = u + noise_std * torch.randn(u.shape, generator=gen) + bias
+    return u, split.dt[rows, idx[:, :-1]], split.quat[rows, idx], split.valid[rows, idx]
+
+
+# ----------------------------------------------------------------------------------
+# Model: normalised on every training window; this process's share of the data
+
+def build_model(cfg: TrainConfig, seqs: list[Sequence],
+                rank: int) -> tuple[GyroNet, Split, torch.Generator]:
+    """Return the network, this process's training split and its batch generator."""
+    model = GyroNet(cfg.model_config())
+    split = training_split(seqs, cfg)
+    flat = split.imu.reshape(-1, 6)
+    model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
+    model.to(cfg.device)
+    if cfg.workers > 1:
+        parallel.sync_batch_norm(model)
+        split = training_split(seqs[rank::cfg.workers], cfg)
+        torch.manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)  # its own dropout masks
+    return model, split, torch.Generator().manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)
+
+
+# ----------------------------------------------------------------------------------
+# Optimiser: Adam with L2 weight decay, cosine warm restarts, optional weight average
+
+def build_optimiser(cfg: TrainConfig, model: GyroNet) -> tuple[Any, Any, Any]:
+    """Return the optimiser, its schedule and the weight average (None without SWA)."""
+    optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    scheduler = torch.optim.lr_scheduler.CosineAnnealingWarmRestarts(
+        optimizer, T_0=cfg.restart_period, T_mult=cfg.restart_mult, eta_min=cfg.lr_min)
+    swa = torch.optim.swa_utils.AveragedModel(model) if cfg.swa_start > 0 else None
+    return optimizer, scheduler, swa
+
+
+# ----------------------------------------------------------------------------------
+# Helpers: validation on the tails of the training sequences, selection, the result
+
+@torch.no_grad()
+def validate(model: GyroNet, seqs: list[Sequence], start: int,
+             loss_cfg: LossConfig) -> dict[str, Any]:
+    """
+    Loss, AOE and gyro residual on samples >= start; the network sees the whole past.
+
+    Feeding the full sequence (not the tail alone) gives the tail's outputs their real
+    causal context, as the online node has.
+    """
+    was_training = model.training
+    model.eval()
+    losses, aoes, residuals = [], {}, []
+    tail_cfg = dataclasses.replace(loss_cfg, skip_blocks=0)
+    device = next(model.parameters()).device
+    for s in seqs:
+        imu = torch.tensor(s.imu, dtype=torch.float32, device=device)
+        omega = model(imu[None])[0].double().cpu()
+        n = (len(s) - 1 - start) // loss_cfg.span * loss_cfg.span
+        sl = slice(start, start + n)
+        losses.append(float(increment_loss(
+            omega[None, sl], torch.tensor(s.dt[sl])[None],
+            torch.tensor(s.gt_quat[start:start + n + 1])[None],
+            torch.tensor(s.gt_valid[start:start + n + 1])[None], tail_cfg)))
+        w = omega.numpy()[start:]
+        aoes[s.name] = sequence_errors(s.tail(start), w, distances=())[1].aoe
+        res, duration = increment_residuals(s.gt_quat[start:], s.gt_valid[start:], w,
+                                            s.dt[start:], RESIDUAL_BLOCK)
+        residuals.append(res / duration[:, None])  # mean rate error over each block
+    model.train(was_training)
+    res = np.concatenate(residuals)
+    return {'loss': float(np.mean(losses)), 'aoe_deg': aoes,
+            'aoe_mean_deg': float(np.mean(list(aoes.values()))),
+            # per-sample gyro error std (rad/s) if the error were white: from the error of
+            # 16-sample increments, whose std shrinks by sqrt(16) over a block
+            'gyro_residual_std': (res.std(axis=0) * math.sqrt(RESIDUAL_BLOCK)).tolist()}
+
+
+def select(candidates: dict[str, dict[str, Any]], rule: str) -> str:
+    """Name of the candidate ``rule`` keeps: best_validation (lowest loss), final or swa."""
+    if rule == 'best_validation':
+        return min(candidates, key=lambda name: candidates[name]['loss'])
+    return rule
+
+
+@dataclass
+class TrainResult:
+    """The selected model, its metadata, and every candidate the run produced."""
+
+    model: GyroNet                                # eval mode, on the CPU
+    meta: dict[str, Any]                          # what its model file records
+    candidates: dict[str, tuple[GyroNet, dict[str, Any]]]  # name -> (model, figures)
+
+    def save(self, path: str | Path, candidates_dir: str | Path | None = None) -> None:
+        """Write the chosen model, and with ``candidates_dir`` every candidate beside it."""
+        save_model(path, self.model, self.meta)
+        if candidates_dir is None:
+            return
+        for name, (model, figures) in self.candidates.items():
+            save_model(Path(candidates_dir) / f'{name}.safetensors', model,
+                       dict(self.meta, selected=name, validation=figures))
+
+
+def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[str, Any]],
+            history: list[dict[str, Any]], t_start: float) -> TrainResult:
+    """Rebuild every candidate as a plain eval-mode network; select one; its metadata."""
+    models = {}
+    for name, figures in candidates.items():
+        models[name] = GyroNet(cfg.model_config())  # plain BatchNorm, whatever trained it
+        models[name].load_state_dict({k: v.cpu() for k, v in figures.pop('state').items()})
+        models[name].eval()
+    chosen = select(candidates, cfg.select)
+    meta = {
+        'dataset': cfg.dataset,
+        'sample_rate_hz': float(np.median([s.rate_hz for s in seqs])),
+        'train_sequences': cfg.sequences,
+        'train_config': cfg.recipe(),
+        'pose_alignment': {s.name: s.pose_alignment for s in seqs
+                           if s.pose_alignment is not None},
+        'run': cfg.run_environment(),
+        'selected': chosen,
+        'validation': candidates[chosen],
+        'candidates': candidates,
+        'history': history,
+        'train_seconds': time.monotonic() - t_start,
+        'code_version': code_version(),
+        'created': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
+    }
+    return TrainResult(models[chosen], meta,
+                       {name: (m, candidates[name]) for name, m in models.items()})
+
+
+# ----------------------------------------------------------------------------------
+# The run: processes, then one loop
+
+def train(cfg: TrainConfig, progress: bool = True) -> TrainResult:
+    """
+    Train per ``cfg``; return the selected model, its metadata and the candidates.
+
+    With ``cfg.workers`` > 1 the batch is shared by that many processes (see parallel.py);
+    this process is the first of them and the only one that validates and reports.
+    """
+    cfg = dataclasses.replace(cfg, device=resolve_device(cfg.device))
+    if cfg.device != 'cpu':
+        cfg.workers = 1  # one GPU process holds the whole batch
+    seqs = load_sequences(cfg)  # here, so that bad input fails before any process starts
+    if cfg.workers == 1:
+        return _run(cfg, 0, seqs, progress)
+    store = parallel.serve(cfg.workers)
+    workers = [parallel.spawn(_worker, (cfg, rank, store.port))
+               for rank in range(1, cfg.workers)]
+    try:
+        parallel.join(0, cfg.workers, store)
+        return _run(cfg, 0, seqs, progress)
+    except RuntimeError as err:  # the process group broke: was it a worker?
+        for proc in workers:
+            proc.join(timeout=10)
+        failed = [proc.exitcode for proc in workers if proc.exitcode]
+        if failed:
+            raise TrainingError(f'a training worker process failed (exit code {failed[0]}); '
+                                'its error is printed above') from err
+        raise
+    finally:
+        if dist.is_initialized():
+            dist.destroy_process_group()
+        for proc in workers:
+            proc.join(timeout=10)
+            if proc.is_alive():  # this process failed: nobody will talk to it any more
+                proc.terminate()
+
+
+def _worker(cfg: TrainConfig, rank: int, port: int) -> None:
+    """Entry point of the data-parallel processes other than the first."""
+    parallel.join(rank, cfg.workers, port)
+    try:
+        _run(cfg, rank, load_sequences(cfg), False)
+    finally:
+        dist.destroy_process_group()
+
+
+def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
+         progress: bool) -> TrainResult | None:
+    """Train as process ``rank`` of ``cfg.workers``; the first one returns the result."""
+    t_start = time.monotonic()
+    _setup_process(cfg, rank)
+    model, split, gen = build_model(cfg, seqs, rank)
+    optimizer, scheduler, swa = build_optimiser(cfg, model)
+    loss_cfg = cfg.loss_config()
+    val_start = cfg.window + cfg.max_offset
+
+    # the loop (step 0 only validates the untrained network)
+    best: dict[str, Any] = {'loss': math.inf}
+    history = []
+    loss = torch.tensor(0.0)
+    bar = tqdm(range(0, cfg.steps + 1), disable=not progress, desc='train', unit='step')
+    for step in bar:
+        if step > 0:
+            u, dt, quat, valid = (x.to(cfg.device) for x in batch(split, cfg, gen))
+            loss = increment_loss(model(u), dt, quat, valid, loss_cfg,
+                                  parallel.sum_over_processes)
+            optimizer.zero_grad(set_to_none=True)
+            loss.backward()
+            if cfg.workers > 1:
+                loss = parallel.all_reduce_grads(list(model.parameters()), loss)
+            if not torch.isfinite(loss):
+                raise TrainingError(f'non-finite training loss at step {step} (lr '
+                                    f'{scheduler.get_last_lr()[0]:.3g}); lower the learning '
+                                    'rate or check the data')
+            optimizer.step()
+            scheduler.step()
+            bar.set_postfix(loss=f'{loss.item():.4g}')
+            if swa is not None and step >= cfg.swa_start:
+                swa.update_parameters(model)
+        if rank == 0 and (step % cfg.val_every == 0 or step == cfg.steps):
+            val = validate(model, seqs, val_start, loss_cfg)
+            history.append({'step': step, 'train_loss': loss.item() if step else None,
+                            'val_loss': val['loss'],
+                            'val_aoe_mean_deg': val['aoe_mean_deg']})
+            bar.write(f'step {step}: train {loss.item():.4g}  val {val["loss"]:.4g}  '
+                      f'val AOE {val["aoe_mean_deg"]:.3f} deg')
+            if step > 0 and val['loss'] < best['loss']:
+                best = dict(val, step=step, state=copy.deepcopy(model.state_dict()))
+    if swa is not None:
+        # BatchNorm statistics of the averaged weights: recomputed on training windows.
+        torch.optim.swa_utils.update_bn(
+            [batch(split, cfg, gen)[0].to(cfg.device) for _ in range(8)], swa)
+    if rank > 0:
+        return None
+
+    # candidates: the loop validated the final weights at its last step
+    candidates = {'best_checkpoint': best,
+                  'final': dict(val, step=cfg.steps, state=copy.deepcopy(model.state_dict()))}
+    if swa is not None:
+        val = validate(swa.module, seqs, val_start, loss_cfg)
+        candidates['swa'] = dict(val, step=cfg.steps, state=swa.module.state_dict())
+        bar.write(f'SWA from step {cfg.swa_start}: val {val["loss"]:.4g}  '
+                  f'val AOE {val["aoe_mean_deg"]:.3f} deg')
+    return _finish(cfg, seqs, candidates, history, t_start)

@@ -1,0 +1,280 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+``gyro_denoiser``: corrects ``imu/data_raw`` into ``imu/corrected`` and ``imu/attitude``.
+
+A thin ROS wrapper around :class:`~denoise_imu_ros.runtime.online.OnlineDenoiser`: it converts
+messages, owns the parameters and topics, and reports on ``/diagnostics``. Header stamps
+and frame ids are copied from the input, never re-stamped.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+import math
+import sys
+import time
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import QuaternionStamped
+import numpy as np
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+import rclpy
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.utilities import remove_ros_args
+from sensor_msgs.msg import Imu
+from std_srvs.srv import Trigger
+
+from .online import Drop, Event, OnlineDenoiser
+from ..core import msgs
+from ..core.errors import DenoiseError
+from ..core.limits import RATE_TOLERANCE, stream_rate_hz
+from ..core.modelfile import deployment_warning, gyro_covariance, read_model_file
+
+
+def _param(description: str, read_only: bool = False, floats: tuple | None = None,
+           ints: tuple | None = None) -> ParameterDescriptor:
+    d = ParameterDescriptor(description=description, read_only=read_only)
+    if floats:
+        d.floating_point_range = [FloatingPointRange(from_value=floats[0], to_value=floats[1])]
+    if ints:
+        d.integer_range = [IntegerRange(from_value=ints[0], to_value=ints[1], step=1)]
+    return d
+
+
+# Every parameter, in one place: (name, default, descriptor). config/gyro_denoiser.yaml
+# mirrors it.
+PARAMETERS = [
+    ('model', 'euroc', _param(
+        'Shipped model name (euroc, tumvi) or path to a .safetensors model file.',
+        read_only=True)),
+    ('fixed_frame', 'odom', _param(
+        'frame_id of imu/attitude: gravity-aligned at start (roll/pitch from the '
+        'accelerometer), yaw 0 at start.', read_only=True)),
+    ('embed_attitude', False, _param(
+        'Also write the attitude into imu/corrected orientation (otherwise '
+        'orientation_covariance[0] = -1: no orientation).')),
+    ('orientation_stddev', 0.05, _param(
+        'rad; orientation covariance diagonal when embed_attitude is on.',
+        floats=(0.0, math.pi))),
+    ('angular_velocity_stddev', -1.0, _param(
+        'rad/s; < 0 uses the per-axis residual std the model measured on its '
+        'validation data.', floats=(-1.0, 10.0))),
+    ('max_gap_factor', 3.0, _param(
+        'A stamp gap above this many nominal periods restarts the network history '
+        '(warm-up) and holds the attitude across the gap.', floats=(1.5, 1000.0))),
+    ('time_jump_threshold', 1.0, _param(
+        's; a stamp this far behind the last one resets everything (bag loop); '
+        'smaller backward steps are dropped as out of order.', floats=(0.0, 3600.0))),
+    ('rate_tolerance', RATE_TOLERANCE, _param(
+        'Relative input-rate mismatch to the model rate that raises a warning and a '
+        'diagnostics error.', floats=(0.0, 1.0))),
+    ('input_queue_depth', 200, _param(
+        'Subscription depth (sensor-data reliability); bursts beyond it are lost.',
+        read_only=True, ints=(10, 10000))),
+]
+
+
+class GyroDenoiser(Node):
+    """Learned gyro correction of every IMU sample, plus the integrated attitude."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__('gyro_denoiser', **kwargs)
+        try:
+            self.declare_parameters('', PARAMETERS)
+        except ParameterException as err:  # a wrong type or range given at start-up
+            raise DenoiseError(f'bad parameter: {" ".join(str(err).split())}') from err
+        p = self.get_parameter
+        loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()
+        self._denoiser = OnlineDenoiser.from_model_file(loaded)
+        self._model_rate = self._denoiser.rate_hz
+        self._loaded = loaded
+        self._not_recommended = deployment_warning(loaded)  # kept as a diagnostics WARN
+        self._types = msgs.rclpy_types()
+        self._fixed_frame = p('fixed_frame').value
+        self.add_post_set_parameters_callback(self._on_parameters)
+
+        self._pub_imu = self.create_publisher(
+            Imu, 'imu/corrected', QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
+            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        self._pub_att = self.create_publisher(
+            QuaternionStamped, 'imu/attitude',
+            QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
+            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        self._pub_diag = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.create_subscription(
+            Imu, 'imu/data_raw', self._on_imu,
+            QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p('input_queue_depth').value,
+                       reliability=ReliabilityPolicy.BEST_EFFORT),
+            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        self.create_service(Trigger, '~/reset_attitude', self._on_reset)
+        self.create_timer(1.0, self._publish_diagnostics)
+        self._waiting_timer = self.create_timer(10.0, self._still_waiting)
+
+        self._stamps: deque[int] = deque(maxlen=int(2 * self._model_rate) + 1)
+        self._rate_error = False  # set by the diagnostics timer from the measured rate
+        self.attitude_withheld = 0  # accepted samples whose attitude was not published
+        self._infer_s: deque[float] = deque(maxlen=1000)
+        self._apply_parameters()
+        self.get_logger().info(
+            f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field '
+            f'{loaded.config.receptive_field} samples); imu/data_raw -> imu/corrected')
+        if self._not_recommended:
+            self.get_logger().warning(self._not_recommended)
+
+    # -- parameters ---------------------------------------------------------------
+    def _apply_parameters(self) -> None:
+        p = self.get_parameter
+        self._embed = p('embed_attitude').value
+        var = p('orientation_stddev').value ** 2
+        # arrays built here, once, not per message
+        self._orientation_cov = np.diag([var] * 3).ravel()
+        self._gyro_cov = np.array(gyro_covariance(self._loaded,
+                                                  p('angular_velocity_stddev').value))
+        self._denoiser.max_gap_factor = p('max_gap_factor').value
+        self._denoiser.time_jump_s = p('time_jump_threshold').value
+        self._rate_tolerance = p('rate_tolerance').value
+
+    def _on_parameters(self, _params: list) -> None:
+        self._apply_parameters()
+
+    # -- data ---------------------------------------------------------------------
+    def _on_imu(self, msg: Imu) -> None:
+        if self._waiting_timer is not None:
+            self._waiting_timer.cancel()
+            self._waiting_timer = None
+        t0 = time.perf_counter()
+        out = self._denoiser.process_imu(msg)
+        if isinstance(out, Drop):
+            self.get_logger().warning(f'dropped an IMU message: {out.value.replace("_", " ")}',
+                                      throttle_duration_sec=5.0)
+            return
+        if out.event in (Event.GAP, Event.TIME_JUMP):
+            self.get_logger().warning(
+                f'{"stamp gap" if out.event == Event.GAP else "backward time jump"} before '
+                f'{out.stamp_ns} ns: network history restarted'
+                + (', attitude re-initialised' if out.event == Event.TIME_JUMP else
+                   ', attitude held (not published for this sample)'),
+                throttle_duration_sec=5.0)
+        self._stamps.append(out.stamp_ns)
+
+        embed = out.attitude if self._embed else None
+        self._pub_imu.publish(msgs.corrected_imu(self._types, msg, out.gyro, self._gyro_cov,
+                                                 embed, self._orientation_cov))
+        # an attitude held across a gap, or integrated at a rate the model was not made
+        # for, is not published as if it were valid
+        if out.event != Event.GAP and not self._rate_error:
+            self._pub_att.publish(msgs.attitude(self._types, msg, self._fixed_frame,
+                                                out.attitude))
+        else:
+            self.attitude_withheld += 1
+        self._infer_s.append(time.perf_counter() - t0)
+
+    def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        self._denoiser.reset_attitude()
+        response.success = True
+        response.message = 'attitude re-initialised from the accelerometer at the next sample'
+        return response
+
+    # -- monitoring ---------------------------------------------------------------
+    def input_rate_hz(self) -> float:
+        """
+        Input rate from the median stamp interval of the last ~2 s (0 if unknown).
+
+        The median, so that one gap (a 2 s dropout) does not read as a slow stream.
+        """
+        return stream_rate_hz(np.array(self._stamps)) if len(self._stamps) >= 3 else 0.0
+
+    def _publish_diagnostics(self) -> None:
+        counts = self._denoiser.counts
+        rate = self.input_rate_hz()
+        status = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: gyro correction',
+                                  hardware_id=self._fixed_frame, level=DiagnosticStatus.OK,
+                                  message='ok')
+        fill = min(self._denoiser.engine.samples, self._denoiser.engine.receptive_field)
+        self._rate_error = bool(rate) and abs(rate / self._model_rate - 1.0) > self._rate_tolerance
+        if self._rate_error:
+            status.level = DiagnosticStatus.ERROR
+            status.message = (f'input rate {rate:.1f} Hz differs from the model rate '
+                              f'{self._model_rate:.1f} Hz: corrections are not valid, '
+                              'imu/attitude not published')
+            self.get_logger().error(status.message, throttle_duration_sec=10.0)
+        elif counts['accepted'] == 0:
+            status.level, status.message = DiagnosticStatus.WARN, 'no input yet'
+        elif fill < self._denoiser.engine.receptive_field:
+            status.level, status.message = DiagnosticStatus.WARN, 'warming up'
+        elif self._not_recommended:
+            status.level, status.message = DiagnosticStatus.WARN, self._not_recommended
+        infer = np.array(self._infer_s) if self._infer_s else np.zeros(1)
+        values = {'input_rate_hz': f'{rate:.2f}', 'model_rate_hz': f'{self._model_rate:.2f}',
+                  'buffer_fill': f'{fill}/{self._denoiser.engine.receptive_field}',
+                  'callback_time_p50_us': f'{np.median(infer) * 1e6:.1f}',
+                  'callback_time_max_us': f'{infer.max() * 1e6:.1f}'}
+        values.update({k: str(v) for k, v in counts.items()})
+        values['attitude_withheld'] = str(self.attitude_withheld)
+        status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self._pub_diag.publish(array)
+
+    def _still_waiting(self) -> None:
+        sub = self.resolve_topic_name('imu/data_raw')
+        self.get_logger().warning(f'still waiting for data on {sub}')
+
+
+USAGE = """usage: gyro_denoiser [--ros-args -p NAME:=VALUE ... --params-file FILE ...]
+
+Corrects imu/data_raw into imu/corrected and imu/attitude with a learned gyro model.
+Parameters (see config/gyro_denoiser.yaml): """ + ', '.join(
+    name for name, _, _ in PARAMETERS) + """.
+Later --params-file and -p arguments override earlier ones: put -p after --params-file.
+Example: gyro_denoiser --ros-args --params-file config/gyro_denoiser.yaml -p model:=tumvi
+"""
+
+
+def main(args: list[str] | None = None) -> int:
+    """Entry point of ``gyro_denoiser`` (console script and ``ros2 run``)."""
+    # args, as in tests, holds no program name; sys.argv does
+    rest = remove_ros_args(sys.argv)[1:] if args is None else remove_ros_args(args)
+    if rest and rest[0] in ('-h', '--help'):
+        print(USAGE, end='')
+        return 0
+    if rest:
+        print(f'gyro_denoiser: error: unknown arguments {" ".join(rest)!r}; parameters go '
+              'after --ros-args, e.g. gyro_denoiser --ros-args -p model:=tumvi',
+              file=sys.stderr)
+        return 1
+    rclpy.init(args=args)
+    node = None
+    try:
+        node = GyroDenoiser()
+        rclpy.spin(node)
+    except DenoiseError as err:
+        print(f'gyro_denoiser: error: {err}', file=sys.stderr)
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

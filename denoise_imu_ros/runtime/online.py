@@ -1,0 +1,157 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The online correction pipeline without ROS: input checks, streaming network, attitude.
+
+:class:`OnlineDenoiser` takes one IMU sample at a time (stamp, gyro, accel) and either
+returns the corrected gyro with the integrated attitude or a counted drop. The ROS node
+and the bag processor both drive it, so they publish identical numbers.
+
+Policies (each counted in :attr:`OnlineDenoiser.counts`):
+- a non-finite field, a value beyond the physical range (:mod:`denoise_imu_ros.core.limits`),
+  a zero stamp, a duplicate or out-of-order stamp: sample dropped;
+- a stamp more than ``time_jump_s`` behind the last one (bag loop, clock reset): full
+  reset (network history and attitude), the sample is the first of a new recording;
+- a gap longer than ``max_gap_factor`` nominal periods: the network history restarts
+  (as at start-up) and the attitude is held across the gap, which cannot be integrated;
+- every nominal period without a sample is counted (``skipped_periods``): samples lost
+  upstream or in a subscription queue show there, not only as a lower rate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+import math
+from typing import Any, NamedTuple
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .streaming import StreamingCorrector
+from ..core.limits import in_range
+from ..core.modelfile import ModelFile, sample_rate
+from ..core.msgs import imu_fields
+
+
+class Drop(str, Enum):
+    """Why a sample was dropped (the value is its counter's name)."""
+
+    NON_FINITE = 'non_finite'
+    OUT_OF_RANGE = 'out_of_range'
+    ZERO_STAMP = 'zero_stamp'
+    DUPLICATE_STAMP = 'duplicate_stamp'
+    OUT_OF_ORDER = 'out_of_order'
+
+
+class Event(str, Enum):
+    """A reset of the pipeline's state at an accepted sample."""
+
+    START = 'start'          # first sample: network warm-up, attitude from gravity
+    GAP = 'gap'              # stamps too far apart: network warm-up, attitude held
+    TIME_JUMP = 'time_jump'  # stamps went back in time: everything reset
+
+
+DROP_CAUSES = tuple(d.value for d in Drop)
+
+
+class Output(NamedTuple):
+    """What one accepted sample yields."""
+
+    stamp_ns: int           # the sample's own stamp
+    gyro: np.ndarray        # (3,) corrected angular velocity, rad/s
+    attitude: np.ndarray    # (4,) xyzw, IMU frame to the fixed frame
+    event: Event | None     # set when the state was reset at this sample
+
+
+def gravity_attitude(accel: np.ndarray) -> Rotation:
+    """Roll and pitch from a (static) accelerometer reading, yaw 0 (z up, ENU-like)."""
+    ax, ay, az = accel
+    roll = math.atan2(ay, az)
+    pitch = math.atan2(-ax, math.hypot(ay, az))
+    return Rotation.from_euler('ZYX', [0.0, pitch, roll])
+
+
+@dataclass
+class OnlineDenoiser:
+    """Streaming gyro correction and attitude integration with input checks."""
+
+    engine: StreamingCorrector
+    rate_hz: float                      # the model's sample rate
+    max_gap_factor: float = 3.0         # gap threshold, in nominal sample periods
+    time_jump_s: float = 1.0            # backward stamp jump that resets everything
+    counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
+        (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods'), 0))
+    _last_ns: int | None = None
+    _attitude: Rotation | None = None
+    _last_gyro: np.ndarray | None = None
+    _pending_reset: bool = False
+
+    @classmethod
+    def from_model_file(cls, model: ModelFile, **options: Any) -> OnlineDenoiser:
+        """Build the pipeline of a model file (node and process-bag): numpy only, no torch."""
+        return cls(StreamingCorrector(model.config, model.arrays), sample_rate(model),
+                   **options)
+
+    def reset_attitude(self) -> None:
+        """Re-initialise the attitude from the accelerometer at the next sample."""
+        self._pending_reset = True
+
+    def _drop(self, cause: Drop) -> Drop:
+        self.counts[cause.value] += 1
+        return cause
+
+    def process_imu(self, msg: Any) -> Output | Drop:
+        """Correct one sensor_msgs/Imu (rclpy or rosbags message); see :meth:`process`."""
+        return self.process(*imu_fields(msg))
+
+    def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray) -> Output | Drop:
+        """Correct one sample; returns an :class:`Output` or the cause of a drop."""
+        if not (np.isfinite(gyro).all() and np.isfinite(accel).all()):
+            return self._drop(Drop.NON_FINITE)
+        if not in_range(gyro, accel):
+            return self._drop(Drop.OUT_OF_RANGE)
+        if stamp_ns <= 0:
+            return self._drop(Drop.ZERO_STAMP)
+        event = None
+        if self._last_ns is None:
+            event = Event.START
+        elif stamp_ns == self._last_ns:
+            return self._drop(Drop.DUPLICATE_STAMP)
+        elif stamp_ns < self._last_ns:
+            if (self._last_ns - stamp_ns) * 1e-9 <= self.time_jump_s:
+                return self._drop(Drop.OUT_OF_ORDER)
+            event = Event.TIME_JUMP
+            self.counts['time_jump_resets'] += 1
+        else:
+            # nominal periods with no sample: lost upstream or in a queue (or a slow stream)
+            periods = round((stamp_ns - self._last_ns) * 1e-9 * self.rate_hz)
+            self.counts['skipped_periods'] += max(periods - 1, 0)
+            if (stamp_ns - self._last_ns) * 1e-9 > self.max_gap_factor / self.rate_hz:
+                event = Event.GAP
+                self.counts['gap_resets'] += 1
+
+        if event is not None:
+            self.engine.reset()
+        if event in (Event.START, Event.TIME_JUMP) or self._pending_reset:
+            self._attitude = gravity_attitude(accel)
+            self._pending_reset = False
+        elif event is None:  # sample k-1 drives the attitude from stamp k-1 to stamp k
+            dt = (stamp_ns - self._last_ns) * 1e-9
+            self._attitude = self._attitude * Rotation.from_rotvec(self._last_gyro * dt)
+        corrected = self.engine.step(np.concatenate([gyro, accel]))
+        self._last_ns, self._last_gyro = stamp_ns, corrected
+        self.counts['accepted'] += 1
+        return Output(stamp_ns=stamp_ns, gyro=corrected, attitude=self._attitude.as_quat(),
+                      event=event)

@@ -1,0 +1,99 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Offline bag processing with the online pipeline: ``denoise-imu process-bag``.
+
+The output bag holds every input topic unchanged plus ``/imu/corrected`` and
+``/imu/attitude``, computed by the same :class:`~denoise_imu_ros.runtime.online.OnlineDenoiser`
+the node runs, so the numbers are those the node would publish for that input.
+ROS 1 bags are first converted to ROS 2 with ``rosbags.convert``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+import tempfile
+
+import numpy as np
+from rosbags.convert import convert, ConverterError
+from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+
+from .online import Drop, DROP_CAUSES, OnlineDenoiser
+from ..core import msgs
+from ..core.atomic import atomic_output
+from ..core.errors import DatasetError
+from ..core.limits import check_rate
+from ..core.modelfile import gyro_covariance, read_model_file
+from ..core.msgs import stamp_ns
+from ..data.bags import BAG_TYPES, CORRUPT, IMU_TYPE, open_bag, pick_connections, TYPESTORE
+
+CORRECTED_TOPIC = '/imu/corrected'
+ATTITUDE_TOPIC = '/imu/attitude'
+ATTITUDE_TYPE = 'geometry_msgs/msg/QuaternionStamped'
+
+
+def _ros2_source(src: Path, workdir: Path) -> Path:
+    """Return the bag itself if it is ROS 2, else its conversion into ``workdir``."""
+    if src.suffix != '.bag':
+        return src
+    dst = workdir / 'converted'
+    try:
+        convert([src], dst, dst_storage='sqlite3', dst_version=9, compress=None,
+                compress_mode='file', default_typestore=None, typestore=TYPESTORE,
+                exclude_topics=[], include_topics=[], exclude_msgtypes=[], include_msgtypes=[])
+    except (ConverterError, *CORRUPT) as err:
+        raise DatasetError(f'{src}: cannot read ROS 1 bag: {" ".join(str(err).split())[:120]}'
+                           ) from err
+    return dst
+
+
+def process_bag(src: str | Path, dst: str | Path, model_spec: str,
+                imu_topic: str | None = None, storage: str = 'mcap',
+                fixed_frame: str = 'odom') -> dict[str, int]:
+    """Copy a bag and add the corrected IMU and attitude; returns the pipeline's counts."""
+    src = Path(src)
+    if not src.exists():
+        raise DatasetError(f'{src}: bag not found')
+    loaded = read_model_file(model_spec)
+    den = OnlineDenoiser.from_model_file(loaded)
+    cov = np.array(gyro_covariance(loaded))
+    plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
+    with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
+        try:
+            with open_bag(_ros2_source(src, Path(tmp))) as rd, \
+                    Writer(partial, version=9, storage_plugin=plugin) as wr:
+                imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
+                check_rate([stamp_ns(rd.deserialize(raw, c.msgtype).header)
+                            for c, _, raw in rd.messages(connections=imu_conns)],
+                           den.rate_hz, src)
+                out = {c.id: wr.add_connection(c.topic, c.msgtype, typestore=rd.typestore)
+                       for c in rd.connections}
+                corr = wr.add_connection(CORRECTED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
+                att = wr.add_connection(ATTITUDE_TOPIC, ATTITUDE_TYPE, typestore=TYPESTORE)
+                imu_ids = {c.id for c in imu_conns}
+                for conn, stamp, raw in rd.messages():
+                    wr.write(out[conn.id], stamp, raw)
+                    if conn.id not in imu_ids:
+                        continue
+                    msg = rd.deserialize(raw, conn.msgtype)
+                    res = den.process_imu(msg)
+                    if isinstance(res, Drop):
+                        continue
+                    corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov)
+                    attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
+                    wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
+                    wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
+        except (*CORRUPT, WriterError, FileExistsError) as err:
+            raise DatasetError(f'{src} -> {dst}: {err}') from err
+    return {k: v for k, v in den.counts.items() if v or k in DROP_CAUSES}

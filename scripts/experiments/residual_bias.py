@@ -1,0 +1,54 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+How much of a model's error on a recording is one constant bias: an analysis, not a method.
+
+Corrects the gyro with MODEL, fits one constant bias on the corrected gyro's 256-sample
+increment errors against the recording's own poses (``metrics.fit_constant_bias``, as
+check-data's supervision test) and prints the AOE before and after removing it, with
+the bias. Fitting on the recording's poses uses its ground truth: the "after" column is
+a bound on what a perfect per-recording constant would give, not something deployable.
+Usage: .venv/bin/python scripts/experiments/residual_bias.py MODEL DATA_DIR NAME [NAME ...]
+"""
+
+import dataclasses
+from pathlib import Path
+import sys
+
+from denoise_imu_ros.data.check import supervision
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.model import correct_gyro
+
+LENGTH = 256
+
+
+def main(model: str, data: str, names: list[str]) -> None:
+    """Print one line per recording."""
+    net = load_model(model).model
+    for name in names:
+        seq = load_sequence(Path(data) / name)
+        imu = seq.imu.copy()
+        imu[:, :3] = correct_gyro(net, seq.imu)
+        report = supervision(dataclasses.replace(seq, imu=imu), (LENGTH,))
+        fit = report['fits'][LENGTH]
+        print(f'{name}: AOE {report["aoe_plain_deg"]:.2f} -> {fit["aoe_deg"]:.2f} deg without '
+              'the residual bias ' + ', '.join(f'{b:+.3f}' for b in fit['bias_deg_s'])
+              + ' deg/s', flush=True)
+
+
+if __name__ == '__main__':
+    if len(sys.argv) < 4:
+        sys.exit(__doc__)
+    main(sys.argv[1], sys.argv[2], sys.argv[3:])

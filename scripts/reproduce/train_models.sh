@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Train the shipped models and their seed repeats (the figures in the README), the EuRoC
+# ensemble of the seeds, and the cross-recording reports of both recipes.
+#   scripts/reproduce/train_models.sh OUT_DIR [SEEDS...]    (EuRoC seeds, default: 0 1 2 3 4)
+#   TUMVI_SEEDS="0 1" scripts/reproduce/train_models.sh ... (TUM-VI seeds, default: 0)
+# Each run writes OUT_DIR/<name>.safetensors and OUT_DIR/<name>.log. Runs one after the
+# other: a run uses both cores (or the GPU: train picks cuda when torch sees one).
+set -euo pipefail
+out=${1:?usage: scripts/reproduce/train_models.sh OUT_DIR [SEEDS...]}
+shift
+seeds=("${@:-0 1 2 3 4}")
+mkdir -p "$out"
+bin=$(dirname "$0")/../../.venv/bin
+run() {  # name, args...
+  local name=$1; shift
+  [ -f "$out/$name.safetensors" ] && { echo "skip $name (exists)"; return; }
+  echo "$(date -u +%H:%M:%S) training $name"
+  "$bin/python" -u -m denoise_imu_ros.cli train "$@" --out "$out/$name.safetensors" --quiet \
+    --candidates-dir "$out/$name.candidates" \
+    > "$out/$name.log" 2>&1
+  tail -n 1 "$out/$name.log"
+}
+run euroc_calibrated --config config/train_euroc.yaml --calibration-only
+run tumvi_calibrated --config config/train_tumvi.yaml --calibration-only
+first=${seeds[0]%% *}
+run "euroc_s$first" --config config/train_euroc.yaml --seed "$first"
+for seed in ${TUMVI_SEEDS:-0}; do
+  run "tumvi_s$seed" --config config/train_tumvi.yaml --seed "$seed"
+done
+for seed in ${seeds[@]}; do
+  run "euroc_s$seed" --config config/train_euroc.yaml --seed "$seed"
+done
+[ -f "$out/euroc_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble \
+  "$out"/euroc_s[0-9].safetensors --out "$out/euroc_ensemble.safetensors"
+crossval() {  # name, recipe, folds, models to attach the report to...
+  local name=$1 recipe=$2 folds=$3; shift 3
+  [ -f "$out/$name/crossval.json" ] && { echo "skip $name (exists)"; return; }
+  echo "$(date -u +%H:%M:%S) $name"
+  "$bin/denoise-imu" crossval --config "$recipe" --folds "$folds" --out "$out/$name" \
+    --quiet --attach "$@" > "$out/$name.log" 2>&1
+  tail -n 1 "$out/$name.log"
+}
+crossval crossval_euroc config/train_euroc.yaml 6 "$out/euroc_ensemble.safetensors" \
+  "$out/euroc_calibrated.safetensors"
+crossval crossval_tumvi config/train_tumvi.yaml 3 "$out"/tumvi_s*.safetensors \
+  "$out/tumvi_calibrated.safetensors"

@@ -1,0 +1,65 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""Integration and AOE/ROE: against a plain loop, evo, and hand-made errors."""
+
+from denoise_imu_ros.core.metrics import attitude_errors, integrate
+from denoise_imu_ros.data.load import load_sequence
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+
+def test_prefix_scan_integration_equals_the_step_by_step_loop():
+    rng = np.random.default_rng(0)
+    gyro, dt = rng.normal(size=(999, 3)), rng.uniform(0.004, 0.006, 999)
+    q0 = Rotation.random(random_state=1)
+    scan = integrate(q0.as_quat(), gyro, dt)
+    r = q0
+    for k in range(999):
+        r = r * Rotation.from_rotvec(gyro[k] * dt[k])  # sample k drives stamp k -> k + 1
+        if k % 97 == 0 or k == 998:
+            assert (scan[k + 1].inv() * r).magnitude() < 1e-12
+    assert (scan[0].inv() * q0).magnitude() == 0
+
+
+def test_aoe_matches_evo_ape_rotation_error_on_a_real_raw_gyro_trajectory(euroc):
+    from evo.core import metrics
+    from evo.core.trajectory import PoseTrajectory3D
+    seq = load_sequence(euroc / 'V1_03_difficult')
+    est = integrate(seq.gt_quat[0], seq.imu[:-1, :3], seq.dt)
+    ours = attitude_errors(est, Rotation.from_quat(seq.gt_quat), seq.gt_pos, seq.gt_valid)
+
+    def traj(quat_xyzw):
+        return PoseTrajectory3D(positions_xyz=seq.gt_pos,
+                                orientations_quat_wxyz=quat_xyzw[:, [3, 0, 1, 2]],
+                                timestamps=seq.stamp_ns * 1e-9)
+    ape = metrics.APE(metrics.PoseRelation.rotation_angle_deg)
+    ape.process_data((traj(seq.gt_quat), traj(est.as_quat())))
+    assert ours.aoe == pytest.approx(ape.get_statistic(metrics.StatisticsType.rmse), rel=1e-6)
+    assert ours.aoe > 50  # raw EuRoC gyro drifts by tens of degrees (paper: 119 deg)
+
+
+def test_yaw_is_the_rotation_about_world_z_and_roe_ignores_a_constant_world_offset():
+    n = 2000
+    t = np.linspace(0, 20, n)
+    gt = Rotation.from_rotvec(np.stack([0.3 * np.sin(t), 0.2 * np.cos(t), 0.5 * t], 1))
+    pos = np.stack([t, np.zeros(n), np.zeros(n)], 1)  # 1 m/s along x: 20 m in all
+    valid = np.ones(n, bool)
+    world_yaw = Rotation.from_euler('z', 10, degrees=True) * gt
+    err = attitude_errors(world_yaw, gt, pos, valid, distances=(7.0,))
+    assert err.aoe == pytest.approx(10) and err.aoe_yaw == pytest.approx(10)
+    assert err.roe_median()[7.0] < 1e-9  # relative rotations are untouched
+    tilt = Rotation.from_euler('x', 5, degrees=True) * gt
+    err = attitude_errors(tilt, gt, pos, valid, distances=(35.0,))
+    assert err.aoe == pytest.approx(5) and err.aoe_yaw < 1e-9
+    assert np.isnan(err.roe_median()[35.0])  # never travelled 35 m
+
+
+def test_ground_truth_holes_are_skipped():
+    n = 1000
+    gt = Rotation.identity(n)
+    est = Rotation.concatenate([Rotation.identity(500),
+                                Rotation.from_euler('z', np.full((500, 1), 90.0), degrees=True)])
+    valid = np.arange(n) < 500
+    err = attitude_errors(est, gt, np.zeros((n, 3)), valid, distances=())
+    assert err.aoe == 0 and np.isnan(err.error_deg[600])

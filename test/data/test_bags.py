@@ -1,0 +1,90 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""Bags through rosbags: convert round trip, ROS 1 and ROS 2 inputs, topic errors."""
+
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.core.errors import DatasetError
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.learn.config import load_config
+from denoise_imu_ros.learn.train import training_split
+from helpers import bag_messages, N, ROOT, ROS2, write_ros1_bag
+import numpy as np
+import pytest
+from rosbags.rosbag2 import Writer as Writer2
+import torch
+
+
+def _check(seq):
+    assert len(seq) == N
+    np.testing.assert_allclose(seq.gt_quat[0], [0.0, 0.0, 0.6, 0.8])
+    np.testing.assert_allclose(seq.gt_pos[:, 2], np.arange(N))
+    assert np.all(np.diff(seq.stamp_ns) == 5_000_000)
+
+
+def test_ros1_bag_with_transform_stamped_ground_truth(tmp_path):
+    _check(load_sequence(write_ros1_bag(tmp_path / 'euroc_like.bag')))
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_ros2_bag_with_odometry_ground_truth_and_explicit_topics(tmp_path, storage):
+    from rosbags.rosbag2 import StoragePlugin
+    path = tmp_path / 'odom'
+    plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
+    with Writer2(path, version=9, storage_plugin=plugin) as writer:
+        conns = {}
+        for topic, msgtype, stamp, msg in bag_messages(ROS2, 'nav_msgs/msg/Odometry'):
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msgtype, typestore=ROS2)
+            writer.write(conns[topic], stamp, ROS2.serialize_cdr(msg, msgtype))
+    _check(load_sequence(path, imu_topic='imu0', pose_topic='/vicon/body'))
+    with pytest.raises(DatasetError, match=r"no topic '/imu9' \(topics: /imu0 \["):
+        load_sequence(path, imu_topic='/imu9')
+    with pytest.raises(DatasetError, match="topic '/imu0' has type sensor_msgs/msg/Imu, "
+                                           'expected geometry_msgs'):
+        load_sequence(path, pose_topic='/imu0')
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_training_arrays_from_converted_bag_equal_those_from_csv(euroc, tmp_path, storage):
+    seq_dir = euroc / 'V1_02_medium'
+    bag = tmp_path / f'V1_02_medium_{storage}'
+    assert main(['convert', str(seq_dir), str(bag), '--storage', storage]) == 0
+    cfg = load_config(ROOT / 'config' / 'train_euroc.yaml')
+    from_csv = training_split([load_sequence(seq_dir)], cfg)
+    from_bag = training_split([load_sequence(bag)], cfg)
+    for name in ('imu', 'dt', 'quat', 'valid'):
+        assert torch.equal(getattr(from_csv, name), getattr(from_bag, name)), name
+    a, b = load_sequence(seq_dir), load_sequence(bag)
+    assert np.array_equal(a.stamp_ns, b.stamp_ns) and np.array_equal(a.gt_pos, b.gt_pos)
+
+
+def test_convert_refuses_an_existing_output(euroc, tmp_path, capsys):
+    (tmp_path / 'out').mkdir()
+    assert main(['convert', str(euroc / 'V1_02_medium'), str(tmp_path / 'out')]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith('denoise-imu convert: error:') and str(tmp_path / 'out') in err
+    assert '\n' not in err
+
+
+def test_convert_overlap_keeps_only_the_span_with_ground_truth(euroc, tmp_path):
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import read_bag
+    # V1_02's ground truth starts ~1 s after its IMU (V1_01's corrected one does not).
+    seq = euroc / 'V1_02_medium'
+    assert main(['convert', str(seq), str(tmp_path / 'b'), '--overlap']) == 0
+    rec, asl = read_bag(tmp_path / 'b'), read_asl(seq)
+    assert asl.gt_stamp_ns[0] > asl.imu_stamp_ns[0]  # the case this test is about
+    assert rec.imu_stamp_ns[0] >= asl.gt_stamp_ns[0]
+    assert len(load_sequence(tmp_path / 'b')) == len(load_sequence(seq))
+
+
+def test_convert_writes_the_topic_names_asked_for(tmp_path):
+    from denoise_imu_ros.data.bags import read_bag
+    from helpers import write_asl
+    seq = write_asl(tmp_path / 'a', n_imu=600)
+    assert main(['convert', str(seq), str(tmp_path / 'b'), '--imu-topic', '/imu/data_raw',
+                 '--pose-topic', '/mocap/pose']) == 0
+    with pytest.raises(DatasetError, match=r"no topic '/imu0' \(topics: /imu/data_raw"):
+        read_bag(tmp_path / 'b', imu_topic='/imu0')
+    rec = read_bag(tmp_path / 'b', imu_topic='/imu/data_raw', pose_topic='/mocap/pose')
+    assert len(rec.imu) == 600

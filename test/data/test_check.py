@@ -1,0 +1,162 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""check-data: rates, holes and the label-noise profile that picks increment lengths."""
+
+import dataclasses
+import json
+import math
+
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.data.asl import read_asl
+from denoise_imu_ros.data.check import check, ESTIMATES, label_noise, paper_increments, supervision
+from denoise_imu_ros.data.pose_alignment import estimate_pose_alignment
+from denoise_imu_ros.data.timebase import onto_imu_stamps
+from helpers import write_asl
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+
+def test_clean_and_jittery_ground_truth_are_told_apart(tmp_path):
+    rec = read_asl(write_asl(tmp_path / 's', n_imu=6000, gt_rate=120.0, gt_dir='mocap0',
+                             gt_hole=(10.0, 11.0), gyro_bias=0.01))
+    clean = check(rec)
+    assert abs(clean['gyro_bias_deg_s'][2] - np.degrees(0.01)) < 1e-3
+    assert clean['noise_dominated_increments'] == []
+    assert clean['pose_holes'] == 1 and 0.9 < clean['pose_longest_hole_s'] < 1.1
+    assert abs(clean['pose_rate_hz'] - 120.0) < 0.5 and abs(clean['imu_rate_hz'] - 200) < 0.1
+    assert clean['usable'] == 'no'  # a constant yaw rate: no x or y rotation, no clock
+    # 3 mrad of white jitter on every pose: short increments measure it, not the gyro
+    rng = np.random.default_rng(0)
+    jitter = Rotation.from_rotvec(rng.normal(0, 3e-3, (len(rec.gt_quat), 3)))
+    noisy_rec = dataclasses.replace(
+        rec, gt_quat=(Rotation.from_quat(rec.gt_quat) * jitter).as_quat())
+    noisy = label_noise(onto_imu_stamps(noisy_rec))
+    assert {16, 32} <= set(noisy['noise_dominated_increments'])
+    assert 64 not in noisy['noise_dominated_increments']
+    assert check(noisy_rec)['label_noise'].startswith(
+        'increments of 16 and 32 samples are dominated by ground-truth noise; from 64')
+
+
+def test_poses_whose_increments_disagree_with_their_own_attitude_cannot_supervise(tmp_path):
+    rec = read_asl(write_asl(tmp_path / 's', n_imu=12000, gt_rate=120.0, gt_dir='mocap0',
+                             gyro_bias=0.01))
+    biased = supervision(onto_imu_stamps(rec), (16, 32, 256))
+    assert biased['helps'] and biased['aoe_plain_deg'] > 10 and biased['summary'].startswith(
+        "a constant gyro bias fitted on the poses' own")
+    for fit in biased['fits'].values():
+        np.testing.assert_allclose(fit['bias_deg_s'], [0, 0, np.degrees(0.01)], atol=1e-4)
+        assert fit['aoe_deg'] < 0.01
+    holes = onto_imu_stamps(rec)
+    holes = dataclasses.replace(holes, gt_valid=np.arange(len(holes)) % 10 > 0)
+    none = supervision(holes, (16, 32))
+    assert not none['helps'] and none['fits'] == {} and none['summary'] == (
+        'no increment of 16, 32 samples has trusted poses at every stamp: nothing supervises '
+        'a correction')
+    # an exact gyro, and mocap whose yaw creeps at 1 deg/s and jumps back in a 0.3 s hole
+    # every 5 s (a re-acquired marker): every trusted increment says "bias", none is one
+    rec = read_asl(write_asl(tmp_path / 'e', n_imu=12000, gt_rate=120.0, gt_dir='mocap0'))
+    t = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
+    keep = np.abs(t - 5.0 * np.round(t / 5.0)) > 0.15
+    creep = Rotation.from_rotvec(np.outer(np.radians(1.0) * (t % 5.0), [0, 0, 1]))
+    jumpy = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns[keep], gt_pos=rec.gt_pos[keep],
+                                gt_quat=(creep * Rotation.from_quat(rec.gt_quat)).as_quat()[keep])
+    report = supervision(onto_imu_stamps(jumpy), (16, 32, 256))
+    assert not report['helps']
+    assert all(f['aoe_deg'] > 5 * report['aoe_plain_deg'] for f in report['fits'].values())
+    assert report['summary'] in check(jumpy)['reasons']
+
+
+def test_check_data_on_real_recordings(data_dir, capsys):
+    assert main(['check-data', str(data_dir / 'tumvi' / 'dataset-room1_512_16'),
+                 '--json']) == 0
+    tumvi = json.loads(capsys.readouterr().out.splitlines()[-1])
+    assert set(ESTIMATES) <= set(tumvi)  # what a too-short recording reports as null
+    assert {16, 32} <= set(map(int, tumvi['noise_dominated_increments']))
+    assert abs(tumvi['time_offset_s']) < 1e-3 and tumvi['usable'] == 'yes'
+    assert tumvi['imu_from_pose_rotation_deg'] < 0.2
+    # room1's own mocap supervises a bias over 256 samples, room3's at no length tried
+    assert tumvi['supervision']['helps'] and tumvi['supervision']['fits']['256']['aoe_deg'] < 1
+    room3 = check(read_asl(data_dir / 'tumvi' / 'dataset-room3_512_16'))
+    assert not room3['supervision']['helps'] and room3['reasons'] == [
+        room3['supervision']['summary']]
+    euroc = check(read_asl(data_dir / 'euroc' / 'V1_01_easy'))  # 20 Hz corrected poses
+    assert 19.5 < euroc['pose_rate_hz'] < 20.5
+    assert not {16, 32} & set(euroc['noise_dominated_increments'])
+    assert euroc['supervision']['fits'][16]['aoe_deg'] < 1.0  # from 114 deg of raw gyro
+    assert abs(euroc['time_offset_s']) < 1e-3 and euroc['imu_from_pose_rotation_deg'] < 0.2
+    # V2_03's poses lag by +2 to -4 ms along the recording: reported, not "fixed"
+    drift = check(read_asl(data_dir / 'euroc' / 'V2_03_difficult'))
+    assert drift['usable'] == 'yes' and abs(drift['time_offset_s']) < 2 * (
+        drift['time_offset_std_s'])
+    assert drift['reasons'][0].startswith('the clock offset is not constant: +2.')
+
+
+def test_the_papers_increments_follow_the_rate_in_seconds():
+    assert [paper_increments(r) for r in (100, 199.4, 200, 400, 1000)] == [
+        (8, 16), (16, 32), (16, 32), (32, 64), (64, 128)]
+
+
+@pytest.mark.parametrize('offset_ms, rotvec_deg', [
+    (37.3, (30.0, -20.0, 45.0)), (-12.6, (0.0, 90.0, 0.0)), (81.0, (-170.0, 5.0, 10.0))])
+def test_a_shifted_clock_and_a_rotated_pose_frame_are_recovered(euroc, offset_ms, rotvec_deg):
+    rec = read_asl(euroc / 'V1_03_difficult')
+    # poses of a marker body (rotated, 12 cm lever arm) on a clock offset_ms late
+    marker = Rotation.from_rotvec(rotvec_deg, degrees=True)  # imu_from_pose
+    body = Rotation.from_quat(rec.gt_quat)
+    moved = dataclasses.replace(
+        rec, gt_stamp_ns=rec.gt_stamp_ns - int(offset_ms * 1e6),
+        gt_quat=(body * marker).as_quat(), gt_pos=rec.gt_pos + body.apply([0.12, 0.0, 0.05]))
+    base = estimate_pose_alignment(rec)
+    found = estimate_pose_alignment(moved)
+    assert abs(found['time_offset_s'] - base['time_offset_s'] - offset_ms * 1e-3) < 1e-3
+    rot = Rotation.from_quat(found['imu_from_pose_rotation_xyzw'])
+    assert math.degrees((rot * marker.inv()).magnitude()) < 0.2
+    assert found['time_offset_std_s'] < 1e-3 and found['imu_from_pose_rotation_std_deg'] < 0.2
+    assert check(moved)['usable'] == 'after alignment'
+
+
+def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, capsys, euroc):
+    # yaw only: nothing about x and y
+    flat = write_asl(tmp_path / 'flat', n_imu=8000)
+    assert main(['check-data', str(flat)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert 'not usable for training: no rotation about the IMU x axis' in err
+    # too short, and poses 2 s off the clock with a 0.5 s search range
+    rec = read_asl(euroc / 'MH_01_easy')
+    short = dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:4000],
+                                imu=rec.imu[:4000])
+    assert check(short)['reasons'][0].startswith('too short: 18.9 s of IMU with poses')
+    # shorter than the receptive field: nothing is estimated, the JSON says so with nulls
+    from denoise_imu_ros.data.bags import write_bag
+    write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:400], imu=rec.imu[:400]),
+              tmp_path / 'tiny')
+    assert main(['check-data', str(tmp_path / 'tiny'), '--json']) == 1
+    out, err = capsys.readouterr()
+    assert json.loads(out.splitlines()[-1])['time_offset_s'] is None
+    assert len(err.strip().splitlines()) == 1
+    assert "fewer than the network's receptive field (511 samples)" in err
+    late = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns - 2_000_000_000)
+    assert 'do not follow the gyro at any clock offset within +-0.5 s' in ' '.join(
+        check(late)['reasons'])
+    # no overlap at all
+    away = write_asl(tmp_path / 'away', n_imu=2000, gt_offset_s=20.0)
+    assert main(['check-data', str(away)]) == 1
+    assert 'do not overlap in time' in capsys.readouterr().err
+
+
+def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
+    from denoise_imu_ros.learn.config import load_config
+    rooms = ['dataset-room1_512_16', 'dataset-room5_512_16']
+    out = tmp_path / 'recipe.yaml'
+    assert main(['init-recipe', '--data', str(data_dir / 'tumvi'), '--sequences', *rooms,
+                 '--out', str(out)]) == 0
+    cfg = load_config(out)  # a recipe train accepts as it is
+    assert cfg.increments == [64, 128]  # the mocap's 16/32 are noise-dominated
+    assert cfg.gyro_std_deg == [0.2, 0.2, 0.2] and cfg.align == 'none'
+    assert cfg.window % 128 == 0 and 75 < cfg.window / 199.4 <= 80
+    assert cfg.sequences == rooms
+    assert '16/32 are noise-dominated' in out.read_text().splitlines()[2]
+    assert out.read_text().splitlines()[6].startswith(
+        '# supervision: the poses of dataset-room5_512_16 do not lower their own attitude')

@@ -1,0 +1,101 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""Cross-recording validation: folds by recording, scores of unseen ones, the verdict."""
+
+import json
+
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.core.errors import TrainingError
+from denoise_imu_ros.evaluation.crossval import folds, summarize
+from denoise_imu_ros.learn.checkpoint import load_model
+from helpers import write_asl
+import pytest
+import yaml
+
+
+def _figures(net, calib, raw):
+    return {m: {'aoe_deg': v, 'aoe_yaw_deg': v / 2}
+            for m, v in (('network', net), ('calibrated', calib), ('raw', raw))}
+
+
+def test_folds_hold_every_recording_out_exactly_once():
+    names = ['a', 'b', 'c', 'd', 'e']
+    assert folds(names) == [['a'], ['b'], ['c'], ['d'], ['e']]
+    assert sorted(sum(folds(names, 2), [])) == names and len(folds(names, 2)) == 2
+    with pytest.raises(TrainingError, match='folds must be between 2 and 5'):
+        folds(names, 1)
+
+
+def test_verdict_follows_the_figures():
+    wins = summarize({'a': _figures(1.0, 2.0, 9.0), 'b': _figures(1.5, 2.0, 9.0),
+                      'c': _figures(3.0, 2.0, 9.0)})
+    assert wins['mean']['network']['aoe_deg'] == pytest.approx(5.5 / 3)
+    assert wins['verdict'] == ('the network beats the calibrated IMU on 2 of 3 unseen '
+                               'recordings, by 8 % in mean AOE: deploy the network')
+    assert wins['deploy'] == 'network'
+    loses = summarize({'a': _figures(1.0, 2.0, 9.0), 'b': _figures(4.0, 2.0, 9.0)})
+    assert loses['verdict'].endswith('(1 of 2, -25 % in mean AOE): deploy the calibration')
+    assert loses['deploy'] == 'calibration'
+    # an IMU calibrated already: plain integration is the bar, not a refitted calibration
+    plain = summarize({'a': _figures(1.2, 3.0, 1.0), 'b': _figures(1.1, 3.0, 1.0)})
+    assert plain['verdict'].startswith('the network does not beat plain integration')
+    assert plain['verdict'].endswith('deploy no correction') and plain['deploy'] == 'none'
+
+
+def test_crossval_command_trains_folds_scores_and_stores_the_report(
+        tmp_path, model_file, capsys):
+    data = tmp_path / 'data'
+    for i, bias in enumerate((0.010, 0.012, 0.011)):  # one z gyro bias per "day"
+        write_asl(data / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=bias)
+    recipe = {'dataset': 'synthetic', 'data': str(data), 'sequences': ['rec0', 'rec1', 'rec2'],
+              'window': 1024, 'steps': 30, 'val_every': 10, 'swa_start': 20, 'select': 'swa',
+              'restart_period': 30, 'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1}
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
+    out = tmp_path / 'cv'
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+                 '--quiet', '--attach', str(model_file)]) == 0
+    report = json.loads((out / 'crossval.json').read_text())
+    assert list(report['recordings']) == ['rec0', 'rec1', 'rec2']
+    assert report['folds'] == [['rec0'], ['rec1'], ['rec2']]
+    for name, figures in report['recordings'].items():
+        # the bias is a constant of every day: the fitted calibration removes most of it
+        assert figures['calibrated']['aoe_deg'] < 0.5 * figures['raw']['aoe_deg']
+    for i in range(3):
+        trained_on = load_model(out / f'fold{i}' / 'network.safetensors').meta['train_sequences']
+        assert f'rec{i}' not in trained_on and len(trained_on) == 2
+    printed = capsys.readouterr().out
+    assert report['verdict'] in printed and 'rec2' in printed
+    assert load_model(model_file).meta['crossval'] == report
+    assert main(['eval', '--model', str(model_file), '--data', str(data), '--sequences',
+                 'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0
+    assert json.loads((tmp_path / 'ev' / 'results.json').read_text())['crossval'] == report
+    assert report['verdict'] in (tmp_path / 'ev' / 'results.md').read_text()
+
+
+def test_held_out_recordings_are_aligned_like_the_training_ones(tmp_path):
+    import dataclasses
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import write_bag
+    from denoise_imu_ros.evaluation.crossval import crossval
+    from scipy.spatial.transform import Rotation
+    marker = Rotation.from_rotvec([30.0, -20.0, 45.0], degrees=True)  # imu_from_pose
+    recipe = {'dataset': 'synthetic', 'sequences': ['rec0', 'rec1'], 'window': 1024,
+              'steps': 10, 'val_every': 10, 'restart_period': 10, 'workers': 1,
+              'gyro_std_deg': [1.0, 1.0, 1.0]}
+    for kind in ('plain', 'marker'):
+        (tmp_path / kind).mkdir()
+    for i, bias in enumerate((0.010, 0.012)):
+        rec = read_asl(write_asl(tmp_path / 'plain' / f'rec{i}', n_imu=2400, gyro_bias=bias))
+        write_bag(dataclasses.replace(rec, gt_quat=(Rotation.from_quat(rec.gt_quat)
+                                                    * marker).as_quat()),
+                  tmp_path / 'marker' / f'rec{i}')
+    reports = {}
+    for kind, align in (('plain', 'none'), ('marker', {
+            'time_offset_s': 0.0, 'imu_from_pose_rotation_xyzw': marker.as_quat().tolist()})):
+        config = tmp_path / f'{kind}.yaml'
+        config.write_text(yaml.safe_dump(dict(recipe, data=str(tmp_path / kind), align=align)))
+        reports[kind] = crossval(config, progress=False)['recordings']
+    for name, figures in reports['plain'].items():
+        for method, scores in figures.items():
+            assert reports['marker'][name][method]['aoe_deg'] == pytest.approx(
+                scores['aoe_deg'], rel=1e-3, abs=1e-4)

@@ -1,0 +1,40 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""eval and correct: tables, figures, chunked batch correction."""
+
+import json
+
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.learn import model as model_module
+from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.model import correct_gyro
+from helpers import SAMPLE
+import numpy as np
+import torch
+
+SAMPLE_DIR = SAMPLE.parent
+
+
+def test_chunked_correction_equals_one_batch_call(model_file, monkeypatch):
+    model = load_model(model_file).model
+    imu = load_imu(SAMPLE).imu[:5000]
+    with torch.no_grad():
+        whole = model(torch.tensor(imu, dtype=torch.float32)[None])[0].double().numpy()
+    monkeypatch.setattr(model_module, 'CHUNK', 700)
+    np.testing.assert_allclose(correct_gyro(model, imu), whole, rtol=0, atol=1e-6)
+
+
+def test_eval_writes_json_markdown_and_figures(model_file, tmp_path):
+    out = tmp_path / 'eval'
+    assert main(['eval', '--model', str(model_file), '--data', str(SAMPLE_DIR),
+                 '--sequences', SAMPLE.name, '--out', str(out),
+                 '--baseline', str(model_file)]) == 0
+    report = json.loads((out / 'results.json').read_text())
+    seq = report['sequences'][SAMPLE.name]
+    assert set(seq) == {'raw', 'calibrated', 'network'}
+    assert set(seq['raw']['roe_median_deg']) == {'7', '21', '35'}
+    assert seq['raw']['aoe_deg'] > 1
+    assert (out / 'results.md').read_text().startswith('| method |')
+    for png in (f'{SAMPLE.name}.png', 'roe.png'):
+        assert (out / png).read_bytes()[:4] == b'\x89PNG'

@@ -1,0 +1,169 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""Model files: self-describing, pickle-free, and refused clearly when broken."""
+
+import json
+
+from denoise_imu_ros.core.architecture import ModelConfig
+from denoise_imu_ros.core.errors import ModelFileError
+from denoise_imu_ros.learn.checkpoint import load_model, save_model
+from denoise_imu_ros.learn.model import GyroNet
+import numpy as np
+import pytest
+from safetensors.torch import save_file
+import torch
+
+
+def _model():
+    torch.manual_seed(0)
+    model = GyroNet(ModelConfig(gyro_std=(0.01, 0.02, 0.03)))
+    model.set_normalization(torch.randn(6), torch.rand(6) + 0.5)
+    with torch.no_grad():
+        model.delta.copy_(0.01 * torch.randn(3, 3))
+    return model.eval()
+
+
+def test_round_trip_rebuilds_the_same_model_from_the_file_alone(tmp_path):
+    model = _model()
+    save_model(tmp_path / 'm.safetensors', model, {'dataset': 'x', 'sample_rate_hz': 200.0})
+    loaded = load_model(tmp_path / 'm.safetensors')
+    u = torch.randn(1, 800, 6)
+    assert torch.equal(loaded.model(u), model(u))
+    assert loaded.meta['sample_rate_hz'] == 200.0
+    assert loaded.meta['receptive_field'] == 511
+    assert not loaded.model.training
+
+
+@pytest.mark.parametrize('calibration_only, deploy, warns', [
+    (False, 'network', False), (False, 'calibration', True), (False, 'none', True),
+    (True, 'calibration', False), (True, 'network', True), (False, None, False)])
+def test_a_model_of_another_kind_than_its_validation_recommends_says_so(
+        tmp_path, calibration_only, deploy, warns):
+    from denoise_imu_ros.core.modelfile import deployment_warning, read_model_file
+    model = GyroNet(ModelConfig(calibration_only=calibration_only)).eval()
+    meta = {'sample_rate_hz': 200.0}
+    if deploy:
+        meta['crossval'] = {'deploy': deploy, 'verdict': f'... deploy {deploy}'}
+    save_model(tmp_path / 'm.safetensors', model, meta)
+    warning = deployment_warning(read_model_file(tmp_path / 'm.safetensors'))
+    assert (warning is not None) == warns
+    if warns:
+        kind = 'calibration' if calibration_only else 'network'
+        assert warning == (f'm.safetensors is a {kind} model, but its cross-recording '
+                           f'validation says: ... deploy {deploy}')
+
+
+def test_corrupt_foreign_and_missing_files_raise_model_file_error(tmp_path):
+    good = tmp_path / 'good.safetensors'
+    save_model(good, _model(), {})
+    data = good.read_bytes()
+    (tmp_path / 'trunc.safetensors').write_bytes(data[: len(data) // 2])
+    (tmp_path / 'junk.safetensors').write_bytes(b'\x00' * 3)
+    torch.save({'a': torch.zeros(1)}, tmp_path / 'pickle.pt')  # a pickle is never loaded
+    save_file({'x': torch.zeros(1)}, str(tmp_path / 'foreign.safetensors'))
+    cases = {'trunc.safetensors': 'corrupt', 'junk.safetensors': 'not a model file',
+             'pickle.pt': 'corrupt', 'foreign.safetensors': 'not a denoise_imu_ros',
+             'absent.safetensors': 'no such model file'}
+    for name, message in cases.items():
+        with pytest.raises(ModelFileError, match=message):
+            load_model(tmp_path / name)
+
+
+def test_other_format_version_and_mismatched_weights_are_refused(tmp_path):
+    model = _model()
+    tensors = {k: v.contiguous() for k, v in model.state_dict().items()}
+    cfg = json.dumps({'calibration_only': False})
+    meta = {'format': 'denoise_imu_ros.gyro_model', 'format_version': '99',
+            'model_config': cfg}
+    save_file(tensors, str(tmp_path / 'v99.safetensors'), metadata=meta)
+    with pytest.raises(ModelFileError, match='format version 99, this code reads version 1'):
+        load_model(tmp_path / 'v99.safetensors')
+    meta['format_version'] = '1'
+    del tensors['delta']
+    save_file(tensors, str(tmp_path / 'partial.safetensors'), metadata=meta)
+    with pytest.raises(ModelFileError, match='inconsistent model file'):
+        load_model(tmp_path / 'partial.safetensors')
+
+
+def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_path):
+    from denoise_imu_ros.cli import main
+    from denoise_imu_ros.learn.model import correct_gyro
+    from helpers import untrained_model
+    second = untrained_model()
+    with torch.no_grad():
+        for p in second.parameters():
+            p.add_(0.01 * torch.randn_like(p))
+    save_model(tmp_path / 'b.safetensors', second, {
+        'dataset': 'test', 'sample_rate_hz': 200.0, 'train_config': {'seed': 7},
+        'validation': {'gyro_residual_std': [0.03, 0.02, 0.01]}})
+    out = tmp_path / 'ens.safetensors'
+    assert main(['ensemble', str(model_file), str(tmp_path / 'b.safetensors'),
+                 '--out', str(out)]) == 0
+    ens = load_model(out)
+    assert ens.model.config.members == 2 and ens.model.receptive_field == 511
+    assert [m['seed'] for m in ens.meta['members']] == [None, 7]
+    assert ens.meta['validation']['gyro_residual_std'] == pytest.approx([0.02] * 3)
+    u = np.random.default_rng(0).normal(0, 1, (800, 6))
+    mean = (correct_gyro(load_model(model_file).model, u) + correct_gyro(second, u)) / 2
+    np.testing.assert_allclose(correct_gyro(ens.model, u), mean, rtol=0, atol=1e-6)
+    # a member normalised otherwise (another run's float32 statistics) is folded in exactly
+    other = untrained_model()
+    other.set_normalization(torch.tensor([0.1, -0.2, 0.0, 9.5, 0.3, -2.0]),
+                            torch.tensor([0.4, 0.2, 0.3, 1.5, 0.8, 1.1]))
+    save_model(tmp_path / 'c.safetensors', other, {'sample_rate_hz': 200.0})
+    assert main(['ensemble', str(model_file), str(tmp_path / 'c.safetensors'),
+                 '--out', str(tmp_path / 'x.safetensors')]) == 0
+    mean = (correct_gyro(load_model(model_file).model, u) + correct_gyro(other, u)) / 2
+    np.testing.assert_allclose(correct_gyro(load_model(tmp_path / 'x.safetensors').model, u),
+                               mean, rtol=0, atol=1e-6)
+    # another architecture cannot be averaged in
+    save_model(tmp_path / 'd.safetensors', GyroNet(ModelConfig(channels=(8, 16, 32, 64))),
+               {'sample_rate_hz': 200.0})
+    assert main(['ensemble', str(model_file), str(tmp_path / 'd.safetensors'),
+                 '--out', str(tmp_path / 'y.safetensors')]) == 1
+    assert not (tmp_path / 'y.safetensors').exists()
+
+
+def test_model_files_are_readable_by_everyone(tmp_path):
+    save_model(tmp_path / 'm.safetensors', _model().eval(), {})
+    assert (tmp_path / 'm.safetensors').stat().st_mode & 0o777 == 0o644
+
+
+def test_copied_metadata_never_overrides_the_architecture(tmp_path):
+    from denoise_imu_ros.learn.model import merge
+    single = _model().eval()
+    save_model(tmp_path / 'a.safetensors', single, {'sample_rate_hz': 200.0})
+    meta = load_model(tmp_path / 'a.safetensors').meta  # holds model_config (members 1)
+    save_model(tmp_path / 'b.safetensors', merge([single, single]), meta)
+    assert load_model(tmp_path / 'b.safetensors').model.config.members == 2
+
+
+@pytest.mark.parametrize('meta, message', [
+    ({'sample_rate_hz': 'fast'}, "sample_rate_hz 'fast' is not a positive number"),
+    ({'sample_rate_hz': 0}, 'sample_rate_hz 0 is not a positive number'),
+    ({'validation': {'gyro_residual_std': ['a', 1, 2]}}, 'gyro_residual_std'),
+    ({'validation': [1, 2]}, 'gyro_residual_std'),
+])
+def test_malformed_metadata_is_refused_on_reading(tmp_path, meta, message):
+    save_model(tmp_path / 'm.safetensors', _model().eval(), meta)
+    with pytest.raises(ModelFileError, match=message):
+        load_model(tmp_path / 'm.safetensors')
+
+
+def test_a_model_config_that_is_not_a_mapping_or_zero_input_std_is_refused(tmp_path):
+    from denoise_imu_ros.core.modelfile import read_model_file, write_model_file
+    model = _model().eval()
+    arrays = {k: v.numpy() for k, v in model.state_dict().items()}
+    write_model_file(tmp_path / 'a.safetensors', model.config, arrays, {})
+    from safetensors.numpy import load_file
+    from safetensors.numpy import save_file as save_np
+    header = {'format': 'denoise_imu_ros.gyro_model', 'format_version': '1',
+              'model_config': '[1, 2]'}
+    save_np(load_file(str(tmp_path / 'a.safetensors')), str(tmp_path / 'b.safetensors'),
+            metadata=header)
+    with pytest.raises(ModelFileError, match='inconsistent model file'):
+        read_model_file(tmp_path / 'b.safetensors')
+    arrays['input_std'][:] = 0
+    write_model_file(tmp_path / 'c.safetensors', model.config, arrays, {})
+    with pytest.raises(ModelFileError, match='non-positive input_std'):
+        read_model_file(tmp_path / 'c.safetensors')

@@ -1,0 +1,70 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The increment loss: zero for the true rate, masks holes, sees every axis."""
+
+from denoise_imu_ros.learn.loss import increment_loss, LossConfig
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+import torch
+
+T = 640
+
+
+def _truth(seed=0):
+    """Smooth attitude at T + 1 stamps and the exact rate that produces it."""
+    rng = np.random.default_rng(seed)
+    dt = np.full(T, 0.005) + rng.uniform(-1e-5, 1e-5, T)
+    omega = np.cumsum(rng.normal(scale=0.05, size=(T, 3)), axis=0)
+    r = [Rotation.from_rotvec(rng.normal(size=3))]
+    for k in range(T):
+        r.append(r[-1] * Rotation.from_rotvec(omega[k] * dt[k]))
+    quat = Rotation.concatenate(r).as_quat()
+    return (torch.tensor(omega)[None], torch.tensor(dt)[None], torch.tensor(quat)[None],
+            torch.ones(1, T + 1, dtype=torch.bool))
+
+
+def test_true_rate_gives_zero_loss_and_a_bias_on_any_single_axis_does_not():
+    omega, dt, quat, valid = _truth()
+    assert increment_loss(omega, dt, quat, valid).item() < 1e-12
+    for axis in range(3):
+        biased = omega.clone()
+        biased[..., axis] += 0.01
+        assert increment_loss(biased, dt, quat, valid).item() > 0.05
+
+
+def test_ground_truth_holes_are_masked_in_both_terms():
+    omega, dt, quat, valid = _truth()
+    omega = omega + 0.002  # a real residual, so the masked mean is not trivially zero
+    valid[:, 200:260] = False
+    base = increment_loss(omega, dt, quat, valid)
+    garbage = quat.clone()
+    garbage[:, 205:255] = torch.tensor([1.0, 0.0, 0.0, 0.0], dtype=torch.float64)
+    assert increment_loss(omega, dt, garbage, valid).item() == pytest.approx(base.item())
+    valid_everywhere = torch.ones_like(valid)
+    assert increment_loss(omega, dt, garbage, valid_everywhere).item() > 10 * base.item()
+
+
+def test_skipped_warm_up_blocks_do_not_count():
+    omega, dt, quat, valid = _truth()
+    bad_start = omega.clone()
+    bad_start[:, :80] += 1.0  # the first 5 blocks of 16 samples
+    cfg = LossConfig()
+    # level 16 skips samples < 80 and level 32 skips samples < 160: no effect at all
+    assert increment_loss(bad_start, dt, quat, valid, cfg).item() < 1e-12
+    assert increment_loss(bad_start, dt, quat, valid, LossConfig(skip_blocks=0)).item() > 1
+
+
+def test_increment_terms_add_up_and_bad_lengths_are_refused():
+    omega, dt, quat, valid = _truth()
+    omega = omega + 0.003
+    only16 = increment_loss(omega, dt, quat, valid, LossConfig(increments=(16,), weights=(1.0,)))
+    only32 = increment_loss(omega, dt, quat, valid, LossConfig(increments=(32,), weights=(1.0,)))
+    both = increment_loss(omega, dt, quat, valid)
+    assert both.item() == pytest.approx(only16.item() + 0.5 * only32.item())
+    long = increment_loss(omega, dt, quat, valid, LossConfig(increments=(64, 128),
+                                                             weights=(1.0, 1.0), skip_blocks=0))
+    assert long.item() > both.item()  # a bias error grows with the increment length
+    for bad in [(16, 24), (32, 16), ()]:
+        with pytest.raises(ValueError, match='powers of two'):
+            LossConfig(increments=bad, weights=(1.0,) * len(bad))

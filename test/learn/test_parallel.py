@@ -1,0 +1,96 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""Data-parallel training gives the one-process gradient; a 2-process run trains."""
+
+from pathlib import Path
+
+from denoise_imu_ros.core.architecture import ModelConfig
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.learn import parallel
+from denoise_imu_ros.learn.config import load_config
+from denoise_imu_ros.learn.loss import increment_loss, LossConfig
+from denoise_imu_ros.learn.model import GyroNet
+from denoise_imu_ros.learn.train import train
+from helpers import ROOT
+import numpy as np
+import torch
+import torch.distributed as dist
+
+CONFIG = ROOT / 'config' / 'train_euroc.yaml'
+SEQUENCES = ['MH_01_easy', 'V1_02_medium', 'V2_01_easy']
+N = 2048
+
+
+def _gradients(rank: int, world: int, store, data: Path, out: Path) -> None:
+    """Loss, gradients and BatchNorm statistics of one step, as process rank of world."""
+    if world > 1:
+        parallel.join(rank, world, store)
+    torch.set_num_threads(1)
+    torch.manual_seed(0)
+    model = GyroNet(ModelConfig(dropout=0.0))
+    seqs = [load_sequence(data / name) for name in SEQUENCES]
+    u = torch.tensor(np.stack([s.imu[:N] for s in seqs]), dtype=torch.float32)
+    dt = torch.tensor(np.stack([s.dt[:N] for s in seqs]))
+    quat = torch.tensor(np.stack([s.gt_quat[:N + 1] for s in seqs]))
+    valid = torch.tensor(np.stack([s.gt_valid[:N + 1] for s in seqs]))
+    valid[0, 300:900] = False  # uneven counts of valid blocks between the processes
+    model.set_normalization(u.reshape(-1, 6).mean(0), u.reshape(-1, 6).std(0))
+    rows = slice(rank, None, world)  # process 0: sequences 0 and 2, process 1: sequence 1
+    if world > 1:
+        parallel.sync_batch_norm(model)
+    loss = increment_loss(model(u[rows]), dt[rows], quat[rows], valid[rows], LossConfig(),
+                          parallel.sum_over_processes)
+    loss.backward()
+    if world > 1:
+        loss = parallel.all_reduce_grads(list(model.parameters()), loss)
+        dist.destroy_process_group()
+    arrays = {f'grad.{k}': p.grad.numpy() for k, p in model.named_parameters()}
+    arrays.update({f'state.{k}': v.numpy() for k, v in model.state_dict().items()})
+    np.savez(out / f'{world}_{rank}.npz', loss=loss.item(), **arrays)
+
+
+def test_two_processes_give_the_whole_batch_gradient_and_statistics(euroc, tmp_path):
+    _gradients(0, 1, None, euroc, tmp_path)
+    store = parallel.serve(2)
+    other = parallel.spawn(_gradients, (1, 2, store.port, euroc, tmp_path))
+    _gradients(0, 2, store, euroc, tmp_path)
+    other.join(timeout=60)
+    assert other.exitcode == 0
+    one = np.load(tmp_path / '1_0.npz')
+    first, second = np.load(tmp_path / '2_0.npz'), np.load(tmp_path / '2_1.npz')
+    assert float(first['loss']) == float(second['loss'])
+    np.testing.assert_allclose(first['loss'], one['loss'], rtol=1e-6)
+    # (the biases of convolutions followed by BatchNorm have gradients that are rounding
+    # noise: tolerances are relative to the largest gradient)
+    scale = max(np.abs(one[k]).max() for k in one.files if k.startswith('grad.'))
+    for key in one.files:
+        if key.startswith(('grad.', 'state.')):
+            np.testing.assert_array_equal(first[key], second[key])  # processes agree
+            atol = 1e-5 * (scale if key.startswith('grad.') else np.abs(one[key]).max())
+            np.testing.assert_allclose(first[key], one[key], rtol=1e-4, atol=atol, err_msg=key)
+    assert any(np.abs(one[k]).max() > 0 for k in one.files if k.startswith('grad.net.0'))
+
+
+def test_a_two_process_run_trains_and_returns_a_plain_model(euroc, tmp_path):
+    cfg = load_config(CONFIG, data=str(euroc), sequences=SEQUENCES[:2], window=N,
+                      steps=24, val_every=12, restart_period=24, swa_start=12, workers=2)
+    result = train(cfg, progress=False)
+    model, meta = result.model, result.meta
+    history = meta['history']
+    assert history[-1]['val_loss'] < 0.5 * history[0]['val_loss']
+    assert not any(isinstance(m, parallel.SyncBatchNorm) for m in model.modules())
+    assert not dist.is_initialized()
+    assert meta['run']['workers'] == 2 and 'workers' not in meta['train_config']
+
+
+def test_two_workers_train_on_synthetic_recordings_without_the_real_data(tmp_path):
+    from helpers import write_asl
+    for i in range(2):
+        write_asl(tmp_path / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=0.01)
+    cfg = load_config(CONFIG, data=str(tmp_path), sequences=['rec0', 'rec1'], window=1024,
+                      steps=6, val_every=3, restart_period=6, swa_start=3, workers=2)
+    result = train(cfg, progress=False)
+    assert result.meta['run']['workers'] == 2
+    assert [h['step'] for h in result.meta['history']] == [0, 3, 6]
+    assert all(np.isfinite(h['val_loss']) for h in result.meta['history'])
+    assert not dist.is_initialized()

@@ -1,0 +1,206 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""A few training steps on short real segments: the loss goes down, failures are clear."""
+
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.core.errors import DatasetError, TrainingError
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.learn import train as train_module
+from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.config import load_config
+from denoise_imu_ros.learn.train import batch, resolve_device, train, training_split
+from helpers import ROOT
+import numpy as np
+import pytest
+import torch
+import yaml
+
+CONFIG = ROOT / 'config' / 'train_euroc.yaml'
+
+
+def _short(euroc, **changes):
+    """Return the EuRoC recipe on two sequences with 10 s windows and a few steps."""
+    changes = {'swa_start': 12, 'sequences': ['MH_01_easy', 'V1_02_medium'], 'steps': 24,
+               'val_every': 12, 'data': str(euroc), **changes}
+    return load_config(CONFIG, window=2048, restart_period=24, **changes)
+
+
+def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
+    result = train(_short(euroc), progress=False)
+    result.save(tmp_path / 'chosen.safetensors', candidates_dir=tmp_path)
+    meta = result.meta
+    history = meta['history']
+    assert [h['step'] for h in history] == [0, 12, 24]
+    assert history[-1]['val_loss'] < 0.5 * history[0]['val_loss']
+    assert meta['validation']['step'] in (12, 24)
+    assert meta['selected'] == 'swa'  # the recipe's choice
+    assert meta['validation'] == meta['candidates']['swa']
+    for name in ('best_checkpoint', 'final', 'swa'):
+        cand = load_model(tmp_path / f'{name}.safetensors')
+        assert cand.meta['validation']['loss'] == meta['candidates'][name]['loss']
+    assert meta['train_sequences'] == ['MH_01_easy', 'V1_02_medium']
+    assert 199 < meta['sample_rate_hz'] < 201
+    assert len(meta['validation']['gyro_residual_std']) == 3
+
+
+def test_twenty_hz_ground_truth_trains_with_a_finite_falling_loss(euroc, tmp_path):
+    # V1_01's corrected ground truth (OpenVINS) is a 20 Hz trajectory
+    cfg = _short(euroc, sequences=['V1_01_easy'], val_every=6, swa_start=0,
+                 select='final')
+    meta = train(cfg, progress=False).meta
+    losses = [h['train_loss'] for h in meta['history'][1:]]
+    assert all(np.isfinite(v) and v > 0 for v in losses)
+    assert losses[-1] < 0.5 * losses[0]
+    assert meta['history'][-1]['val_loss'] < 0.5 * meta['history'][0]['val_loss']
+
+
+def test_a_recording_that_cannot_supervise_the_loss_is_named(euroc, tmp_path):
+    cfg = _short(euroc, sequences=['MH_01_easy', 'V1_01_easy'], max_gt_gap_s=0.02)
+    with pytest.raises(TrainingError, match='V1_01_easy: no 16-sample increment with trusted '
+                                            'ground truth in its training window'):
+        train(cfg, progress=False)
+
+
+def test_recordings_of_different_rates_are_refused(euroc, tmp_path):
+    import dataclasses
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import write_bag
+    (tmp_path / 'MH_01_easy').symlink_to(euroc / 'MH_01_easy')
+    rec = read_asl(euroc / 'V1_02_medium')
+    write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[::2], imu=rec.imu[::2]),
+              tmp_path / 'V1_02_at_100_hz')
+    cfg = _short(euroc, data=str(tmp_path), sequences=['MH_01_easy', 'V1_02_at_100_hz'])
+    with pytest.raises(DatasetError, match=r'differ \(MH_01_easy 200.0 Hz, V1_02_at_100_hz '
+                                           r'100.0 Hz\): one model is for one rate'):
+        train(cfg, progress=False)
+
+
+def test_non_finite_loss_stops_with_a_clear_message(euroc, monkeypatch):
+    real = train_module.increment_loss
+    monkeypatch.setattr(train_module, 'increment_loss',
+                        lambda *a, **k: real(*a, **k) * float('nan'))
+    with pytest.raises(TrainingError, match='non-finite training loss at step 1'):
+        train(_short(euroc), progress=False)
+
+
+def test_calibration_baseline_trains_from_the_same_command(euroc, tmp_path):
+    cfg = yaml.safe_load(CONFIG.read_text())
+    cfg.update(sequences=['MH_01_easy'], window=1024, steps=6, val_every=6, swa_start=3)
+    (tmp_path / 'c.yaml').write_text(yaml.safe_dump(cfg))
+    out = tmp_path / 'calib.safetensors'
+    assert main(['train', '--config', str(tmp_path / 'c.yaml'), '--data', str(euroc),
+                 '--calibration-only', '--quiet', '--out', str(out)]) == 0
+    loaded = load_model(out)
+    assert loaded.model.num_trainable() == 12
+    assert loaded.meta['train_config']['calibration_only'] is True
+
+
+def test_config_typos_and_bad_windows_are_refused(tmp_path):
+    (tmp_path / 'typo.yaml').write_text('sequences: [a]\nlearning_rate: 0.1\n')
+    with pytest.raises(TrainingError, match=r"unknown keys \['learning_rate'\]"):
+        load_config(tmp_path / 'typo.yaml')
+    (tmp_path / 'w.yaml').write_text('sequences: [a]\nwindow: 1000\n')
+    with pytest.raises(TrainingError, match='multiple of 32'):
+        load_config(tmp_path / 'w.yaml')
+    (tmp_path / 's.yaml').write_text('sequences: [a]\nselect: swa\nswa_start: 0\n')
+    with pytest.raises(TrainingError, match='swa needs swa_start > 0'):
+        load_config(tmp_path / 's.yaml')
+    (tmp_path / 'l.yaml').write_text('sequences: [a]\nsteps: 10\nswa_start: 20\n')
+    with pytest.raises(TrainingError, match='swa_start 20 is after the last step 10'):
+        load_config(tmp_path / 'l.yaml')
+    (tmp_path / 'p.yaml').write_text('sequences: [a, b]\nworkers: 0\n')
+    with pytest.raises(TrainingError, match='workers must be at least 1'):
+        load_config(tmp_path / 'p.yaml')
+    assert load_config(tmp_path / 'p.yaml', workers=8).workers == 2  # one per sequence
+    (tmp_path / 'd.yaml').write_text('sequences: [a, b]\n')
+    assert load_config(tmp_path / 'd.yaml', device='cpu').device == 'cpu'
+    with pytest.raises(TrainingError, match="device 'tpu': not a torch device"):
+        load_config(tmp_path / 'd.yaml', device='tpu')
+    # whether the device exists is known to torch only: checked where training starts
+    assert load_config(tmp_path / 'd.yaml', device='cuda:1').device == 'cuda:1'
+    if not torch.cuda.is_available():
+        with pytest.raises(TrainingError, match='torch sees no CUDA GPU'):
+            resolve_device('cuda')
+        assert resolve_device(load_config(tmp_path / 'd.yaml').device) == 'cpu'  # no GPU
+
+
+@pytest.mark.parametrize('whole', [False, True])
+def test_windows_are_drawn_from_the_head_or_the_whole_of_each_sequence(euroc, whole):
+    cfg = _short(euroc, whole_sequences=whole)
+    seqs = [load_sequence(euroc / name) for name in cfg.sequences]
+    split = training_split(seqs, cfg)
+    gen = torch.Generator().manual_seed(0)
+    last_stamp_seen = [0] * len(seqs)
+    for _ in range(300):
+        u, dt, quat, valid = batch(split, cfg, gen)
+        assert u.shape == (2, cfg.window, 6) and quat.shape == (2, cfg.window + 1, 4)
+        assert bool(valid.all()) and bool((dt > 0).all())  # never the zero padding
+        for i, s in enumerate(seqs):
+            # find where this window ends in the sequence from its last quaternion
+            end = int(np.flatnonzero((s.gt_quat == quat[i, -1].numpy()).all(1))[0])
+            last_stamp_seen[i] = max(last_stamp_seen[i], end)
+    for s, end in zip(seqs, last_stamp_seen):
+        if whole:
+            assert end > len(s) - 2000  # windows reach the end of every sequence
+        else:
+            assert end < cfg.window + cfg.max_offset
+
+
+def test_an_unwritable_output_is_refused_before_training(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(train_module, 'load_sequences', lambda cfg: pytest.fail('trained'))
+    (tmp_path / 'file').write_text('')
+    assert main(['train', '--config', str(CONFIG), '--out',
+                 str(tmp_path / 'file' / 'model.safetensors')]) == 1
+    err = capsys.readouterr().err
+    assert 'cannot create the output folder' in err and len(err.splitlines()) == 1
+
+
+def test_align_auto_trains_on_poses_of_a_rotated_marker_on_a_late_clock(euroc, tmp_path):
+    import dataclasses
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import write_bag
+    from scipy.spatial.transform import Rotation
+    rec = read_asl(euroc / 'V1_02_medium')
+    marker = Rotation.from_rotvec([20.0, -35.0, 60.0], degrees=True)  # imu_from_pose
+    moved = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns - 23_000_000,
+                                gt_quat=(Rotation.from_quat(rec.gt_quat) * marker).as_quat())
+    write_bag(moved, tmp_path / 'moved')
+    original = load_sequence(euroc / 'V1_02_medium')
+    fixed = load_sequence(tmp_path / 'moved', align_poses='auto')
+    assert abs(fixed.pose_alignment['time_offset_s'] - 0.023) < 1e-3
+    common, i, j = np.intersect1d(original.stamp_ns, fixed.stamp_ns, return_indices=True)
+    err = (Rotation.from_quat(original.gt_quat[i]).inv()
+           * Rotation.from_quat(fixed.gt_quat[j])).magnitude()
+    assert len(common) > 0.9 * len(original) and np.degrees(err[fixed.gt_valid[j]]).max() < 0.2
+    cfg = _short(euroc, data=str(tmp_path), sequences=['moved'], steps=6, val_every=6,
+                 swa_start=3, align='auto')
+    meta = train(cfg, progress=False).meta
+    assert meta['train_config']['align'] == 'auto'
+    used = meta['pose_alignment']['moved']
+    assert abs(used['time_offset_s'] - 0.023) < 1e-3
+    assert len(used['imu_from_pose_rotation_xyzw']) == 4
+    with pytest.raises(TrainingError, match='align must be none, auto or a mapping'):
+        _short(euroc, align='yes')
+
+
+@pytest.mark.parametrize('text, message', [
+    ('steps: three', 'steps must be int'),
+    ('steps: 3.7', 'steps must be int'),
+    ('lr: -0.01', 'lr must be above 0'),
+    ('gyro_std_deg: [1, 2]', 'gyro_std_deg must be three positive values'),
+    ('val_every: 0', 'val_every must be at least 1'),
+    ('calibration_only: "no"', 'calibration_only must be bool'),
+    ('dropout: 1.5', 'dropout must be at least 0 and below 1'),
+    ('increments: [16, 32.5]', r'increments must be list\[int\]'),
+    ('42', 'a training config is a mapping of keys, not int'),
+])
+def test_recipe_values_of_the_wrong_type_or_range_are_refused(tmp_path, text, message):
+    (tmp_path / 'r.yaml').write_text(('sequences: [a]\n' if ':' in text else '') + text + '\n')
+    with pytest.raises(TrainingError, match=message):
+        load_config(tmp_path / 'r.yaml')
+
+
+def test_a_binary_recipe_is_a_clear_error(tmp_path):
+    (tmp_path / 'r.yaml').write_bytes(b'\xff\xfe\x00garbage')
+    with pytest.raises(TrainingError, match='cannot read training config'):
+        load_config(tmp_path / 'r.yaml')

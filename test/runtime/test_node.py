@@ -1,0 +1,265 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The gyro_denoiser node in-process: topics, headers, bad input, fuzz, services."""
+
+from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.learn.checkpoint import load_model, save_model
+from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.runtime.node import main, PARAMETERS
+from denoise_imu_ros.runtime.online import DROP_CAUSES
+from diagnostic_msgs.msg import DiagnosticStatus
+from helpers import DOMAIN, imu_msg, ROOT, SAMPLE, untrained_model
+import numpy as np
+import pytest
+from rclpy.qos import ReliabilityPolicy
+from std_srvs.srv import Trigger
+
+NODE_PARAMETERS = {name: default for name, default, _ in PARAMETERS}
+
+
+def test_corrected_imu_copies_headers_and_matches_the_batch_network(harness, model_file):
+    rec = load_imu(SAMPLE)
+    n = 700
+    h = harness(fixed_frame='world')
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:n], rec.imu[:n])])
+    got = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
+                    for m in h.corrected])
+    np.testing.assert_allclose(got, correct_gyro(load_model(model_file).model, rec.imu[:n]),
+                               atol=1e-6)
+    first = h.corrected[0]
+    assert first.header.frame_id == 'imu4'
+    assert first.header.stamp.sec * 10**9 + first.header.stamp.nanosec == rec.imu_stamp_ns[0]
+    assert first.linear_acceleration.x == rec.imu[0, 3]
+    assert first.linear_acceleration_covariance[0] == 0.04
+    assert first.orientation_covariance[0] == -1.0
+    np.testing.assert_allclose(np.diag(np.reshape(first.angular_velocity_covariance, (3, 3))),
+                               [1e-4, 4e-4, 9e-4])
+    assert h.attitude[-1].header.frame_id == 'world'
+    assert h.attitude[-1].header.stamp == h.corrected[-1].header.stamp
+
+
+def test_fuzz_two_thousand_messages_with_garbage(harness):
+    rng = np.random.default_rng(7)
+    h = harness()
+    t, msgs = 1_700_000_000 * 10**9, []
+    for _ in range(2000):
+        kind = rng.random()
+        t += int(rng.choice([5_000_000, 5_000_000, 5_000_000, 0, -3_000_000, 40_000_000,
+                             -2_000_000_000]))
+        gyro, accel = rng.normal(size=3), rng.normal(size=3) + [0, 0, 9.8]
+        if kind < 0.05:
+            gyro[rng.integers(3)] = rng.choice([np.nan, np.inf, -np.inf])
+        elif kind < 0.08:
+            accel[rng.integers(3)] = np.nan
+        elif kind < 0.10:
+            gyro *= 1e30
+        elif kind < 0.16:  # extreme finite values over the whole float64 range
+            (gyro if kind < 0.13 else accel)[rng.integers(3)] = rng.choice(
+                [1.8e308, -1.8e308, 5e38, 3.4e38, -1e20, 5e-324, -0.0, 1e-310])
+        stamp = 0 if kind > 0.98 else max(t, 0)
+        msgs.append(imu_msg(stamp, gyro, accel))
+    h.send(msgs)
+    counts = h.node._denoiser.counts
+    dropped = sum(counts[c] for c in DROP_CAUSES)
+    assert counts['accepted'] + dropped == 2000
+    assert counts['out_of_range'] > 20
+    assert len(h.corrected) == counts['accepted'] > 1000
+    for m in h.corrected:
+        assert np.isfinite([m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
+                            *m.angular_velocity_covariance]).all()
+    for q in h.attitude:
+        assert np.isfinite([q.quaternion.x, q.quaternion.y, q.quaternion.z, q.quaternion.w]).all()
+    stamps = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in h.corrected]
+    resets = counts['time_jump_resets']
+    assert sum(np.diff(stamps) <= 0) == resets  # increasing, except after a declared reset
+
+
+def test_rate_mismatch_is_a_diagnostics_error(harness):
+    h = harness()
+    rec = load_imu(SAMPLE)
+    stamps = rec.imu_stamp_ns[0] + np.arange(600) * 10_000_000  # 100 Hz into a 200 Hz model
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(stamps, rec.imu[:600])])
+    h.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR
+                             for d in h.diagnostics for s in d.status), timeout=5.0)
+    status = [s for d in h.diagnostics for s in d.status if s.level == DiagnosticStatus.ERROR][0]
+    assert 'input rate 100.0 Hz differs from the model rate 200.0 Hz' in status.message
+    assert {kv.key for kv in status.values} >= {'input_rate_hz', 'buffer_fill', 'accepted',
+                                                'out_of_order', 'callback_time_p50_us',
+                                                'skipped_periods', 'attitude_withheld'}
+    assert status.name == '/gyro_denoiser: gyro correction'  # the namespaced node name
+    # from now on the corrected gyro flows, the attitude is not published as if valid
+    before = len(h.attitude)
+    later = stamps[-1] + np.arange(1, 201) * 10_000_000
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(later, rec.imu[600:800])])
+    assert len(h.attitude) == before and len(h.corrected) == 800
+
+
+def test_one_long_gap_is_not_a_slow_stream(harness):
+    h = harness()
+    rec = load_imu(SAMPLE)
+    stamps = rec.imu_stamp_ns[0] + np.arange(800) * 5_000_000
+    stamps[400:] += 2_000_000_000  # 2 s without data, then the stream goes on
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(stamps, rec.imu[:800])])
+    h.diagnostics.clear()
+    h.spin_until(lambda: h.diagnostics, timeout=5.0)
+    status = h.diagnostics[-1].status[0]
+    values = {kv.key: kv.value for kv in status.values}
+    assert float(values['input_rate_hz']) == pytest.approx(200.0, rel=0.01)
+    assert status.level != DiagnosticStatus.ERROR
+    assert values['gap_resets'] == '1' and values['skipped_periods'] == '400'
+    assert values['attitude_withheld'] == '1'
+
+
+def test_a_model_its_cross_recording_validation_advises_against_warns(model_file, harness):
+    from denoise_imu_ros.core.modelfile import add_metadata
+    add_metadata(model_file, crossval={'deploy': 'none', 'verdict': 'the network does not beat '
+                                       'plain integration on unseen recordings (1 of 3, '
+                                       '-61 % in mean AOE): deploy no correction'})
+    h = harness()
+    rec = load_imu(SAMPLE)
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:600], rec.imu[:600])])
+    h.diagnostics.clear()
+    h.spin_until(lambda: h.diagnostics, timeout=5.0)
+    status = h.diagnostics[-1].status[0]
+    assert status.level == DiagnosticStatus.WARN
+    assert status.message == ('model.safetensors is a network model, but its cross-recording '
+                              'validation says: the network does not beat plain integration '
+                              'on unseen recordings (1 of 3, -61 % in mean AOE): deploy no '
+                              'correction')
+    assert len(h.corrected) == 600  # it still runs: the user decides
+
+
+def test_reset_attitude_service_and_embedded_attitude(harness):
+    from scipy.spatial.transform import Rotation
+    h = harness(embed_attitude=True, orientation_stddev=0.1)
+    # one second of yaw at 1 rad/s: the attitude has turned by ~1 rad about z
+    h.send([imu_msg(10**9 + k * 5_000_000, [0, 0, 1.0], [0, 0, 9.81]) for k in range(200)])
+    turned = h.attitude[-1].quaternion
+    assert abs(Rotation.from_quat([turned.x, turned.y, turned.z, turned.w]).as_euler(
+        'ZYX')[0]) > 0.5
+    cli = h.client.create_client(Trigger, 'gyro_denoiser/reset_attitude')
+    h.spin_until(cli.service_is_ready)
+    future = cli.call_async(Trigger.Request())
+    h.spin_until(future.done)
+    assert future.result().success
+    # the next sample's attitude comes from its accelerometer alone: level, yaw 0
+    h.send([imu_msg(10**9 + 200 * 5_000_000, [0, 0, 1.0], [0, 0, 9.81])])
+    assert h.corrected[-1].orientation_covariance[0] == pytest.approx(0.01)
+    assert h.corrected[-1].orientation.w == pytest.approx(1.0)
+    assert h.attitude[-1].quaternion.w == pytest.approx(1.0)
+
+
+def test_missing_or_corrupt_model_exits_non_zero_with_one_line(tmp_path, capsys):
+    args = ['--ros-args', '-p', f'model:={tmp_path / "absent.safetensors"}']
+    assert main(args) == 1
+    assert 'absent.safetensors: no such model file' in capsys.readouterr().err
+    (tmp_path / 'bad.safetensors').write_bytes(b'x' * 100)
+    assert main(['--ros-args', '-p', f'model:={tmp_path / "bad.safetensors"}']) == 1
+    assert 'bad.safetensors: corrupt' in capsys.readouterr().err
+    save_model(tmp_path / 'norate.safetensors', untrained_model(), {})
+    assert main(['--ros-args', '-p', f'model:={tmp_path / "norate.safetensors"}']) == 1
+    assert 'norate.safetensors: model file has no valid sample rate' in capsys.readouterr().err
+
+
+def test_launch_file_compiles_and_config_is_keyed_for_any_node_name():
+    import yaml
+    root = ROOT
+    compile((root / 'launch' / 'denoiser.launch.py').read_text(), 'denoiser.launch.py', 'exec')
+    config = yaml.safe_load((root / 'config' / 'gyro_denoiser.yaml').read_text())
+    params = config['/**']['ros__parameters']
+    assert params['model'] == 'euroc'
+    for name, value in params.items():  # every key is a declared parameter of the node
+        assert name in NODE_PARAMETERS, name
+        assert type(value) is type(NODE_PARAMETERS[name]), name
+
+
+def test_use_sim_time_is_accepted(harness):
+    h = harness(use_sim_time=True)
+    assert h.node.get_parameter('use_sim_time').value is True
+    h.send([imu_msg(10**9 + k * 5_000_000, [0, 0, 0], [0, 0, 9.81]) for k in range(3)])
+    assert len(h.corrected) == 3
+
+
+def test_qos_is_overridable_through_parameters(harness):
+    h = harness(**{'qos_overrides./imu/corrected.publisher.reliability': 'best_effort',
+                   'qos_overrides./imu/corrected.publisher.depth': 7})
+    assert h.node._pub_imu.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
+    assert h.node._pub_imu.qos_profile.depth == 7
+
+
+def test_the_node_needs_no_torch_and_equals_the_batch_network(tmp_path):
+    # torch made unimportable: the node starts with the shipped model, and every message
+    # through its callback gives the batch network's output (computed here, with torch)
+    rec = load_imu(SAMPLE)
+    n = 1500
+    np.savez(tmp_path / 'data.npz', stamps=rec.imu_stamp_ns[:n], imu=rec.imu[:n],
+             batch=correct_gyro(load_model('euroc').model, rec.imu[:n]))
+    script = tmp_path / 'run.py'
+    script.write_text(f"""
+import sys
+
+
+class NoTorch:
+    def find_spec(self, name, path=None, target=None):
+        if name == 'torch' or name.startswith('torch.'):
+            raise ImportError('torch is not installed here')
+
+
+sys.meta_path.insert(0, NoTorch())
+import numpy as np
+import rclpy
+from rclpy.parameter import Parameter
+from denoise_imu_ros.core import msgs
+from denoise_imu_ros.runtime.node import GyroDenoiser
+rclpy.init(domain_id={DOMAIN})
+node = GyroDenoiser(parameter_overrides=[Parameter('model', value='euroc')])
+sent = []
+node._pub_imu.publish = sent.append  # what the callback publishes
+data = np.load({str(tmp_path / 'data.npz')!r})
+types = msgs.rclpy_types()
+for t, row in zip(data['stamps'], data['imu']):
+    node._on_imu(msgs.imu(types, msgs.header(types, int(t), 'imu0'), row[:3], row[3:]))
+out = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
+                for m in sent])
+assert len(out) == len(data['batch']), len(out)
+print('max difference', np.abs(out - data['batch']).max())
+assert np.abs(out - data['batch']).max() <= 1e-6
+node.destroy_node()
+rclpy.shutdown()
+assert 'torch' not in sys.modules and 'safetensors.torch' not in sys.modules
+print('ok')
+""")
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip().endswith('ok')
+
+
+@pytest.mark.parametrize('args, message', [
+    (['-p', 'max_gap_factor:=5'], "parameter 'max_gap_factor'"),
+    (['-p', 'max_gap_factor:=0.5'], 'max_gap_factor out of range'),
+    (['-p', 'input_queue_depth:=5'], 'input_queue_depth out of range'),
+    (['-p', 'model:=5'], "parameter 'model'"),
+    (['-p', 'embed_attitude:=maybe'], "parameter 'embed_attitude'"),
+])
+def test_a_bad_parameter_is_a_one_line_error_at_start_up(args, message, capsys):
+    assert main(['--ros-args', *args]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith('gyro_denoiser: error: bad parameter') and message in err
+    assert len(err.splitlines()) == 1
+
+
+def test_a_params_file_with_an_int_for_a_double_is_refused(tmp_path, capsys):
+    (tmp_path / 'p.yaml').write_text('/**:\n  ros__parameters:\n    max_gap_factor: 3\n')
+    assert main(['--ros-args', '--params-file', str(tmp_path / 'p.yaml')]) == 1
+    assert "parameter 'max_gap_factor'" in capsys.readouterr().err
+
+
+def test_help_and_unknown_arguments(capsys):
+    assert main(['--help']) == 0
+    out = capsys.readouterr().out
+    assert out.startswith('usage: gyro_denoiser') and 'max_gap_factor' in out
+    assert main(['--model', 'tumvi']) == 1
+    assert "unknown arguments '--model tumvi'" in capsys.readouterr().err

@@ -1,0 +1,177 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The ROS-free online pipeline: equals offline integration, handles bad stamps."""
+
+from denoise_imu_ros.core.metrics import integrate
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.runtime.online import (DROP_CAUSES, Event, gravity_attitude, OnlineDenoiser,
+                                            Output)
+from denoise_imu_ros.runtime.streaming import StreamingCorrector
+from helpers import SAMPLE, untrained_model
+from hypothesis import given, HealthCheck, settings, strategies as st
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+import torch
+
+
+@pytest.fixture(scope='module')
+def seq():
+    """Load the bundled real EuRoC sample with ground truth."""
+    return load_sequence(SAMPLE)
+
+
+@pytest.fixture()
+def model():
+    """Build an untrained eval-mode network."""
+    return untrained_model()
+
+
+def _run(denoiser, stamps, imu):
+    return [denoiser.process(int(t), row[:3], row[3:]) for t, row in zip(stamps, imu)]
+
+
+def test_online_attitude_equals_offline_integration_of_the_batch_output(seq, model):
+    n = 3000
+    outs = _run(OnlineDenoiser(StreamingCorrector.from_module(model), 200.0), seq.stamp_ns[:n],
+                seq.imu[:n])
+    gyro = correct_gyro(model, seq.imu[:n])
+    np.testing.assert_allclose(np.array([o.gyro for o in outs]), gyro, atol=1e-6)
+    start = gravity_attitude(seq.imu[0, 3:])
+    offline = integrate(start.as_quat(), gyro[:-1], seq.dt[:n - 1])
+    online = Rotation.from_quat(np.array([o.attitude for o in outs]))
+    assert np.max((offline.inv() * online).magnitude()) < 1e-6
+    assert outs[0].event == Event.START and all(o.event is None for o in outs[1:])
+    assert [o.stamp_ns for o in outs] == list(seq.stamp_ns[:n])  # each output has its stamp
+
+
+def test_gravity_attitude_levels_the_accelerometer():
+    tilt = Rotation.from_euler('ZYX', [0.0, 0.2, -0.4])
+    accel = tilt.inv().apply([0.0, 0.0, 9.81])
+    assert (gravity_attitude(accel).inv() * tilt).magnitude() < 1e-12
+
+
+def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    t, imu = seq.stamp_ns, seq.imu
+    assert isinstance(den.process(int(t[0]), imu[0, :3], imu[0, 3:]), Output)
+    bad_gyro = np.array([np.nan, 0.0, 0.0])
+    assert den.process(int(t[1]), bad_gyro, imu[1, 3:]) == 'non_finite'
+    assert den.process(int(t[1]), imu[1, :3], np.array([0.0, np.inf, 0.0])) == 'non_finite'
+    assert den.process(int(t[1]), np.array([5e38, 0.0, 0.0]), imu[1, 3:]) == 'out_of_range'
+    assert den.process(int(t[1]), imu[1, :3], np.array([0.0, 0.0, -1e21])) == 'out_of_range'
+    assert den.process(0, imu[1, :3], imu[1, 3:]) == 'zero_stamp'
+    assert den.process(int(t[0]), imu[1, :3], imu[1, 3:]) == 'duplicate_stamp'
+    assert den.process(int(t[0]) - 1000, imu[1, :3], imu[1, 3:]) == 'out_of_order'
+    assert isinstance(den.process(int(t[1]), imu[1, :3], imu[1, 3:]), Output)
+    assert den.counts == {'non_finite': 2, 'out_of_range': 2, 'zero_stamp': 1,
+                          'duplicate_stamp': 1,
+                          'out_of_order': 1, 'accepted': 2, 'gap_resets': 0,
+                          'time_jump_resets': 0, 'skipped_periods': 0}
+
+
+def test_missing_samples_are_counted_from_the_stamps(seq, model):
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    keep = np.ones(400, bool)
+    keep[[10, 11, 12, 200]] = False  # four samples lost upstream
+    _run(den, seq.stamp_ns[:400][keep], seq.imu[:400][keep])
+    assert den.counts['skipped_periods'] == 4 and den.counts['gap_resets'] == 1
+
+
+def test_gap_restarts_the_network_and_holds_the_attitude(seq, model):
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, max_gap_factor=3.0)
+    first = _run(den, seq.stamp_ns[:600], seq.imu[:600])
+    after = _run(den, seq.stamp_ns[1000:1600], seq.imu[1000:1600])  # 2 s gap
+    assert after[0].event == Event.GAP and den.counts['gap_resets'] == 1
+    np.testing.assert_array_equal(after[0].attitude, first[-1].attitude)
+    # the network restarted exactly as at start-up on the new segment
+    np.testing.assert_allclose(np.array([o.gyro for o in after]),
+                               correct_gyro(model, seq.imu[1000:1600]), atol=1e-6)
+
+
+def test_backward_time_jump_resets_everything(seq, model):
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, time_jump_s=1.0)
+    _run(den, seq.stamp_ns[:800], seq.imu[:800])
+    again = _run(den, seq.stamp_ns[:300], seq.imu[:300])  # a bag played again
+    assert again[0].event == Event.TIME_JUMP and den.counts['time_jump_resets'] == 1
+    fresh = _run(OnlineDenoiser(StreamingCorrector.from_module(model), 200.0), seq.stamp_ns[:300],
+                 seq.imu[:300])
+    np.testing.assert_allclose(again[-1].attitude, fresh[-1].attitude, atol=1e-12)
+
+
+def test_reset_attitude_reinitialises_from_gravity_at_the_next_sample(seq, model):
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    _run(den, seq.stamp_ns[:500], seq.imu[:500])
+    den.reset_attitude()
+    out = den.process(int(seq.stamp_ns[500]), seq.imu[500, :3], seq.imu[500, 3:])
+    np.testing.assert_allclose(out.attitude, gravity_attitude(seq.imu[500, 3:]).as_quat())
+
+
+EXTREMES = [1.8e308, -1.8e308, 5e38, 3.4e38, -3e38, 1e30, 1e20, 101.0, 2001.0, np.inf,
+            -np.inf, np.nan]
+ODD_BUT_VALID = [5e-324, -5e-324, 1e-310, 0.0, -0.0, 99.0, -1999.0]
+
+
+def test_fuzz_ten_thousand_samples_with_extremes_never_yield_a_non_finite_output(seq, model):
+    rng = np.random.default_rng(1)
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    answered = out_of_range = 0
+    n = 5000
+    for k in range(n):  # a real sample, then one with extreme or odd fields, 1 ms later
+        t = int(seq.stamp_ns[k])
+        out = den.process(t, seq.imu[k, :3], seq.imu[k, 3:])
+        assert isinstance(out, Output) and np.isfinite(out.gyro).all()
+        assert np.isfinite(out.attitude).all()
+        answered += 1
+        sample = seq.imu[k].copy()
+        fields = rng.choice(6, size=rng.integers(1, 4), replace=False)
+        pool = EXTREMES if rng.random() < 0.7 else ODD_BUT_VALID
+        sample[fields] = rng.choice(pool, size=len(fields))
+        bad = not (np.isfinite(sample).all() and np.abs(sample[:3]).max() <= 100
+                   and np.abs(sample[3:]).max() <= 2000)
+        out = den.process(t + 1_000_000, sample[:3], sample[3:])
+        if bad:
+            assert out in ('non_finite', 'out_of_range')
+            out_of_range += out == 'out_of_range'
+        else:
+            assert isinstance(out, Output) and np.isfinite(out.gyro).all()
+    assert answered == n and out_of_range > 1000
+    assert den.counts['non_finite'] + den.counts['out_of_range'] > 0.6 * n
+
+
+# Every float64 (NaN, +-inf, +-1.8e308, denormals, +-0.0 included) in every field, and
+# stamp steps that repeat, go back, jump forward or are normal.
+FIELDS = st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64),
+                  min_size=6, max_size=6)
+STEPS = st.sampled_from([5_000_000] * 6 + [0, -3_000_000, 40_000_000, -2_000_000_000])
+STREAMS = st.lists(st.tuples(STEPS, st.one_of(FIELDS, st.just(None))), min_size=20,
+                   max_size=60)
+
+
+@pytest.fixture()
+def denormals():
+    """
+    Let the CPU keep denormal floats, which hypothesis needs to draw subnormals.
+
+    Training and the CLI, run earlier in the same pytest process, switch on flush-to-zero.
+    """
+    torch.set_flush_denormal(False)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(stream=STREAMS)
+def test_property_no_sample_raises_or_yields_a_non_finite_output(
+        denormals, seq, model, stream):
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    t = 1_700_000_000 * 10**9
+    for k, (step, fields) in enumerate(stream):
+        t += step
+        sample = seq.imu[k] if fields is None else np.array(fields)  # None: a real sample
+        out = den.process(t, sample[:3], sample[3:])
+        if isinstance(out, Output):
+            assert np.isfinite(out.gyro).all() and np.isfinite(out.attitude).all()
+            assert abs(np.linalg.norm(out.attitude) - 1) < 1e-9
+    counted = den.counts['accepted'] + sum(den.counts[c] for c in DROP_CAUSES)
+    assert counted == len(stream)  # every sample accepted or dropped with a cause

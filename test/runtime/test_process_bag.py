@@ -1,0 +1,85 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""process-bag: what the node publishes, written into a copy of a bag."""
+
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.core.errors import DatasetError
+from denoise_imu_ros.data.load import load_imu
+from helpers import imu_msg, SAMPLE
+from helpers import N, write_ros1_bag
+import numpy as np
+
+
+def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path):
+    from denoise_imu_ros.cli import main as cli
+    from rosbags.highlevel import AnyReader
+    assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
+                str(model_file)]) == 0
+    with AnyReader([tmp_path / 'out']) as reader:
+        topics = {c.topic: c.msgcount for c in reader.connections}
+        conns = [c for c in reader.connections if c.topic == '/imu/corrected']
+        bag = []
+        for conn, _, raw in reader.messages(connections=conns):
+            m = reader.deserialize(raw, conn.msgtype)
+            bag.append([m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
+                        *m.angular_velocity_covariance, m.orientation_covariance[0]])
+            if len(bag) == 600:
+                break
+    assert topics['/imu0'] == topics['/imu/corrected'] == topics['/imu/attitude'] == 18000
+    assert topics['/groundtruth/pose'] > 17000
+    rec = load_imu(SAMPLE)
+    h = harness()
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:600], rec.imu[:600])])
+    node = [[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
+             *m.angular_velocity_covariance, m.orientation_covariance[0]] for m in h.corrected]
+    assert np.array_equal(np.array(node), np.array(bag))
+
+
+def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path, model_file):
+    from rosbags.highlevel import AnyReader
+    path = write_ros1_bag(tmp_path / 'in.bag')
+    assert main(['process-bag', str(path), str(tmp_path / 'out'), '--model',
+                 str(model_file), '--storage', 'sqlite3']) == 0
+    with AnyReader([tmp_path / 'out']) as reader:
+        topics = {c.topic: c.msgcount for c in reader.connections}
+    assert topics == {'/imu0': N, '/vicon/body': N, '/imu/corrected': N, '/imu/attitude': N}
+
+
+def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(
+        model_file, tmp_path, monkeypatch):
+    from denoise_imu_ros.runtime import process_bag
+    from denoise_imu_ros.data.bags import read_bag
+    from helpers import write_asl
+    assert main(['convert', str(write_asl(tmp_path / 'a', n_imu=1200)),
+                 str(tmp_path / 'in')]) == 0
+    real = process_bag.OnlineDenoiser.process_imu
+    calls = []
+
+    def fail_half_way(self, msg):
+        calls.append(1)
+        if len(calls) == 600:
+            raise DatasetError('disk full (simulated)')
+        return real(self, msg)
+    monkeypatch.setattr(process_bag.OnlineDenoiser, 'process_imu', fail_half_way)
+    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+                 '--model', str(model_file)]) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ['a', 'in', 'model.safetensors']
+    monkeypatch.setattr(process_bag.OnlineDenoiser, 'process_imu', real)
+    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+                 '--model', str(model_file)]) == 0
+    assert len(read_bag(tmp_path / 'out', imu_topic='/imu/corrected').imu) == 1200
+
+
+def test_every_offline_tool_refuses_a_stream_at_another_rate(model_file, tmp_path, capsys):
+    from helpers import write_asl
+    slow = write_asl(tmp_path / 'slow', n_imu=2000, imu_rate=100.0)
+    assert main(['convert', str(slow), str(tmp_path / 'slow_bag')]) == 0
+    capsys.readouterr()
+    for cmd in (['process-bag', str(tmp_path / 'slow_bag'), str(tmp_path / 'out')],
+                ['correct', '--input', str(tmp_path / 'slow_bag'), '--output',
+                 str(tmp_path / 'o.csv')],
+                ['eval', '--data', str(tmp_path), '--sequences', 'slow_bag', '--out',
+                 str(tmp_path / 'e'), '--no-plots']):
+        assert main(cmd + ['--model', str(model_file)]) == 1
+        assert 'IMU rate 100.0 Hz, the model was trained at 200.0 Hz' in capsys.readouterr().err
+    assert not (tmp_path / 'out').exists() and not (tmp_path / 'o.csv').exists()

@@ -1,0 +1,83 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The numpy streaming engine equals the batch network, from the first sample on."""
+
+from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.runtime.streaming import StreamingCorrector
+from helpers import SAMPLE, untrained_model
+import numpy as np
+import pytest
+import torch
+
+
+@pytest.fixture(scope='module')
+def imu():
+    """Real EuRoC IMU samples (the bundled test-sequence sample)."""
+    return load_imu(SAMPLE).imu
+
+
+def _random_model(calibration_only=False):
+    """Build an eval-mode network with non-trivial BatchNorm statistics and calibration."""
+    model = untrained_model(calibration_only=calibration_only)
+    with torch.no_grad():
+        model.delta.normal_(std=0.01)
+        for mod in model.modules():
+            if isinstance(mod, torch.nn.BatchNorm1d):
+                mod.running_mean.normal_()
+                mod.running_var.uniform_(0.5, 2.0)
+                mod.weight.normal_()
+                mod.bias.normal_()
+            if calibration_only:
+                model.bias.normal_()
+    return model
+
+
+@pytest.mark.parametrize('calibration_only', [False, True])
+def test_streaming_equals_batch_including_the_first_510_samples(imu, calibration_only):
+    model = _random_model(calibration_only)
+    batch = correct_gyro(model, imu[:3000])
+    np.testing.assert_allclose(StreamingCorrector.from_module(model).process(imu[:3000]), batch,
+                               rtol=0, atol=1e-6)
+
+
+def test_reset_starts_a_new_recording(imu):
+    model = _random_model()
+    stream = StreamingCorrector.from_module(model)
+    stream.process(imu[:1000])
+    stream.reset()
+    np.testing.assert_allclose(stream.process(imu[2000:2800]), correct_gyro(model, imu[2000:2800]),
+                               rtol=0, atol=1e-6)
+
+
+def test_outputs_never_depend_on_future_samples(imu):
+    stream = StreamingCorrector.from_module(_random_model())
+    first = stream.process(imu[:700])
+    stream.reset()
+    changed = imu[:800].copy()
+    changed[700:] += 5.0
+    assert np.array_equal(stream.process(changed)[:700], first)
+
+
+def test_an_ensemble_is_the_mean_of_its_members_in_batch_and_streaming(imu):
+    from denoise_imu_ros.learn.model import merge
+    members = []
+    for seed in range(3):
+        member = _random_model()
+        torch.manual_seed(seed + 10)  # members differ in every weight and in Delta
+        with torch.no_grad():
+            member.delta.normal_(std=0.01)
+            member.input_mean.add_(0.1 * torch.randn(6))  # each its own normalisation
+            member.input_std.mul_(1 + 0.1 * torch.rand(6))
+            for mod in member.modules():
+                if isinstance(mod, torch.nn.Conv1d):
+                    mod.weight.normal_(std=0.05)
+        members.append(member)
+    ensemble = merge(members)
+    mean = np.mean([correct_gyro(m, imu[:1500]) for m in members], axis=0)
+    batch = correct_gyro(ensemble, imu[:1500])
+    # the members do differ ...
+    assert np.abs(np.array([correct_gyro(m, imu[:1500]) for m in members]) - mean).max() > 1e-3
+    np.testing.assert_allclose(batch, mean, rtol=0, atol=1e-6)  # ... and average exactly
+    np.testing.assert_allclose(StreamingCorrector.from_module(ensemble).process(imu[:1500]), batch,
+                               rtol=0, atol=1e-6)

@@ -1,0 +1,65 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""Pins of the shipped models: provenance, accuracy on the bundled sample, streaming."""
+
+from denoise_imu_ros.core.modelfile import deployment_warning, read_model_file, shipped_models
+from denoise_imu_ros.evaluation import evaluate as evaluate_module
+from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.runtime.streaming import StreamingCorrector
+from helpers import SAMPLE
+import numpy as np
+import pytest
+
+SAMPLE_DIR = SAMPLE.parent
+
+
+@pytest.mark.parametrize('name', ['euroc', 'tumvi', 'euroc_calibrated', 'tumvi_calibrated'])
+def test_shipped_models_load_by_name_with_their_provenance(name):
+    assert name in shipped_models()
+    loaded = load_model(name)
+    meta = loaded.meta
+    for key in ('sample_rate_hz', 'train_sequences', 'train_config', 'validation',
+                'code_version', 'receptive_field'):
+        assert key in meta
+    expected = {'euroc': ['MH_01_easy', 'MH_03_medium', 'MH_05_difficult', 'V1_02_medium',
+                          'V2_01_easy', 'V2_03_difficult'],
+                'tumvi': ['dataset-room1_512_16', 'dataset-room3_512_16',
+                          'dataset-room5_512_16']}[name.split('_')[0]]
+    assert meta['train_sequences'] == expected
+    assert loaded.model.receptive_field == (1 if 'calibrated' in name else 511)
+
+
+def test_shipped_euroc_model_beats_raw_and_calibrated_on_the_shipped_test_sample(tmp_path):
+    report = evaluate_module.evaluate('euroc', str(SAMPLE_DIR), [SAMPLE.name],
+                                      str(tmp_path), plots=False)
+    aoe = {m: r['aoe_deg'] for m, r in report['sequences'][SAMPLE.name].items()}
+    assert aoe['network'] < aoe['calibrated'] < aoe['raw']
+
+
+def test_shipped_model_streams_the_whole_sample_exactly():
+    from denoise_imu_ros.data.load import load_imu
+    imu = load_imu(SAMPLE).imu
+    model = load_model('euroc').model
+    np.testing.assert_allclose(StreamingCorrector.from_module(model).process(imu),
+                               correct_gyro(model, imu), rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize('name', ['euroc', 'tumvi', 'euroc_calibrated', 'tumvi_calibrated'])
+def test_every_shipped_model_carries_its_cross_recording_report(name):
+    report = load_model(name).meta['crossval']
+    assert report['verdict'].startswith('the network ')
+    assert set(report['mean']) == {'raw', 'calibrated', 'network'}
+    assert len(report['recordings']) == (6 if name.startswith('euroc') else 3)
+    assert report['deploy'] in ('network', 'calibration', 'none')
+    kind = 'calibration' if name.endswith('_calibrated') else 'network'
+    warning = deployment_warning(read_model_file(name))
+    assert (warning is None) == (report['deploy'] == kind)
+    if name.startswith('tumvi'):  # on unseen rooms neither beats plain integration
+        assert report['deploy'] == 'none' and warning.endswith('deploy no correction')
+
+
+def test_shipped_euroc_is_the_ensemble_of_five_trainings():
+    loaded = load_model('euroc')
+    assert loaded.model.config.members == 5
+    assert sorted(m['seed'] for m in loaded.meta['members']) == [0, 1, 2, 3, 4]
