@@ -51,7 +51,7 @@ def unjoined(t: np.ndarray, values: np.ndarray,
 def plot_errors(path: Path, title: str, t: np.ndarray, valid: np.ndarray,
                 errors: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]) -> None:
     """
-    Three panels against time: error angle (log), tilt error (log), yaw error (+-180).
+    Three panels against time: error angle and tilt error (log), yaw error (symlog, +-180).
 
     ``errors`` maps a label to its (angle, tilt, yaw) arrays in degrees; stamps without
     trusted ground truth are left out.
@@ -70,8 +70,11 @@ def plot_errors(path: Path, title: str, t: np.ndarray, valid: np.ndarray,
     for ax in axes[:2]:
         ax.set_yscale('log')
         ax.set_ylim(0.01, 360)
+    # symmetric log: a network's tenths of a degree and raw's wraps on one axis
+    axes[2].set_yscale('symlog', linthresh=0.1)
     axes[2].set_ylim(-180, 180)
-    axes[2].set_yticks(range(-180, 181, 90))
+    axes[2].set_yticks([-180, -10, -1, -0.1, 0, 0.1, 1, 10, 180])
+    axes[2].set_yticklabels(['-180', '-10', '-1', '-0.1', '0', '0.1', '1', '10', '180'])
     axes[2].set_xlabel('time (s)')
     axes[0].legend(loc='upper left', fontsize=8)
     axes[0].set_title(title)
