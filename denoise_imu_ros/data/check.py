@@ -156,19 +156,7 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     or ``no``; a clock offset that is not constant along the recording is a reason too.
     """
     seq = onto_imu_stamps(rec)
-    imu_dt = np.diff(seq.stamp_ns) * 1e-9
-    gt_dt = np.diff(rec.gt_stamp_ns) * 1e-9
-    holes = ~seq.gt_valid
-    starts = np.flatnonzero(np.diff(np.r_[0, holes.astype(np.int8)]) == 1)
-    ends = np.flatnonzero(np.diff(np.r_[holes.astype(np.int8), 0]) == -1)
-    longest = float(max(((seq.stamp_ns[e] - seq.stamp_ns[max(s - 1, 0)]) * 1e-9
-                         for s, e in zip(starts, ends)), default=0.0))
-    report = {'name': seq.name, 'imu_rate_hz': seq.rate_hz,
-              'imu_stamp_jitter_ms': 1e3 * float(imu_dt.std()),
-              'pose_rate_hz': 1.0 / float(np.median(gt_dt)),
-              'pose_holes': len(starts), 'pose_longest_hole_s': longest,
-              'pose_hole_fraction': float(holes.mean()),
-              'duration_s': float(imu_dt.sum())}
+    report = _streams(rec, seq)
     field = ModelConfig().receptive_field
     if len(seq) < field:  # too little for any estimate below, and for the network
         report.update(dict.fromkeys(ESTIMATES), usable='no',
@@ -179,23 +167,58 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
         return report
     report.update(label_noise(seq))
     report.update(estimate_pose_alignment(rec, max_offset_s))
+    report.update(_increments(report, seq.rate_hz))
+    long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
+    report['supervision'] = supervision(seq, (*report['paper_increments'], long))
+    report['usable'], report['reasons'] = _usable(report, max_offset_s)
+    quarters = report['time_offset_quarters_s']
+    if max(quarters) - min(quarters) > OFFSET_SPREAD_S:
+        report['reasons'].append(
+            'the clock offset is not constant: '
+            f'{", ".join(f"{1e3 * q:+.1f}" for q in quarters)} ms on the four quarters of the '
+            'recording (pose latency varies, or a clock drifts); one offset cannot fix that')
+    if not report['supervision']['helps']:
+        report['reasons'].append(report['supervision']['summary'])
+    report['verdict'] = {'yes': 'usable for training', 'after alignment':
+                         'usable for training with alignment applied',
+                         'no': 'not usable for training'}[report['usable']]
+    return report
+
+
+def _streams(rec: Recording, seq: Sequence) -> dict[str, Any]:
+    """Return the rates, stamp jitter, pose holes and duration of a recording."""
+    imu_dt = np.diff(seq.stamp_ns) * 1e-9
+    holes = ~seq.gt_valid
+    starts = np.flatnonzero(np.diff(np.r_[0, holes.astype(np.int8)]) == 1)
+    ends = np.flatnonzero(np.diff(np.r_[holes.astype(np.int8), 0]) == -1)
+    longest = float(max(((seq.stamp_ns[e] - seq.stamp_ns[max(s - 1, 0)]) * 1e-9
+                         for s, e in zip(starts, ends)), default=0.0))
+    return {'name': seq.name, 'imu_rate_hz': seq.rate_hz,
+            'imu_stamp_jitter_ms': 1e3 * float(imu_dt.std()),
+            'pose_rate_hz': 1.0 / float(np.median(np.diff(rec.gt_stamp_ns) * 1e-9)),
+            'pose_holes': len(starts), 'pose_longest_hole_s': longest,
+            'pose_hole_fraction': float(holes.mean()), 'duration_s': float(imu_dt.sum())}
+
+
+def _increments(report: dict[str, Any], rate_hz: float) -> dict[str, Any]:
+    """Return the paper's increments at this rate, the shortest clean one, the noise line."""
     noisy = report['noise_dominated_increments']
-    paper = paper_increments(seq.rate_hz)
-    report['paper_increments'] = list(paper)
+    paper = paper_increments(rate_hz)
     clean = [j for j in report['increments'] if j >= paper[0] and j not in noisy]
-    report['shortest_clean_increment'] = clean[0] if clean else None
     short = [j for j in paper if j in noisy]
     if not short:
-        report['label_noise'] = (f"the paper's {paper[0]}- and {paper[1]}-sample increments "
-                                 f'(0.08/0.16 s at {seq.rate_hz:.0f} Hz) are not dominated by '
-                                 'ground-truth noise')
+        line = (f"the paper's {paper[0]}- and {paper[1]}-sample increments (0.08/0.16 s at "
+                f'{rate_hz:.0f} Hz) are not dominated by ground-truth noise')
     else:
-        report['label_noise'] = (
-            f'increments of {" and ".join(map(str, short))} samples are dominated by '
-            'ground-truth noise' + (f'; from {clean[0]} samples on they are not'
-                                    if clean else '; so are all up to 512 samples'))
-    long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
-    report['supervision'] = supervision(seq, (*paper, long))
+        line = (f'increments of {" and ".join(map(str, short))} samples are dominated by '
+                'ground-truth noise' + (f'; from {clean[0]} samples on they are not'
+                                        if clean else '; so are all up to 512 samples'))
+    return {'paper_increments': list(paper),
+            'shortest_clean_increment': clean[0] if clean else None, 'label_noise': line}
+
+
+def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]]:
+    """Return ``yes``, ``after alignment`` or ``no``, and the reasons for it."""
     reasons = []
     if report['duration_s'] < MIN_DURATION_S:
         reasons.append(f'too short: {report["duration_s"]:.1f} s of IMU with poses, training '
@@ -211,30 +234,16 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
         if rms < MIN_EXCITATION_DEG_S:
             reasons.append(f'no rotation about the IMU {axis} axis ({rms:.2f} deg/s RMS)')
     if reasons:
-        report['usable'], report['reasons'] = 'no', reasons
-    elif _significant(report['time_offset_s'], report['time_offset_std_s'],
-                      OFFSET_TOLERANCE_S) or _significant(
+        return 'no', reasons
+    if _significant(report['time_offset_s'], report['time_offset_std_s'],
+                    OFFSET_TOLERANCE_S) or _significant(
             report['imu_from_pose_rotation_deg'], report['imu_from_pose_rotation_std_deg'],
             ROTATION_TOLERANCE_DEG):
-        report['usable'] = 'after alignment'
-        report['reasons'] = [
+        return 'after alignment', [
             f'poses {1e3 * report["time_offset_s"]:+.1f} ms off the IMU clock and in a frame '
             f'{report["imu_from_pose_rotation_deg"]:.2f} deg from the IMU\'s: apply both '
             'before training']
-    else:
-        report['usable'], report['reasons'] = 'yes', []
-    quarters = report['time_offset_quarters_s']
-    if max(quarters) - min(quarters) > OFFSET_SPREAD_S:
-        report['reasons'].append(
-            'the clock offset is not constant: '
-            f'{", ".join(f"{1e3 * q:+.1f}" for q in quarters)} ms on the four quarters of the '
-            'recording (pose latency varies, or a clock drifts); one offset cannot fix that')
-    if not report['supervision']['helps']:
-        report['reasons'].append(report['supervision']['summary'])
-    report['verdict'] = {'yes': 'usable for training', 'after alignment':
-                         'usable for training with alignment applied',
-                         'no': 'not usable for training'}[report['usable']]
-    return report
+    return 'yes', []
 
 
 def _significant(value: float, std: float, tolerance: float) -> bool:
