@@ -28,9 +28,10 @@ class Harness:
         self.client = rclpy.create_node('client', context=self.ctx)
         self.pub = self.client.create_publisher(
             Imu, 'imu/data_raw', QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
-        self.corrected, self.attitude, self.diagnostics = [], [], []
+        self.corrected, self.fused, self.attitude, self.diagnostics = [], [], [], []
         reliable = QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE)
         self.client.create_subscription(Imu, 'imu/corrected', self.corrected.append, reliable)
+        self.client.create_subscription(Imu, 'imu/data', self.fused.append, reliable)
         self.client.create_subscription(QuaternionStamped, 'imu/attitude',
                                         self.attitude.append, reliable)
         self.client.create_subscription(DiagnosticArray, '/diagnostics',
@@ -60,6 +61,9 @@ class Harness:
         self.spin_until(lambda: len(self.corrected) >= self.node._denoiser.counts['accepted'])
         self.spin_until(lambda: len(self.attitude) >= self.node._denoiser.counts['accepted']
                         - self.node.attitude_withheld)
+        if self.node._pub_fused is not None:
+            self.spin_until(lambda: len(self.fused) >= self.node._denoiser.counts['accepted']
+                            - self.node.fused_withheld)
 
     def close(self):
         self.executor.shutdown()

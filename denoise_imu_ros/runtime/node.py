@@ -12,7 +12,12 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-``gyro_denoiser``: corrects ``imu/data_raw`` into ``imu/corrected`` and ``imu/attitude``.
+``gyro_denoiser``: ``imu/data_raw`` into ``imu/corrected``, ``imu/data`` and ``imu/attitude``.
+
+``imu/data`` is the imu_tools contract (what imu_filter_madgwick publishes): the
+gravity-aided orientation of the corrected gyro, with its covariance, the corrected
+angular velocity and the accelerometer passed through. ``imu/attitude`` is the paper's
+open-loop integral of the corrected gyro.
 
 A thin ROS wrapper around :class:`~denoise_imu_ros.runtime.online.OnlineDenoiser`: it converts
 messages, owns the parameters and topics, and reports on ``/diagnostics``. Header stamps
@@ -40,11 +45,12 @@ from rclpy.utilities import remove_ros_args
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
+from .fusion import FusionSettings, orientation_covariance, settings_of
 from .online import Drop, Event, OnlineDenoiser
 from ..core import msgs
 from ..core.errors import DenoiseError
 from ..core.limits import RATE_TOLERANCE, stream_rate_hz
-from ..core.modelfile import deployment_warning, gyro_covariance, read_model_file
+from ..core.modelfile import deployment_warning, gyro_covariance, ModelFile, read_model_file
 
 
 def _param(description: str, read_only: bool = False, floats: tuple | None = None,
@@ -87,6 +93,19 @@ PARAMETERS = [
     ('input_queue_depth', 200, _param(
         'Subscription depth (sensor-data reliability); bursts beyond it are lost.',
         read_only=True, ints=(10, 10000))),
+    ('publish_fused', True, _param(
+        'Publish imu/data: the gravity-aided orientation (VQF) of the corrected gyro and '
+        'the accelerometer.', read_only=True)),
+    ('fusion_tau_acc', -1.0, _param(
+        "s; the filter's accelerometer time constant (longer trusts the gyro more); < 0: "
+        'the value the model file stores, chosen on its training recordings.',
+        read_only=True, floats=(-1.0, 1000.0))),
+    ('fusion_bias_estimation', 'model', _param(
+        "The filter's own gyro-bias estimation: 'model' (the model file's choice), 'on' or "
+        "'off'. On stacks a second estimator on the network's correction.", read_only=True)),
+    ('fused_orientation_stddev', -1.0, _param(
+        'rad; imu/data orientation covariance diagonal; < 0: the fused errors the model '
+        'file stores (0.05 rad without them).', floats=(-1.0, math.pi))),
 ]
 
 
@@ -101,7 +120,8 @@ class GyroDenoiser(Node):
             raise DenoiseError(f'bad parameter: {" ".join(str(err).split())}') from err
         p = self.get_parameter
         loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()
-        self._denoiser = OnlineDenoiser.from_model_file(loaded)
+        fusion = self._fusion_settings(loaded) if p('publish_fused').value else None
+        self._denoiser = OnlineDenoiser.from_model_file(loaded, fusion)
         self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
         self._not_recommended = deployment_warning(loaded)  # kept as a diagnostics WARN
@@ -112,6 +132,10 @@ class GyroDenoiser(Node):
         self._pub_imu = self.create_publisher(
             Imu, 'imu/corrected', QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        self._pub_fused = self.create_publisher(
+            Imu, 'imu/data', QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
+            qos_overriding_options=QoSOverridingOptions.with_default_policies()
+        ) if fusion is not None else None
         self._pub_att = self.create_publisher(
             QuaternionStamped, 'imu/attitude',
             QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
@@ -129,11 +153,15 @@ class GyroDenoiser(Node):
         self._stamps: deque[int] = deque(maxlen=int(2 * self._model_rate) + 1)
         self._rate_error = False  # set by the diagnostics timer from the measured rate
         self.attitude_withheld = 0  # accepted samples whose attitude was not published
+        self.fused_withheld = 0  # accepted samples whose imu/data was not published
         self._infer_s: deque[float] = deque(maxlen=1000)
         self._apply_parameters()
         self.get_logger().info(
             f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field '
-            f'{loaded.config.receptive_field} samples); imu/data_raw -> imu/corrected')
+            f'{loaded.config.receptive_field} samples); imu/data_raw -> imu/corrected'
+            + ('' if fusion is None else
+               f', imu/data (VQF: tau_acc {fusion.tau_acc_s:g} s, bias estimation '
+               f'{"on" if fusion.bias_estimation else "off"})'))
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)
 
@@ -146,12 +174,27 @@ class GyroDenoiser(Node):
         self._orientation_cov = np.diag([var] * 3).ravel()
         self._gyro_cov = np.array(gyro_covariance(self._loaded,
                                                   p('angular_velocity_stddev').value))
+        self._fused_cov = np.array(orientation_covariance(
+            self._loaded.meta, p('fused_orientation_stddev').value))
         self._denoiser.max_gap_factor = p('max_gap_factor').value
         self._denoiser.time_jump_s = p('time_jump_threshold').value
         self._rate_tolerance = p('rate_tolerance').value
 
     def _on_parameters(self, _params: list) -> None:
         self._apply_parameters()
+
+    def _fusion_settings(self, loaded: ModelFile) -> FusionSettings:
+        """Return the model file's filter settings with the node's overrides applied."""
+        p = self.get_parameter
+        settings = settings_of(loaded.meta, loaded.path)
+        bias = p('fusion_bias_estimation').value
+        if bias not in ('model', 'on', 'off'):
+            raise DenoiseError(f"bad parameter: fusion_bias_estimation must be 'model', 'on' "
+                               f"or 'off', not {bias!r}")
+        return FusionSettings(
+            tau_acc_s=p('fusion_tau_acc').value if p('fusion_tau_acc').value > 0
+            else settings.tau_acc_s,
+            bias_estimation=settings.bias_estimation if bias == 'model' else bias == 'on')
 
     # -- data ---------------------------------------------------------------------
     def _on_imu(self, msg: Imu) -> None:
@@ -176,6 +219,13 @@ class GyroDenoiser(Node):
         embed = out.attitude if self._embed else None
         self._pub_imu.publish(msgs.corrected_imu(self._types, msg, out.gyro, self._gyro_cov,
                                                  embed, self._orientation_cov))
+        # a filter run at a rate it was not set up for is not published as if it were valid
+        if self._pub_fused is not None and not self._rate_error:
+            self._pub_fused.publish(msgs.corrected_imu(self._types, msg, out.gyro,
+                                                       self._gyro_cov, out.orientation,
+                                                       self._fused_cov))
+        elif self._pub_fused is not None:
+            self.fused_withheld += 1
         # an attitude held across a gap, or integrated at a rate the model was not made
         # for, is not published as if it were valid
         if out.event != Event.GAP and not self._rate_error:
@@ -188,7 +238,8 @@ class GyroDenoiser(Node):
     def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self._denoiser.reset_attitude()
         response.success = True
-        response.message = 'attitude re-initialised from the accelerometer at the next sample'
+        response.message = ('attitude (and imu/data orientation) re-initialised from the '
+                            'accelerometer at the next sample')
         return response
 
     # -- monitoring ---------------------------------------------------------------
@@ -212,7 +263,7 @@ class GyroDenoiser(Node):
             status.level = DiagnosticStatus.ERROR
             status.message = (f'input rate {rate:.1f} Hz differs from the model rate '
                               f'{self._model_rate:.1f} Hz: corrections are not valid, '
-                              'imu/attitude not published')
+                              'imu/attitude and imu/data not published')
             self.get_logger().error(status.message, throttle_duration_sec=10.0)
         elif counts['accepted'] == 0:
             status.level, status.message = DiagnosticStatus.WARN, 'no input yet'
@@ -227,6 +278,7 @@ class GyroDenoiser(Node):
                   'callback_time_max_us': f'{infer.max() * 1e6:.1f}'}
         values.update({k: str(v) for k, v in counts.items()})
         values['attitude_withheld'] = str(self.attitude_withheld)
+        values['fused_withheld'] = str(self.fused_withheld)
         status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()

@@ -15,8 +15,10 @@
 The online correction pipeline without ROS: input checks, streaming network, attitude.
 
 :class:`OnlineDenoiser` takes one IMU sample at a time (stamp, gyro, accel) and either
-returns the corrected gyro with the integrated attitude or a counted drop. The ROS node
-and the bag processor both drive it, so they publish identical numbers.
+returns the corrected gyro with the integrated (open-loop) attitude and, with a
+:class:`~denoise_imu_ros.runtime.fusion.GravityFilter`, the gravity-aided orientation,
+or a counted drop. The ROS node and the bag processor both drive it, so they publish
+identical numbers.
 
 Policies (each counted in :attr:`OnlineDenoiser.counts`):
 - a non-finite field, a value beyond the physical range (:mod:`denoise_imu_ros.core.limits`),
@@ -25,6 +27,7 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
   reset (network history and attitude), the sample is the first of a new recording;
 - a gap longer than ``max_gap_factor`` nominal periods: the network history restarts
   (as at start-up) and the attitude is held across the gap, which cannot be integrated;
+  the gravity-aided orientation goes on (gravity corrects its tilt; its yaw is held);
 - every nominal period without a sample is counted (``skipped_periods``): samples lost
   upstream or in a subscription queue show there, not only as a lower rate.
 """
@@ -39,6 +42,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from .fusion import FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
 from ..core.limits import in_range
 from ..core.modelfile import ModelFile, sample_rate
@@ -71,8 +75,9 @@ class Output(NamedTuple):
 
     stamp_ns: int           # the sample's own stamp
     gyro: np.ndarray        # (3,) corrected angular velocity, rad/s
-    attitude: np.ndarray    # (4,) xyzw, IMU frame to the fixed frame
+    attitude: np.ndarray    # (4,) xyzw, IMU frame to the fixed frame (open loop)
     event: Event | None     # set when the state was reset at this sample
+    orientation: np.ndarray | None = None  # (4,) xyzw, gravity-aided (with a filter)
 
 
 def gravity_attitude(accel: np.ndarray) -> Rotation:
@@ -91,6 +96,7 @@ class OnlineDenoiser:
     rate_hz: float                      # the model's sample rate
     max_gap_factor: float = 3.0         # gap threshold, in nominal sample periods
     time_jump_s: float = 1.0            # backward stamp jump that resets everything
+    fusion: GravityFilter | None = None  # the gravity-aided orientation, if wanted
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods'), 0))
     _last_ns: int | None = None
@@ -99,13 +105,19 @@ class OnlineDenoiser:
     _pending_reset: bool = False
 
     @classmethod
-    def from_model_file(cls, model: ModelFile, **options: Any) -> OnlineDenoiser:
-        """Build the pipeline of a model file (node and process-bag): numpy only, no torch."""
-        return cls(StreamingCorrector(model.config, model.arrays), sample_rate(model),
-                   **options)
+    def from_model_file(cls, model: ModelFile, fusion: FusionSettings | None = None,
+                        **options: Any) -> OnlineDenoiser:
+        """
+        Build the pipeline of a model file (node and process-bag): numpy only, no torch.
+
+        With ``fusion`` settings, the gravity-aided orientation is computed too.
+        """
+        rate = sample_rate(model)
+        return cls(StreamingCorrector(model.config, model.arrays), rate,
+                   fusion=None if fusion is None else GravityFilter(rate, fusion), **options)
 
     def reset_attitude(self) -> None:
-        """Re-initialise the attitude from the accelerometer at the next sample."""
+        """Re-initialise the attitude (and the orientation) from the next accelerometer."""
         self._pending_reset = True
 
     def _drop(self, cause: Drop) -> Drop:
@@ -146,6 +158,8 @@ class OnlineDenoiser:
             self.engine.reset()
         if event in (Event.START, Event.TIME_JUMP) or self._pending_reset:
             self._attitude = gravity_attitude(accel)
+            if self.fusion is not None:
+                self.fusion.reset()
             self._pending_reset = False
         elif event is None:  # sample k-1 drives the attitude from stamp k-1 to stamp k
             dt = (stamp_ns - self._last_ns) * 1e-9
@@ -153,5 +167,6 @@ class OnlineDenoiser:
         corrected = self.engine.step(np.concatenate([gyro, accel]))
         self._last_ns, self._last_gyro = stamp_ns, corrected
         self.counts['accepted'] += 1
+        orientation = None if self.fusion is None else self.fusion.update(corrected, accel)
         return Output(stamp_ns=stamp_ns, gyro=corrected, attitude=self._attitude.as_quat(),
-                      event=event)
+                      event=event, orientation=orientation)

@@ -14,7 +14,8 @@
 """
 Offline bag processing with the online pipeline: ``denoise-imu process-bag``.
 
-The output bag holds every input topic unchanged plus ``/imu/corrected`` and
+The output bag holds every input topic unchanged plus ``/imu/corrected``, ``/imu/data``
+(the gravity-aided orientation, with the model file's filter settings) and
 ``/imu/attitude``, computed by the same :class:`~denoise_imu_ros.runtime.online.OnlineDenoiser`
 the node runs, so the numbers are those the node would publish for that input.
 ROS 1 bags are first converted to ROS 2 with ``rosbags.convert``.
@@ -29,6 +30,7 @@ import numpy as np
 from rosbags.convert import convert, ConverterError
 from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
 
+from .fusion import orientation_covariance, settings_of
 from .online import Drop, DROP_CAUSES, OnlineDenoiser
 from ..core import msgs
 from ..core.atomic import atomic_output
@@ -39,6 +41,7 @@ from ..core.msgs import stamp_ns
 from ..data.bags import BAG_TYPES, CORRUPT, IMU_TYPE, open_bag, pick_connections, TYPESTORE
 
 CORRECTED_TOPIC = '/imu/corrected'
+FUSED_TOPIC = '/imu/data'
 ATTITUDE_TOPIC = '/imu/attitude'
 ATTITUDE_TYPE = 'geometry_msgs/msg/QuaternionStamped'
 
@@ -61,13 +64,14 @@ def _ros2_source(src: Path, workdir: Path) -> Path:
 def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
                 fixed_frame: str = 'odom') -> dict[str, int]:
-    """Copy a bag and add the corrected IMU and attitude; returns the pipeline's counts."""
+    """Copy a bag, add the corrected IMU, orientation and attitude; return the counts."""
     src = Path(src)
     if not src.exists():
         raise DatasetError(f'{src}: bag not found')
     loaded = read_model_file(model_spec)
-    den = OnlineDenoiser.from_model_file(loaded)
+    den = OnlineDenoiser.from_model_file(loaded, settings_of(loaded.meta, loaded.path))
     cov = np.array(gyro_covariance(loaded))
+    fused_cov = np.array(orientation_covariance(loaded.meta))
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
         try:
@@ -80,6 +84,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 out = {c.id: wr.add_connection(c.topic, c.msgtype, typestore=rd.typestore)
                        for c in rd.connections}
                 corr = wr.add_connection(CORRECTED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
+                fused = wr.add_connection(FUSED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
                 att = wr.add_connection(ATTITUDE_TOPIC, ATTITUDE_TYPE, typestore=TYPESTORE)
                 imu_ids = {c.id for c in imu_conns}
                 for conn, stamp, raw in rd.messages():
@@ -91,8 +96,11 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                     if isinstance(res, Drop):
                         continue
                     corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov)
+                    oriented = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov,
+                                                  res.orientation, fused_cov)
                     attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
                     wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
+                    wr.write(fused, stamp, TYPESTORE.serialize_cdr(oriented, IMU_TYPE))
                     wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
         except (*CORRUPT, WriterError, FileExistsError) as err:
             raise DatasetError(f'{src} -> {dst}: {err}') from err

@@ -38,6 +38,35 @@ def test_corrected_imu_copies_headers_and_matches_the_batch_network(harness, mod
     assert h.attitude[-1].header.stamp == h.corrected[-1].header.stamp
 
 
+def test_imu_data_is_the_imu_tools_contract_with_the_fused_orientation(harness, model_file):
+    """imu/data: header copied, VQF orientation with its covariance, corrected gyro."""
+    from denoise_imu_ros.runtime.fusion import fuse, FusionSettings
+    rec = load_imu(SAMPLE)
+    n = 600
+    h = harness(fusion_tau_acc=5.0)
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:n], rec.imu[:n])])
+    assert len(h.fused) == n
+    gyro = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
+                     for m in h.fused])
+    assert np.array_equal(gyro, np.array([[m.angular_velocity.x, m.angular_velocity.y,
+                                           m.angular_velocity.z] for m in h.corrected]))
+    quat = np.array([[m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w]
+                     for m in h.fused])
+    np.testing.assert_array_equal(quat, fuse(gyro, rec.imu[:n, 3:], 200.0,
+                                             FusionSettings(tau_acc_s=5.0)))
+    first = h.fused[0]
+    assert first.header == h.corrected[0].header
+    assert first.linear_acceleration_covariance[0] == 0.04
+    np.testing.assert_allclose(np.diag(np.reshape(first.orientation_covariance, (3, 3))),
+                               [0.05 ** 2] * 3)  # the model file stores no fused figures
+
+
+def test_imu_data_can_be_turned_off(harness):
+    h = harness(publish_fused=False)
+    assert h.node.count_publishers('imu/data') == 0 and h.node._pub_fused is None
+    assert h.node.count_publishers('imu/corrected') == 1
+
+
 def test_fuzz_two_thousand_messages_with_garbage(harness):
     rng = np.random.default_rng(7)
     h = harness()
@@ -69,6 +98,11 @@ def test_fuzz_two_thousand_messages_with_garbage(harness):
                             *m.angular_velocity_covariance]).all()
     for q in h.attitude:
         assert np.isfinite([q.quaternion.x, q.quaternion.y, q.quaternion.z, q.quaternion.w]).all()
+    assert len(h.fused) == counts['accepted']
+    for m in h.fused:
+        o = m.orientation
+        assert np.isfinite([o.x, o.y, o.z, o.w, *m.orientation_covariance]).all()
+        assert abs(np.linalg.norm([o.x, o.y, o.z, o.w]) - 1) < 1e-9
     stamps = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in h.corrected]
     resets = counts['time_jump_resets']
     assert sum(np.diff(stamps) <= 0) == resets  # increasing, except after a declared reset
@@ -243,6 +277,8 @@ print('ok')
     (['-p', 'input_queue_depth:=5'], 'input_queue_depth out of range'),
     (['-p', 'model:=5'], "parameter 'model'"),
     (['-p', 'embed_attitude:=maybe'], "parameter 'embed_attitude'"),
+    (['-p', 'fusion_bias_estimation:=maybe'], "fusion_bias_estimation must be 'model'"),
+    (['-p', 'fusion_tau_acc:=-5.0'], 'fusion_tau_acc out of range'),
 ])
 def test_a_bad_parameter_is_a_one_line_error_at_start_up(args, message, capsys):
     assert main(['--ros-args', *args]) == 1

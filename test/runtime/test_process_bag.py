@@ -4,10 +4,15 @@
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError
-from denoise_imu_ros.data.load import load_imu
-from helpers import imu_msg, SAMPLE
-from helpers import N, write_ros1_bag
+from helpers import N, SAMPLE, write_ros1_bag
 import numpy as np
+
+
+def _fields(m) -> list[float]:
+    """Every number of a sensor_msgs/Imu (rclpy or rosbags)."""
+    o, w, a = m.orientation, m.angular_velocity, m.linear_acceleration
+    return [w.x, w.y, w.z, *m.angular_velocity_covariance, a.x, a.y, a.z,
+            *m.linear_acceleration_covariance, o.x, o.y, o.z, o.w, *m.orientation_covariance]
 
 
 def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path):
@@ -17,22 +22,25 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
                 str(model_file)]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
         topics = {c.topic: c.msgcount for c in reader.connections}
-        conns = [c for c in reader.connections if c.topic == '/imu/corrected']
-        bag = []
-        for conn, _, raw in reader.messages(connections=conns):
-            m = reader.deserialize(raw, conn.msgtype)
-            bag.append([m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
-                        *m.angular_velocity_covariance, m.orientation_covariance[0]])
-            if len(bag) == 600:
-                break
-    assert topics['/imu0'] == topics['/imu/corrected'] == topics['/imu/attitude'] == 18000
+        bags = {}
+        for topic in ('/imu/corrected', '/imu/data'):
+            conns = [c for c in reader.connections if c.topic == topic]
+            bags[topic] = []
+            for conn, _, raw in reader.messages(connections=conns):
+                bags[topic].append(_fields(reader.deserialize(raw, conn.msgtype)))
+                if len(bags[topic]) == 600:
+                    break
+    assert (topics['/imu0'] == topics['/imu/corrected'] == topics['/imu/data']
+            == topics['/imu/attitude'] == 18000)
     assert topics['/groundtruth/pose'] > 17000
-    rec = load_imu(SAMPLE)
+    from denoise_imu_ros.runtime.player import read_imu_messages
     h = harness()
-    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:600], rec.imu[:600])])
-    node = [[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
-             *m.angular_velocity_covariance, m.orientation_covariance[0]] for m in h.corrected]
-    assert np.array_equal(np.array(node), np.array(bag))
+    h.send(read_imu_messages(SAMPLE)[:600])  # the bag's own messages, every field
+    assert np.array_equal(np.array([_fields(m) for m in h.corrected]),
+                          np.array(bags['/imu/corrected']))
+    # the gravity-aided orientation, bit for bit, with its covariance
+    assert np.array_equal(np.array([_fields(m) for m in h.fused]), np.array(bags['/imu/data']))
+    assert bags['/imu/data'][0][-9] > 0  # orientation provided (REP-145)
 
 
 def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path, model_file):
@@ -42,7 +50,8 @@ def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path, model_fi
                  str(model_file), '--storage', 'sqlite3']) == 0
     with AnyReader([tmp_path / 'out']) as reader:
         topics = {c.topic: c.msgcount for c in reader.connections}
-    assert topics == {'/imu0': N, '/vicon/body': N, '/imu/corrected': N, '/imu/attitude': N}
+    assert topics == {'/imu0': N, '/vicon/body': N, '/imu/corrected': N, '/imu/data': N,
+                      '/imu/attitude': N}
 
 
 def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(

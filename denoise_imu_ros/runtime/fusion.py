@@ -1,0 +1,133 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Gravity-aided orientation: the corrected gyro and the accelerometer through VQF.
+
+VQF (Laidig & Seel 2023, the ``vqf`` package, C++ core) is a standard 6-D filter: the
+gyro carries the orientation, the low-passed accelerometer pulls its tilt back towards
+gravity with the time constant ``tau_acc_s``. Its own gyro-bias estimators are off by
+default: the network has already removed the bias it can see, and a second estimator
+chasing the same error makes the result worse (docs/results.md).
+
+Time convention, the package's one: gyro sample k drives the orientation from stamp k
+to stamp k + 1. So at sample k the filter first integrates sample k - 1's gyro, then
+corrects with sample k's accelerometer, and the result is the orientation at stamp k.
+:func:`fuse` (offline, one compiled batch) equals :meth:`GravityFilter.update` (online,
+per sample) bit for bit.
+
+Quaternions are xyzw, body (IMU) to an earth frame whose z axis points up; its yaw is
+that of the first sample's, arbitrary.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+from vqf import VQF
+
+from ..core.errors import ModelFileError
+
+
+@dataclass(frozen=True)
+class FusionSettings:
+    """The filter's two choices; defaults are VQF's own time constant, bias estimation off."""
+
+    tau_acc_s: float = 3.0         # accelerometer time constant: longer trusts the gyro more
+    bias_estimation: bool = False  # VQF's rest and motion gyro-bias estimators
+
+    def __post_init__(self) -> None:
+        """Refuse settings the filter cannot run with (model files are user input)."""
+        if not (isinstance(self.tau_acc_s, (int, float)) and 0 < self.tau_acc_s < 1e6):
+            raise ValueError(f'tau_acc_s must be a positive number of seconds, '
+                             f'not {self.tau_acc_s!r}')
+        if not isinstance(self.bias_estimation, bool):
+            raise ValueError(f'bias_estimation must be true or false, not '
+                             f'{self.bias_estimation!r}')
+
+    def as_dict(self) -> dict[str, Any]:
+        """Return the settings as stored in a model file."""
+        return asdict(self)
+
+
+def settings_of(meta: dict[str, Any], path: object = 'model file') -> FusionSettings:
+    """Return the settings a model file stores (``fusion.settings``), or the defaults."""
+    stored = meta.get('fusion', {})
+    stored = stored.get('settings') if isinstance(stored, dict) else None
+    if stored is None:
+        return FusionSettings()
+    try:
+        return FusionSettings(**stored)
+    except (TypeError, ValueError) as err:
+        raise ModelFileError(f'{path}: inconsistent fusion settings ({err})') from err
+
+
+def _vqf(rate_hz: float, settings: FusionSettings) -> VQF:
+    return VQF(1.0 / rate_hz, tauAcc=float(settings.tau_acc_s),
+               motionBiasEstEnabled=settings.bias_estimation,
+               restBiasEstEnabled=settings.bias_estimation, magDistRejectionEnabled=False)
+
+
+def _xyzw(wxyz: np.ndarray) -> np.ndarray:
+    return wxyz[..., [1, 2, 3, 0]]
+
+
+class GravityFilter:
+    """One sample at a time (the node, process-bag); see the module docstring."""
+
+    def __init__(self, rate_hz: float, settings: FusionSettings = FusionSettings()) -> None:
+        self.settings = settings
+        self._vqf = _vqf(rate_hz, settings)
+        self._last_gyro: np.ndarray | None = None
+
+    def reset(self) -> None:
+        """Start again: the next sample's accelerometer sets the tilt, yaw 0."""
+        self._vqf.resetState()
+        self._last_gyro = None
+
+    def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
+        """Orientation (4,) xyzw at this sample's stamp; ``gyro`` drives the next step."""
+        self._vqf.update(np.zeros(3) if self._last_gyro is None else self._last_gyro,
+                         np.ascontiguousarray(accel, dtype=np.float64))
+        self._last_gyro = np.array(gyro, dtype=np.float64)
+        return _xyzw(self._vqf.getQuat6D())
+
+
+def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
+         settings: FusionSettings = FusionSettings()) -> np.ndarray:
+    """Orientation (N, 4) xyzw at every stamp of (N, 3) gyro and accelerometer samples."""
+    shifted = np.zeros((len(gyro), 3))
+    shifted[1:] = gyro[:-1]  # sample k - 1 drives the step to stamp k
+    out = _vqf(rate_hz, settings).updateBatch(
+        np.ascontiguousarray(shifted), np.ascontiguousarray(accel, dtype=np.float64))
+    return _xyzw(out['quat6D'])
+
+
+DEFAULT_ORIENTATION_STD_RAD = 0.05  # used when a model file stores no fused-error figures
+
+
+def orientation_covariance(meta: dict[str, Any], stddev: float = -1.0) -> list[float]:
+    """
+    Row-major 3x3 orientation_covariance of the fused orientation (``imu/data``).
+
+    Diagonal, from ``stddev`` (rad) when >= 0, else from the per-axis RMS errors of the
+    fused orientation the model file stores (measured where its settings were chosen),
+    else DEFAULT_ORIENTATION_STD_RAD.
+    """
+    stored = meta.get('fusion', {})
+    std = stored.get('orientation_std_rad') if isinstance(stored, dict) else None
+    if stddev >= 0 or not (isinstance(std, list) and len(std) == 3):
+        std = [stddev if stddev >= 0 else DEFAULT_ORIENTATION_STD_RAD] * 3
+    return [float(std[i]) ** 2 if i == j else 0.0 for i in range(3) for j in range(3)]

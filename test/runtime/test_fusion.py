@@ -1,0 +1,84 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The gravity-aided orientation: VQF online equals offline, the time convention, settings."""
+
+from denoise_imu_ros.core.errors import ModelFileError
+from denoise_imu_ros.core.modelfile import read_model_file
+from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.runtime.fusion import (fuse, FusionSettings, GravityFilter,
+                                            orientation_covariance, settings_of)
+from denoise_imu_ros.runtime.online import OnlineDenoiser
+from helpers import SAMPLE
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+
+@pytest.fixture(scope='module')
+def imu():
+    return load_imu(SAMPLE).imu[:3000]
+
+
+@pytest.mark.parametrize('settings', [FusionSettings(), FusionSettings(10.0, True)])
+def test_online_equals_offline_bit_for_bit(imu, settings):
+    online = GravityFilter(200.0, settings)
+    one_by_one = np.array([online.update(row[:3], row[3:]) for row in imu])
+    assert np.array_equal(one_by_one, fuse(imu[:, :3], imu[:, 3:], 200.0, settings))
+    online.reset()
+    assert np.array_equal(online.update(imu[0, :3], imu[0, 3:]), one_by_one[0])
+
+
+def test_sample_k_drives_the_step_to_stamp_k_plus_one():
+    """About the vertical gravity says nothing: the yaw is the gyro's own integral."""
+    rate = np.random.default_rng(0).uniform(-1.0, 1.0, 1000)
+    gyro = np.stack([np.zeros(1000), np.zeros(1000), rate], axis=1)
+    accel = np.tile([0.0, 0.0, 9.81], (1000, 1))
+    quat = fuse(gyro, accel, 200.0, FusionSettings(tau_acc_s=1.0))
+    yaw = Rotation.from_quat(quat).as_rotvec()[:, 2]
+    expected = np.concatenate([[0.0], np.cumsum(rate[:-1] * 0.005)])
+    np.testing.assert_allclose(np.unwrap(yaw), expected, atol=1e-9)
+
+
+def test_gravity_pulls_the_tilt_back_and_yaw_starts_at_zero():
+    tilt = Rotation.from_euler('ZYX', [0.0, 0.2, -0.4])
+    accel = np.tile(tilt.inv().apply([0.0, 0.0, 9.81]), (2000, 1))
+    gyro = np.tile([0.0, 0.02, 0.0], (2000, 1))  # a bias the filter must not integrate away
+    quat = fuse(gyro, accel, 200.0, FusionSettings(tau_acc_s=1.0))
+    up = tilt.inv().apply([0.0, 0.0, 1.0])  # the vertical seen from the body
+
+    def tilt_error_deg(q: np.ndarray) -> float:
+        return float(np.degrees(np.arccos(np.clip(Rotation.from_quat(q).inv().apply(
+            [0.0, 0.0, 1.0]) @ up, -1.0, 1.0))))
+    assert tilt_error_deg(quat[0]) < 1e-6  # the first accelerometer sets the tilt
+    # after 10 s the tilt error is the bias over the time constant, not a growing drift
+    assert tilt_error_deg(quat[-1]) < np.degrees(0.02 * 1.0) * 1.5
+    assert abs(tilt_error_deg(quat[-1]) - tilt_error_deg(quat[-400])) < 0.01
+
+
+def test_the_online_pipeline_fuses_its_own_corrected_gyro(model_file, imu):
+    mf = read_model_file(model_file)
+    den = OnlineDenoiser.from_model_file(mf, FusionSettings(2.0, False))
+    stamps = 1_000_000_000 + 5_000_000 * np.arange(len(imu))
+    outs = [den.process(int(t), row[:3], row[3:]) for t, row in zip(stamps, imu)]
+    gyro = np.array([o.gyro for o in outs])
+    assert np.array_equal(np.array([o.orientation for o in outs]),
+                          fuse(gyro, imu[:, 3:], 200.0, FusionSettings(2.0, False)))
+    # a backward jump resets the filter: the sample after it starts from its accelerometer
+    back = den.process(int(stamps[0]), imu[0, :3], imu[0, 3:])
+    assert np.array_equal(back.orientation, fuse(gyro[:1], imu[:1, 3:], 200.0)[0])
+    assert OnlineDenoiser.from_model_file(mf).process(1, imu[0, :3], imu[0, 3:]).orientation \
+        is None
+
+
+def test_settings_and_covariance_come_from_the_model_file_or_defaults():
+    assert settings_of({}) == FusionSettings()
+    meta = {'fusion': {'settings': {'tau_acc_s': 12.0, 'bias_estimation': False},
+                       'orientation_std_rad': [0.01, 0.02, 0.03]}}
+    assert settings_of(meta) == FusionSettings(12.0, False)
+    assert orientation_covariance(meta)[::4] == pytest.approx([1e-4, 4e-4, 9e-4])
+    assert orientation_covariance(meta, 0.1)[::4] == pytest.approx([0.01] * 3)
+    assert orientation_covariance({})[::4] == pytest.approx([0.0025] * 3)
+    for bad in ({'tau_acc_s': -1.0}, {'tau_acc_s': 'long'}, {'bias_estimation': 'yes'},
+                {'tau': 3.0}):
+        with pytest.raises(ModelFileError, match='m.safetensors: inconsistent fusion settings'):
+            settings_of({'fusion': {'settings': bad}}, 'm.safetensors')
