@@ -29,7 +29,7 @@ from .core.errors import DenoiseError
 
 # Commands that run the torch network; the others (process-bag, play, check-data,
 # convert, init-recipe, correct --engine streaming) never import torch.
-TORCH_COMMANDS = ('train', 'crossval', 'eval', 'ensemble')
+TORCH_COMMANDS = ('train', 'crossval', 'eval', 'ensemble', 'tune-fusion')
 
 
 def _train(args: argparse.Namespace) -> None:
@@ -78,6 +78,15 @@ def _init_recipe(args: argparse.Namespace) -> None:
     recipe, why = init_recipe(args.data, args.sequences, args.imu_topic, args.pose_topic)
     write_recipe(args.out, recipe, why)
     print(f'wrote {args.out}:\n' + ''.join(f'  {line}\n' for line in why), end='')
+
+
+def _tune_fusion(args: argparse.Namespace) -> None:
+    from .evaluation.filters import attach, table, tune_model
+    report = tune_model(args.model, args.baseline, args.data, progress=not args.quiet)
+    sys.stdout.write(table(report))
+    if args.attach:
+        attach(args.model, args.baseline, report)
+        print(f'stored the chosen settings in {args.model} and {args.baseline}')
 
 
 def _ensemble(args: argparse.Namespace) -> None:
@@ -202,6 +211,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('models', nargs='+', help='model files (shipped names or paths)')
     p.add_argument('--out', required=True, help='model file to write')
     p.set_defaults(func=_ensemble)
+
+    p = sub.add_parser('tune-fusion', help="choose the gravity-aided filters' settings on the "
+                       "model's training recordings (validation tails) and store them")
+    p.add_argument('--model', required=True, help='the network model (shipped name or file)')
+    p.add_argument('--baseline', required=True, help='its calibrated-IMU model')
+    p.add_argument('--data', help="folder of the training recordings (default: the model's)")
+    p.add_argument('--attach', action='store_true',
+                   help='store the chosen settings in both model files')
+    p.add_argument('--quiet', action='store_true')
+    p.set_defaults(func=_tune_fusion)
 
     topics = argparse.ArgumentParser(add_help=False)
     topics.add_argument('--imu-topic', help='bags: IMU topic (default: the only one)')

@@ -31,6 +31,7 @@ if TYPE_CHECKING:
 
 ROE_DISTANCES_M = (7.0, 21.0, 35.0)
 SCAN_BLOCK = 16  # steps composed per block by integrate (4x faster than one scan)
+ALIGN_AT_S = 1.5  # a fused orientation's arbitrary yaw is aligned to the ground truth here
 
 
 def _prefix_products(q: np.ndarray) -> np.ndarray:
@@ -203,3 +204,49 @@ def score(seq: Sequence, gyro: np.ndarray) -> dict[str, float]:
     """AOE 3-D and yaw (deg) of one method's gyro integrated over a whole sequence."""
     err = sequence_errors(seq, gyro, distances=())[1]
     return {'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw}
+
+
+def tilt_growth_deg_min(t_s: np.ndarray, tilt_deg: np.ndarray, valid: np.ndarray) -> float:
+    """Slope (deg/min) of a least-squares line through the tilt error against time."""
+    if valid.sum() < 2:
+        return float('nan')
+    return float(np.polyfit(t_s[valid] / 60.0, tilt_deg[valid], 1)[0])
+
+
+class FusedErrors(NamedTuple):
+    """Errors of a gravity-aided orientation, degrees, from its yaw-alignment instant on."""
+
+    aoe: float                # RMS of the 3-D error angle
+    tilt: float               # RMS of the tilt error (what gravity can correct)
+    aoe_yaw: float            # RMS of the yaw error
+    tilt_growth_deg_min: float
+    std_rad: np.ndarray       # (3,) RMS of the world-frame error's rotation-vector components
+    start: int                # index of the alignment instant
+
+
+def fused_errors(est: Rotation, gt: Rotation, valid: np.ndarray, t_s: np.ndarray,
+                 align_at_s: float = ALIGN_AT_S) -> FusedErrors:
+    """
+    Errors of an orientation whose yaw is arbitrary (a 6-D filter's) but whose tilt is not.
+
+    Its yaw is aligned to the ground truth once, at the first trusted stamp ``align_at_s``
+    after the start (the world-frame error's yaw removed there); its tilt never is.
+    Scored from that stamp on, ground-truth holes skipped.
+    """
+    later = np.flatnonzero((t_s - t_s[0] >= align_at_s) & valid)
+    k = int(later[0]) if len(later) else 0
+    yaw0 = error_components(est[k:k + 1], gt[k:k + 1])[2][0]
+    aligned = Rotation.from_rotvec([0.0, 0.0, -np.radians(yaw0)]) * est[k:]
+    angle, tilt, yaw = error_components(aligned, gt[k:])
+    ok = valid[k:]
+    if not ok.any():
+        nan = float('nan')
+        return FusedErrors(nan, nan, nan, nan, np.full(3, nan), k)
+
+    def rms(e: np.ndarray) -> float:
+        return float(np.sqrt(np.mean(e[ok] ** 2)))
+
+    vec = (aligned * gt[k:].inv()).as_rotvec()[ok]
+    return FusedErrors(rms(angle), rms(tilt), rms(yaw),
+                       tilt_growth_deg_min(t_s[k:] - t_s[k], tilt, ok),
+                       np.sqrt(np.mean(vec ** 2, axis=0)), k)

@@ -26,13 +26,16 @@ import sys
 from typing import Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
+from .filters import eval_filters, run, score
 from .plots import plot_roe, plot_sequence
-from .reports import crossval_table, eval_table
+from .reports import crossval_table, eval_table, fused_table, growth_table
 from ..core.errors import OptionError, OutputError
 from ..core.limits import check_rate
-from ..core.metrics import sequence_errors
+from ..core.metrics import error_components, sequence_errors, tilt_growth_deg_min
 from ..core.modelfile import shipped_models
+from ..core.records import Sequence
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..learn.model import correct_gyro
@@ -67,6 +70,9 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         raise OutputError(f'{out_dir}: cannot create the output folder ({err.strerror})'
                           ) from err
     results: dict[str, Any] = {}
+    fused: dict[str, Any] = {}
+    rows = eval_filters(loaded.meta, models['calibrated'].meta if 'calibrated' in models
+                        else None)
     roe_all: dict[str, list[np.ndarray]] = {}
     for name in sequences:
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
@@ -78,32 +84,51 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         gyros.update({m: correct_gyro(lm.model, seq.imu) for m, lm in models.items()})
         seq = seq.tail(start_sample)
         gyros = {m: g[start_sample:] for m, g in gyros.items()}
-        estimates, results[name] = {}, {}
+        estimates, results[name], fused[name] = {}, {}, {}
+        t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
         for method, gyro in gyros.items():
             estimates[method], err = sequence_errors(seq, gyro)
+            tilt = error_components(estimates[method], Rotation.from_quat(seq.gt_quat))[1]
             results[name][method] = {
                 'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw,
+                'tilt_deg': float(np.sqrt(np.mean(tilt[seq.gt_valid] ** 2))),
+                'tilt_growth_deg_min': tilt_growth_deg_min(t, tilt, seq.gt_valid),
                 'roe_median_deg': {str(int(d)): v for d, v in err.roe_median().items()}}
             roe_all.setdefault(method, []).append(err.roe)
+        for method, (source, flt) in rows.items():
+            quat = run(flt, gyros[source], seq.imu[:, 3:], seq.rate_hz)
+            err = score(seq, quat)
+            fused[name][method] = {
+                'filter': flt.label, 'aoe_deg': err.aoe, 'tilt_deg': err.tilt,
+                'aoe_yaw_deg': err.aoe_yaw, 'tilt_growth_deg_min': err.tilt_growth_deg_min}
+            estimates[method] = _yaw_aligned(Rotation.from_quat(quat), seq, err.start)
         if seq.pose_alignment is not None:
             results[name]['pose_alignment'] = seq.pose_alignment
         if plots:
             plot_sequence(out_dir / f'{name}.png', seq, estimates)
     methods = [m for m in next(iter(results.values())) if m != 'pose_alignment']
     average = {m: {k: float(np.mean([results[s][m][k] for s in results]))
-                   for k in ('aoe_deg', 'aoe_yaw_deg')} for m in methods}
+                   for k in ('aoe_deg', 'aoe_yaw_deg', 'tilt_deg')} for m in methods}
+    fused_average = {m: {k: float(np.mean([fused[s][m][k] for s in fused]))
+                         for k in ('aoe_deg', 'tilt_deg', 'aoe_yaw_deg')} for m in rows}
     report = {'model': str(loaded.path), 'model_code_version': loaded.meta.get('code_version'),
               'baseline': baseline, 'data': str(data), 'start_sample': start_sample,
               'sequences': results,
               'average': average,
+              'fused': fused, 'fused_average': fused_average,
               'conventions': 'R_{k+1} = R_k Exp(w_k dt_k) from ground truth at the first '
                              'stamp; AOE = RMS error angle; yaw = rotation about world z of '
-                             'R_est R_gt^T; ROE = median over start stamps; GT holes skipped'}
+                             'R_est R_gt^T; tilt = angle between the estimated and the true '
+                             'vertical; ROE = median over start stamps; GT holes skipped. '
+                             'Fused (gravity-aided) rows: the filter starts at the first '
+                             'stamp, its yaw is aligned to the ground truth once 1.5 s in, '
+                             'its tilt never; scored from there on.'}
     crossval = loaded.meta.get('crossval')
     if isinstance(crossval, dict) and 'verdict' in crossval:
         report['crossval'] = crossval
     (out_dir / 'results.json').write_text(json.dumps(report, indent=2))
-    table = eval_table(results, average)
+    table = (eval_table(results, average) + fused_table(fused, fused_average)
+             + growth_table(results, fused))
     if 'crossval' in report:
         table += '\nThe recipe on recordings it never saw (stored in the model file):\n\n'
         table += crossval_table(crossval)
@@ -112,3 +137,9 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         plot_roe(out_dir / 'roe.png', roe_all)
     sys.stdout.write(table)
     return report
+
+
+def _yaw_aligned(est: Rotation, seq: Sequence, k: int) -> Rotation:
+    """Return a fused orientation with its yaw aligned to the ground truth at stamp k."""
+    yaw = error_components(est[k:k + 1], Rotation.from_quat(seq.gt_quat[k:k + 1]))[2][0]
+    return Rotation.from_rotvec([0.0, 0.0, -np.radians(yaw)]) * est

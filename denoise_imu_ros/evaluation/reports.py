@@ -55,3 +55,32 @@ def crossval_table(report: dict[str, Any]) -> str:
     lines.append(f'\nUnseen recordings (leave-out folds), AOE 3-D / yaw in degrees. '
                  f'Verdict: {report["verdict"]}.\n')
     return ''.join(lines)
+
+
+def fused_table(fused: dict[str, Any], average: dict[str, Any]) -> str:
+    """Gravity-aided rows: 3-D / tilt (deg) per sequence, and the tilt growth (deg/min)."""
+    names = list(fused)
+    lines = ['\nGravity-aided orientation (yaw aligned once 1.5 s in, tilt never), AOE 3-D / '
+             'tilt in degrees:\n\n| method | ' + ' | '.join(names) + ' | average |\n',
+             '|---' * (len(names) + 2) + '|\n']
+    for m in average:
+        cells = [f'{fused[s][m]["aoe_deg"]:.2f}/{fused[s][m]["tilt_deg"]:.2f}' for s in names]
+        avg = f'**{average[m]["aoe_deg"]:.2f}/{average[m]["tilt_deg"]:.2f}**'
+        lines.append(f'| {m} | ' + ' | '.join(cells) + f' | {avg} |\n')
+    filters = [f'{m}: {fused[names[0]][m]["filter"]}' for m in average]
+    lines.append('\nFilters: ' + '; '.join(filters) + '.\n')
+    return ''.join(lines)
+
+
+def growth_table(results: dict[str, Any], fused: dict[str, Any]) -> str:
+    """Tilt error growth (deg/min) per sequence: open-loop rows, then gravity-aided ones."""
+    names = list(results)
+    methods = [(m, results) for m in results[names[0]] if m != 'pose_alignment']
+    methods += [(m, fused) for m in fused[names[0]]]
+    lines = ['\nTilt error growth, deg/min (slope of a least-squares line through the tilt '
+             'error against time):\n\n| method | ' + ' | '.join(names) + ' |\n',
+             '|---' * (len(names) + 1) + '|\n']
+    for m, table in methods:
+        cells = [f'{table[s][m]["tilt_growth_deg_min"]:+.2f}' for s in names]
+        lines.append(f'| {m} | ' + ' | '.join(cells) + ' |\n')
+    return ''.join(lines)

@@ -36,5 +36,12 @@ def test_eval_writes_json_markdown_and_figures(model_file, tmp_path):
     assert set(seq['raw']['roe_median_deg']) == {'7', '21', '35'}
     assert seq['raw']['aoe_deg'] > 1
     assert (out / 'results.md').read_text().startswith('| method |')
+    fused = report['fused'][SAMPLE.name]
+    assert set(fused) == {'raw + VQF', 'calibrated + VQF', 'calibrated + imufusion',
+                          'calibrated + Madgwick', 'network + VQF'}
+    assert all(np.isfinite([f['aoe_deg'], f['tilt_deg'], f['tilt_growth_deg_min']]).all()
+               for f in fused.values())
+    assert 'Gravity-aided orientation' in (out / 'results.md').read_text()
+    assert 'Tilt error growth' in (out / 'results.md').read_text()
     for png in (f'{SAMPLE.name}.png', 'roe.png'):
         assert (out / png).read_bytes()[:4] == b'\x89PNG'

@@ -35,6 +35,20 @@ def test_shipped_euroc_model_beats_raw_and_calibrated_on_the_shipped_test_sample
                                       str(tmp_path), plots=False)
     aoe = {m: r['aoe_deg'] for m, r in report['sequences'][SAMPLE.name].items()}
     assert aoe['network'] < aoe['calibrated'] < aoe['raw']
+    fused = {m: r['aoe_deg'] for m, r in report['fused'][SAMPLE.name].items()}
+    assert fused['network + VQF'] < min(v for m, v in fused.items() if m != 'network + VQF')
+    # gravity bounds the tilt: the fused tilt error stops growing, the open-loop one does not
+    growth = {m: r['tilt_growth_deg_min'] for m, r in report['fused'][SAMPLE.name].items()}
+    assert abs(growth['network + VQF']) < report['sequences'][SAMPLE.name]['network'][
+        'tilt_growth_deg_min']
+
+
+def test_shipped_euroc_files_store_filter_settings_chosen_on_training_recordings():
+    for name in ('euroc', 'euroc_calibrated'):
+        fusion = read_model_file(name).meta['fusion']
+        assert fusion['chosen_on'].startswith('validation tails of MH_01_easy')
+        assert fusion['settings']['bias_estimation'] is False
+        assert len(fusion['orientation_std_rad']) == 3
 
 
 def test_shipped_model_streams_the_whole_sample_exactly():

@@ -1,0 +1,82 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The node's per-message cost with the fused orientation (imu/data) on and off.
+
+One process, two nodes built from the same model (``publish_fused`` true and false),
+each fed the same real V1_01 IMU messages through its own subscription callback, with a
+subscriber on every output topic so that each publish serialises and sends; the rounds
+alternate between the two nodes. Prints the median and p99 callback time of each and
+their ratio.
+Run: .venv/bin/python bench/fusion_cost.py [--model euroc] [--messages 3000] [--rounds 3]
+"""
+
+import argparse
+from pathlib import Path
+import time
+
+from denoise_imu_ros.core import msgs
+from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.runtime.node import GyroDenoiser
+from geometry_msgs.msg import QuaternionStamped
+import numpy as np
+import rclpy
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu
+
+DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc' / 'V1_01_easy'
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument('--model', default='euroc')
+    parser.add_argument('--messages', type=int, default=3000)
+    parser.add_argument('--rounds', type=int, default=3)
+    args = parser.parse_args()
+    rec = load_imu(DATA)
+    types = msgs.rclpy_types()
+    messages = [msgs.imu(types, msgs.header(types, int(t), 'imu0'), r[:3], r[3:])
+                for t, r in zip(rec.imu_stamp_ns[:args.messages], rec.imu[:args.messages])]
+    rclpy.init()
+    nodes = {on: GyroDenoiser(parameter_overrides=[Parameter('model', value=args.model),
+                                                   Parameter('publish_fused', value=on)])
+             for on in (True, False)}
+    sink = rclpy.create_node('sink')
+    qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+    for msg_type, topic in ((Imu, 'imu/corrected'), (Imu, 'imu/data'),
+                            (QuaternionStamped, 'imu/attitude')):
+        sink.create_subscription(msg_type, topic, lambda m: None, qos)
+    times = {True: [], False: []}
+    for _ in range(args.rounds):
+        for on, node in nodes.items():
+            node._denoiser.engine.reset()
+            node._denoiser._last_ns = None
+            for m in messages:
+                t0 = time.perf_counter()
+                node._on_imu(m)
+                times[on].append(time.perf_counter() - t0)
+    for on in (True, False):
+        t = np.array(times[on]) * 1e6
+        print(f'imu/data {"on " if on else "off"}: median {np.median(t):7.1f} us, '
+              f'p99 {np.percentile(t, 99):7.1f} us per message ({len(t)} messages)')
+    ratio = np.median(times[True]) / np.median(times[False])
+    print(f'ratio on/off (median): {ratio:.2f}')
+    for node in (*nodes.values(), sink):
+        node.destroy_node()
+    rclpy.shutdown()
+
+
+if __name__ == '__main__':
+    main()

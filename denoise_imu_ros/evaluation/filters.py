@@ -1,0 +1,257 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Gravity-aided filters offline: their settings chosen on training data, and their scores.
+
+The product's filter is VQF (:mod:`denoise_imu_ros.runtime.fusion`); for comparison the
+calibrated gyro is also fed to two other standard filters, each from its library:
+``imufusion`` (x-io's AHRS, C core) and ``ahrs``'s Madgwick. Every filter's settings are
+chosen the same way (``denoise-imu tune-fusion``): on the validation tails of the
+model's training recordings (the samples after its training windows, which no training
+step saw), the setting with the lowest mean 3-D error wins. Test sequences are never
+used. Scores follow :func:`denoise_imu_ros.core.metrics.fused_errors`: yaw aligned once
+1.5 s in, tilt never.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import ahrs
+import imufusion
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..core.errors import DatasetError
+from ..core.metrics import fused_errors, FusedErrors
+from ..core.modelfile import read_model_file
+from ..core.records import Sequence
+from ..data.load import load_sequence
+from ..learn.checkpoint import load_model
+from ..learn.model import correct_gyro
+from ..runtime.fusion import fuse, FusionSettings
+
+GRAVITY_M_S2 = 9.80665
+TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
+IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
+MADGWICK_GAINS = (0.001, 0.003, 0.01, 0.033, 0.1, 0.3)     # ahrs's default: 0.033
+
+
+@dataclass(frozen=True)
+class Filter:
+    """One filter with its settings: ``vqf`` (tau_acc_s, bias_estimation) or a gain."""
+
+    kind: str                       # vqf, imufusion or madgwick
+    tau_acc_s: float = 3.0
+    bias_estimation: bool = False
+    gain: float = 0.0
+
+    @property
+    def label(self) -> str:
+        """Name in tables and model files."""
+        if self.kind == 'vqf':
+            return (f'vqf tau_acc {self.tau_acc_s:g} s, bias estimation '
+                    f'{"on" if self.bias_estimation else "off"}')
+        return f'{self.kind} gain {self.gain:g}'
+
+    def as_dict(self) -> dict[str, Any]:
+        """Return what a model file stores of it."""
+        if self.kind == 'vqf':
+            return {'filter': 'vqf', 'settings': FusionSettings(
+                self.tau_acc_s, self.bias_estimation).as_dict()}
+        return {'filter': self.kind, 'gain': self.gain}
+
+    @classmethod
+    def from_dict(cls, stored: dict[str, Any]) -> Filter:
+        """Rebuild a filter from :meth:`as_dict`'s mapping."""
+        if stored.get('filter', 'vqf') == 'vqf':
+            settings = FusionSettings(**stored.get('settings', {}))
+            return cls('vqf', settings.tau_acc_s, settings.bias_estimation)
+        return cls(stored['filter'], gain=float(stored['gain']))
+
+
+def grid(kind: str) -> list[Filter]:
+    """Every setting tried for a filter."""
+    if kind == 'vqf':
+        return [Filter('vqf', tau, bias) for bias in (False, True) for tau in TAU_ACC_GRID_S]
+    gains = IMUFUSION_GAINS if kind == 'imufusion' else MADGWICK_GAINS
+    return [Filter(kind, gain=g) for g in gains]
+
+
+def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Orientation (N, 4) xyzw at every stamp; sample k - 1's gyro drives the step to k."""
+    if flt.kind == 'vqf':
+        return fuse(gyro, accel, rate_hz, FusionSettings(flt.tau_acc_s, flt.bias_estimation))
+    shifted = np.zeros((len(gyro), 3))
+    shifted[1:] = gyro[:-1]
+    if flt.kind == 'madgwick':
+        wxyz = ahrs.filters.Madgwick(gyr=shifted, acc=accel, frequency=rate_hz,
+                                     gain=flt.gain).Q
+    else:
+        fusion = imufusion.Ahrs()
+        settings = imufusion.AhrsSettings()
+        settings.convention, settings.gain = imufusion.CONVENTION_NWU, flt.gain
+        settings.gyroscope_range, settings.sample_rate = 0.0, rate_hz  # no range, no rejection
+        settings.acceleration_rejection = settings.magnetic_rejection = 0.0
+        fusion.set_settings(settings)
+        fusion.skip_startup()  # as the others: the first accelerometer sets the tilt
+        wxyz = np.empty((len(gyro), 4))
+        deg, g = np.degrees(shifted), accel / GRAVITY_M_S2  # its units: deg/s and g
+        for k in range(len(gyro)):
+            if k == 0:
+                fusion.set_quaternion(_tilt_wxyz(accel[0]))
+            else:
+                fusion.update_no_magnetometer(deg[k], g[k])
+            wxyz[k] = fusion.get_quaternion()
+    return np.asarray(wxyz)[:, [1, 2, 3, 0]]
+
+
+def _tilt_wxyz(accel: np.ndarray) -> np.ndarray:
+    """Roll and pitch from one accelerometer sample, yaw 0, as a wxyz quaternion."""
+    ax, ay, az = accel
+    roll, pitch = np.arctan2(ay, az), np.arctan2(-ax, np.hypot(ay, az))
+    return Rotation.from_euler('ZYX', [0.0, pitch, roll]).as_quat()[[3, 0, 1, 2]]
+
+
+def score(seq: Sequence, quat: np.ndarray) -> FusedErrors:
+    """Fused errors of an orientation at every stamp of a sequence."""
+    t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
+    return fused_errors(Rotation.from_quat(quat), Rotation.from_quat(seq.gt_quat),
+                        seq.gt_valid, t)
+
+
+def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: float,
+         kinds: dict[str, tuple[str, ...]]) -> dict[str, Any]:
+    """
+    Choose every filter's settings for every gyro on the tails: the lowest mean 3-D AOE.
+
+    ``gyros`` maps a source (raw, calibrated, network) to its gyro on each tail;
+    ``kinds`` the filters to tune for it. Returns, per source and filter, the chosen
+    filter, its figures (3-D, tilt, yaw; the per-axis error std) and every candidate's.
+    """
+    report: dict[str, Any] = {}
+    for source, per_tail in gyros.items():
+        for kind in kinds[source]:
+            figures = {}
+            for flt in grid(kind):
+                errs = [score(seq, run(flt, g, seq.imu[:, 3:], rate_hz))
+                        for seq, g in zip(tails, per_tail)]
+                figures[flt] = errs
+            mean = {f: float(np.mean([e.aoe for e in errs])) for f, errs in figures.items()}
+            best = min(mean, key=mean.get)
+            errs = figures[best]
+            report[f'{source} {kind}'] = dict(best.as_dict(), **{
+                'aoe_deg': mean[best],
+                'tilt_deg': float(np.mean([e.tilt for e in errs])),
+                'aoe_yaw_deg': float(np.mean([e.aoe_yaw for e in errs])),
+                'orientation_std_rad': np.sqrt(np.mean([e.std_rad ** 2 for e in errs],
+                                                       axis=0)).tolist(),
+                'candidates': {f.label: m for f, m in mean.items()}})
+    return report
+
+
+# what is tuned for each gyro: the product's filter for all three, the others for the
+# gyro a user without the network would feed them
+KINDS = {'raw': ('vqf',), 'calibrated': ('vqf', 'imufusion', 'madgwick'), 'network': ('vqf',)}
+
+
+def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
+               progress: bool = True) -> dict[str, Any]:
+    """
+    :func:`tune` on the validation tails of a model's training recordings.
+
+    The recordings, their folder and the tail start come from the model file (its recipe
+    and run); ``data`` overrides the folder. ``baseline_spec`` is the calibrated model.
+    """
+    net = load_model(model_spec)
+    calib = load_model(baseline_spec)
+    cfg = net.meta.get('train_config') or {}
+    names = net.meta.get('train_sequences') or []
+    folder = data or (net.meta.get('run') or {}).get('data')
+    if not names or folder is None or 'window' not in cfg:
+        raise DatasetError(f'{net.path}: the model file does not name its training '
+                           'recordings, their folder and its window (pass --data)')
+    start = int(cfg['window']) + int(cfg.get('max_offset', 0))
+    tails, gyros = [], {source: [] for source in KINDS}
+    for name in names:
+        seq = load_sequence(f'{folder}/{name}', cfg.get('imu_topic'), cfg.get('pose_topic'),
+                            cfg.get('max_gt_gap_s'), align_poses=cfg.get('align', 'none'))
+        if len(seq) - start < 2:
+            continue
+        whole = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib.model, seq.imu),
+                 'network': correct_gyro(net.model, seq.imu)}  # the tail's causal context
+        tails.append(seq.tail(start))
+        for source, gyro in whole.items():
+            gyros[source].append(gyro[start:])
+        if progress:
+            print(f'tail of {name}: {len(seq) - start} samples', flush=True)
+    if not tails:
+        raise DatasetError(f'{net.path}: no training recording has a validation tail')
+    report = tune(tails, gyros, float(net.meta['sample_rate_hz']), KINDS)
+    return {'chosen_on': f'validation tails of {", ".join(names)} (from sample {start} on)',
+            'scored': 'yaw aligned once 1.5 s into each tail, tilt never; mean over tails',
+            'filters': report}
+
+
+def attach(model_spec: str, baseline_spec: str, report: dict[str, Any]) -> None:
+    """Store the chosen settings: each model file its own, the network's all of them."""
+    from ..core.modelfile import add_metadata
+    for spec, source in ((model_spec, 'network'), (baseline_spec, 'calibrated')):
+        chosen = report['filters'][f'{source} vqf']
+        add_metadata(read_model_file(spec).path, fusion=dict(
+            settings=chosen['settings'], orientation_std_rad=chosen['orientation_std_rad'],
+            chosen_on=report['chosen_on'], scored=report['scored'],
+            **({'filters': report['filters']} if source == 'network' else {})))
+
+
+def table(report: dict[str, Any]) -> str:
+    """Markdown: the chosen setting of every filter and gyro, its figures on the tails."""
+    lines = ['| gyro | filter | chosen | 3-D | tilt | yaw |\n', '|---|---|---|---|---|---|\n']
+    for name, r in report['filters'].items():
+        source, kind = name.split(' ')
+        lines.append(f'| {source} | {kind} | {Filter.from_dict(r).label} | {r["aoe_deg"]:.2f} '
+                     f'| {r["tilt_deg"]:.2f} | {r["aoe_yaw_deg"]:.2f} |\n')
+    lines.append(f'\nChosen on the {report["chosen_on"]}; {report["scored"]}; degrees.\n')
+    return ''.join(lines)
+
+
+DEFAULTS = {'imufusion': Filter('imufusion', gain=0.5), 'madgwick': Filter('madgwick', gain=0.033)}
+LABELS = {'vqf': 'VQF', 'imufusion': 'imufusion', 'madgwick': 'Madgwick'}
+
+
+def eval_filters(net_meta: dict[str, Any], calib_meta: dict[str, Any] | None
+                 ) -> dict[str, tuple[str, Filter]]:
+    """
+    Return the fused rows of ``eval``: name -> (gyro source, filter with its settings).
+
+    Each model file's own VQF settings for its gyro; for the raw gyro and the other
+    filters the settings ``tune-fusion`` stored in the network's file (defaults if none).
+    """
+    stored = (net_meta.get('fusion') or {}).get('filters') or {}
+
+    def chosen(source: str, kind: str) -> Filter:
+        if f'{source} {kind}' in stored:
+            return Filter.from_dict(stored[f'{source} {kind}'])
+        return DEFAULTS.get(kind, Filter('vqf'))
+
+    rows = {'raw + VQF': ('raw', chosen('raw', 'vqf'))}
+    if calib_meta is not None:
+        rows['calibrated + VQF'] = ('calibrated', Filter.from_dict(
+            {'settings': (calib_meta.get('fusion') or {}).get('settings') or {}}))
+        rows.update({f'calibrated + {LABELS[k]}': ('calibrated', chosen('calibrated', k))
+                     for k in ('imufusion', 'madgwick')})
+    rows['network + VQF'] = ('network', Filter.from_dict(
+        {'settings': (net_meta.get('fusion') or {}).get('settings') or {}}))
+    return rows

@@ -1,0 +1,74 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The gravity-aided filters offline: one convention for all three, scores, tuning."""
+
+from denoise_imu_ros.core.metrics import fused_errors
+from denoise_imu_ros.evaluation import filters
+from denoise_imu_ros.evaluation.filters import eval_filters, Filter, run
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+KINDS = [Filter('vqf', 2.0), Filter('imufusion', gain=0.2), Filter('madgwick', gain=0.033)]
+
+
+@pytest.mark.parametrize('flt', KINDS, ids=lambda f: f.kind)
+def test_every_filter_starts_from_gravity_and_integrates_sample_k_into_stamp_k_plus_one(flt):
+    tilt = Rotation.from_euler('ZYX', [0.0, 0.15, -0.3])
+    n = 1000
+    rate = np.random.default_rng(1).uniform(-0.5, 0.5, n)  # about the body's vertical axis
+    up = tilt.inv().apply([0.0, 0.0, 1.0])
+    gyro = np.outer(rate, up)
+    accel = np.tile(9.81 * up, (n, 1))
+    quat = Rotation.from_quat(run(flt, gyro, accel, 200.0))
+    # the vertical is the accelerometer's from the first stamp on, whatever the rotation
+    seen = quat.inv().apply([0.0, 0.0, 1.0])
+    assert np.degrees(np.arccos(np.clip(seen @ up, -1, 1))).max() < 0.05
+    # rotation about the vertical: the gyro's own integral, sample k into stamp k + 1
+    turned = (quat[0].inv() * quat).as_rotvec() @ up
+    expected = np.concatenate([[0.0], np.cumsum(rate[:-1] * 0.005)])
+    np.testing.assert_allclose(np.unwrap(turned), expected, atol=2e-3)
+
+
+def test_fused_errors_align_the_yaw_once_and_never_the_tilt():
+    t = np.arange(4000) * 0.005
+    gt = Rotation.from_rotvec(np.outer(np.sin(t), [0.2, -0.1, 1.0]))
+    offset = Rotation.from_rotvec([0.0, 0.0, 1.1])  # an arbitrary yaw: aligned away
+    creep = Rotation.from_rotvec(np.outer(np.radians(0.5) * t / 60, [1.0, 0.0, 0.0]))
+    err = fused_errors(offset * creep * gt, gt, np.ones(len(t), bool), t)
+    assert err.start == 300  # 1.5 s in
+    tilt = 0.5 * t[300:] / 60  # deg: a tilt creeping at 0.5 deg/min is never aligned away
+    assert err.tilt == pytest.approx(np.sqrt(np.mean(tilt ** 2)), rel=1e-3)
+    assert err.tilt_growth_deg_min == pytest.approx(0.5, rel=1e-3)
+    assert err.aoe_yaw < 1e-3 and err.aoe == pytest.approx(err.tilt, rel=1e-2)
+
+
+def test_eval_uses_the_settings_the_model_files_store():
+    net = {'fusion': {'settings': {'tau_acc_s': 7.0, 'bias_estimation': False},
+                      'filters': {'raw vqf': Filter('vqf', 1.0).as_dict(),
+                                  'calibrated madgwick': Filter('madgwick', gain=0.1).as_dict()}}}
+    calib = {'fusion': {'settings': {'tau_acc_s': 4.0, 'bias_estimation': True}}}
+    rows = eval_filters(net, calib)
+    assert rows == {'raw + VQF': ('raw', Filter('vqf', 1.0)),
+                    'calibrated + VQF': ('calibrated', Filter('vqf', 4.0, True)),
+                    'calibrated + imufusion': ('calibrated', Filter('imufusion', gain=0.5)),
+                    'calibrated + Madgwick': ('calibrated', Filter('madgwick', gain=0.1)),
+                    'network + VQF': ('network', Filter('vqf', 7.0))}
+    assert set(eval_filters({}, None)) == {'raw + VQF', 'network + VQF'}
+
+
+def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):
+    from denoise_imu_ros.core.records import Sequence
+    t = np.arange(3000) * 0.005
+    gt = Rotation.from_rotvec(np.outer(np.sin(t), [0.3, 0.2, 1.0]))
+    omega = (gt[:-1].inv() * gt[1:]).as_rotvec() / 0.005
+    accel = gt.inv().apply(np.tile([0, 0, 9.81], (len(t), 1)))
+    seq = Sequence('s', (1e9 + t * 1e9).astype(np.int64), np.hstack([np.vstack(
+        [omega, omega[-1:]]), accel]), gt.as_quat(), np.zeros((len(t), 3)),
+        np.ones(len(t), bool))
+    biased = seq.imu[:, :3] + [0.0, 0.02, 0.0]  # a gyro bias: a short time constant helps
+    monkeypatch.setattr(filters, 'TAU_ACC_GRID_S', (0.5, 50.0))
+    report = filters.tune([seq], {'raw': [biased]}, 200.0, {'raw': ('vqf',)})
+    chosen = report['raw vqf']
+    assert chosen['settings']['tau_acc_s'] == 0.5 and len(chosen['candidates']) == 4
+    assert chosen['aoe_deg'] == min(chosen['candidates'].values())
