@@ -29,7 +29,7 @@ from .core.errors import DenoiseError
 
 # Commands that run the torch network; the others (process-bag, play, check-data,
 # convert, init-recipe, correct --engine streaming) never import torch.
-TORCH_COMMANDS = ('train', 'crossval', 'eval', 'ensemble', 'tune-fusion')
+TORCH_COMMANDS = ('train', 'crossval', 'eval', 'ensemble', 'tune-fusion', 'noise')
 
 
 def _train(args: argparse.Namespace) -> None:
@@ -114,6 +114,14 @@ def _eval(args: argparse.Namespace) -> None:
     evaluate(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
              imu_topic=args.imu_topic, pose_topic=args.pose_topic, plots=not args.no_plots,
              start_sample=args.start_sample, align_poses=args.align)
+
+
+def _noise(args: argparse.Namespace) -> None:
+    from .evaluation.noise import markdown, noise
+    report = noise(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
+                   imu_topic=args.imu_topic, pose_topic=args.pose_topic)
+    sys.stdout.write(markdown(report))
+    print(f'\nYAML for a VIO, Allan plots and JSON in {args.out}/')
 
 
 def _warn_if_not_recommended(model: str) -> None:
@@ -241,6 +249,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help='auto: move the poses onto the IMU clock and frame first (check-data)')
     p.add_argument('--no-plots', action='store_true')
     p.set_defaults(func=_eval)
+
+    p = sub.add_parser('noise', parents=[topics],
+                       help='gyro noise figures for a VIO (Allan deviation, Kalibr-style '
+                            'noise density and random walk) and a check of the covariance')
+    p.add_argument('--model', required=True)
+    p.add_argument('--data', required=True, help='folder holding the recordings')
+    p.add_argument('--sequences', nargs='+', required=True, help='recordings with ground truth')
+    p.add_argument('--out', required=True, help='output folder (YAML, JSON, PNG)')
+    p.add_argument('--baseline', help='calibrated-IMU model (default: <dataset>_calibrated)')
+    p.set_defaults(func=_noise)
 
     p = sub.add_parser('check-data', parents=[topics],
                        help='data quality of one recording: rates, pose holes, label noise')

@@ -41,6 +41,14 @@ from ..learn.checkpoint import load_model
 from ..learn.model import correct_gyro
 
 
+def default_baseline(meta: dict[str, Any], baseline: str | None) -> str | None:
+    """Return the calibrated-IMU model to compare with, given or shipped for the dataset."""
+    if baseline is not None:
+        return baseline
+    candidate = f'{meta.get("dataset")}_calibrated'
+    return candidate if candidate in shipped_models() else None
+
+
 def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
              baseline: str | None = None, imu_topic: str | None = None,
              pose_topic: str | None = None, plots: bool = True,
@@ -56,9 +64,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     """
     loaded = load_model(model_spec)
     models = {'network': loaded}
-    if baseline is None:
-        candidate = f'{loaded.meta.get("dataset")}_calibrated'
-        baseline = candidate if candidate in shipped_models() else None
+    baseline = default_baseline(loaded.meta, baseline)
     if baseline is not None:
         models = {'calibrated': load_model(baseline), 'network': loaded}
     out_dir = Path(out)

@@ -1,0 +1,217 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+Noise figures for a VIO (``denoise-imu noise``): the gyro's error, as Kalibr reports it.
+
+The error of a gyro is measured against the ground truth's own body rate, Log(R_k^T
+R_{k+1}) / dt_k, at every stamp where both poses are trusted. Its overlapping Allan
+variance (``allantools``) per axis is fitted, by non-negative least squares relative to
+each point, with the standard noise model
+
+    sigma^2(tau) = 3 Q^2 / tau^2 + N^2 / tau + B^2 (2 ln 2 / pi) + K^2 tau / 3,
+
+whose terms are the poses' own angle noise (Q: white noise in the ground-truth angle,
+slope -1), the gyro's angle random walk (N, slope -1/2), its bias instability (B, flat)
+and its rate random walk (K, slope +1/2). N and K are the figures OpenVINS, VINS-Fusion
+and Kalibr ask for: ``gyroscope_noise_density`` (rad/s/sqrt(Hz)) and
+``gyroscope_random_walk`` (rad/s^2/sqrt(Hz)). Separating Q keeps the poses' noise out of
+N; a recording of a few minutes resolves K only roughly.
+
+It also checks the covariance the node publishes: the fraction of samples whose error
+lies within 1, 2 and 3 of its standard deviations (68.3 / 95.4 / 99.7 % if Gaussian).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import allantools
+import numpy as np
+from scipy.optimize import nnls
+from scipy.spatial.transform import Rotation
+
+from ..core.errors import OutputError
+from ..core.records import Sequence
+
+GAUSS = (0.6827, 0.9545, 0.9973)  # fractions within 1, 2, 3 sigma of a normal distribution
+
+
+def gyro_error(seq: Sequence, gyro: np.ndarray) -> np.ndarray:
+    """(M, 3) rad/s: gyro minus the ground truth's body rate, at trusted stamps only."""
+    gt = Rotation.from_quat(seq.gt_quat)
+    rate = (gt[:-1].inv() * gt[1:]).as_rotvec() / seq.dt[:, None]
+    ok = seq.gt_valid[:-1] & seq.gt_valid[1:]
+    return (gyro[:-1] - rate)[ok]
+
+
+def allan(err: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Octave-spaced taus (s) and the overlapping Allan deviation (K, 3) per axis."""
+    curves = [allantools.oadev(np.ascontiguousarray(err[:, i]), rate=rate_hz,
+                               data_type='freq', taus='octave') for i in range(3)]
+    return curves[0][0], np.stack([c[1] for c in curves], axis=1)
+
+
+def fit_noise_model(taus: np.ndarray, adev: np.ndarray) -> dict[str, float]:
+    """Q, N, B, K of the noise model (module docstring) fitted to one Allan curve."""
+    basis = np.stack([3 / taus ** 2, 1 / taus, np.full_like(taus, 2 * math.log(2) / math.pi),
+                      taus / 3], axis=1)
+    var = adev ** 2
+    coef, _ = nnls(basis / var[:, None], np.ones_like(var))  # relative error at every tau
+    q2, n2, b2, k2 = coef
+    return {'angle_noise_rad': math.sqrt(q2), 'noise_density': math.sqrt(n2),
+            'bias_instability': math.sqrt(b2), 'random_walk': math.sqrt(k2)}
+
+
+def figures(err: np.ndarray, rate_hz: float) -> dict[str, Any]:
+    """Return Kalibr's two gyro figures of the worst axis, the fitted model, the Allan curve."""
+    taus, adev = allan(err, rate_hz)
+    fits = [fit_noise_model(taus, adev[:, i]) for i in range(3)]
+    return {'gyroscope_noise_density': max(f['noise_density'] for f in fits),
+            'gyroscope_random_walk': max(f['random_walk'] for f in fits),
+            'per_axis': fits, 'taus_s': taus.tolist(), 'adev_rad_s': adev.tolist()}
+
+
+def covariance_check(err: np.ndarray, std: np.ndarray) -> dict[str, Any]:
+    """Fractions of the per-axis errors within 1/2/3 standard deviations, and the RMS error."""
+    z = np.abs(err) / np.where(std > 0, std, np.nan)
+    return {'std_rad_s': std.tolist(), 'rms_error_rad_s': np.sqrt(np.mean(err ** 2, 0)).tolist(),
+            'within_sigma': [float(np.mean(z <= k)) for k in (1, 2, 3)], 'gaussian': GAUSS}
+
+
+def yaml_snippet(name: str, fig: dict[str, Any], where: str) -> str:
+    """Return the lines to paste into a Kalibr / OpenVINS / VINS-Fusion IMU configuration."""
+    return (f'# {name} gyro, measured against ground truth on {where} (denoise-imu noise)\n'
+            f'gyroscope_noise_density: {fig["gyroscope_noise_density"]:.3e}  # rad/s/sqrt(Hz)\n'
+            f'gyroscope_random_walk: {fig["gyroscope_random_walk"]:.3e}  # rad/s^2/sqrt(Hz)\n')
+
+
+def plot(path: Path, curves: dict[str, dict[str, Any]]) -> None:
+    """Allan deviation of each gyro's error, every axis, with the two figures' lines."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for (name, f), color in zip(curves.items(), ('C0', 'C1', 'C2', 'C3')):
+        taus, adev = np.array(f['taus_s']), np.array(f['adev_rad_s'])
+        for i, style in enumerate(('-', '--', ':')):
+            ax.loglog(taus, adev[:, i], style, color=color,
+                      label=f'{name} ({"xyz"[i]})' if i == 0 else None)
+        ax.loglog(taus, f['gyroscope_noise_density'] / np.sqrt(taus), color=color, lw=0.5)  # N
+    ax.set_xlabel('tau (s)')
+    ax.set_ylabel('Allan deviation of the gyro error (rad/s)')
+    ax.grid(True, which='both', alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def write(out: Path, report: dict[str, Any]) -> None:
+    """results: noise.json, noise.yaml (one snippet per gyro), allan_<recording>.png."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise OutputError(f'{out}: cannot create the output folder ({err.strerror})') from err
+    (out / 'noise.json').write_text(json.dumps(report, indent=2))
+    (out / 'noise.yaml').write_text('\n'.join(
+        yaml_snippet(g, f, ', '.join(report['recordings']))
+        for g, f in report['pooled'].items()))
+    for name, curves in report['recordings'].items():
+        plot(out / f'allan_{name}.png', {g: c['figures'] for g, c in curves.items()})
+
+
+def pooled(per_recording: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """Per gyro, the worst recording's figures (what a VIO should be configured with)."""
+    gyros = next(iter(per_recording.values())).keys()
+    out = {}
+    for g in gyros:
+        figs = [r[g]['figures'] for r in per_recording.values()]
+        out[g] = {k: max(f[k] for f in figs)
+                  for k in ('gyroscope_noise_density', 'gyroscope_random_walk')}
+    return out
+
+
+def markdown(report: dict[str, Any]) -> str:
+    """Tables: the figures per recording and gyro, then the covariance check."""
+    lines = ['| recording | gyro | noise density (rad/s/√Hz) | random walk (rad/s²/√Hz) | '
+             "poses' angle noise (rad) |\n", '|---|---|---|---|---|\n']
+    for name, gyros in report['recordings'].items():
+        for g, r in gyros.items():
+            f = r['figures']
+            q = max(a['angle_noise_rad'] for a in f['per_axis'])
+            lines.append(f'| {name} | {g} | {f["gyroscope_noise_density"]:.3e} | '
+                         f'{f["gyroscope_random_walk"]:.3e} | {q:.1e} |\n')
+    lines.append('\nThe covariance the node publishes (`angular_velocity_covariance`) against '
+                 "the corrected gyro's real errors: fraction of samples within 1 / 2 / 3 σ "
+                 '(Gaussian: 68.3 / 95.4 / 99.7 %), per axis pooled:\n\n'
+                 '| recording | σ x/y/z (rad/s) | RMS error x/y/z (rad/s) | within 1/2/3 σ |\n'
+                 '|---|---|---|---|\n')
+    for name, gyros in report['recordings'].items():
+        c = gyros['corrected'].get('covariance')
+        if c is None:
+            continue
+        lines.append(f'| {name} | ' + '/'.join(f'{v:.4f}' for v in c['std_rad_s']) + ' | '
+                     + '/'.join(f'{v:.4f}' for v in c['rms_error_rad_s']) + ' | '
+                     + '/'.join(f'{100 * v:.1f} %' for v in c['within_sigma']) + ' |\n')
+    return ''.join(lines)
+
+
+def noise_report(seqs: list[Sequence], gyros: dict[str, list[np.ndarray]],
+                 corrected_std: np.ndarray | None) -> dict[str, Any]:
+    """Figures of every gyro on every recording; the check of the corrected gyro's std."""
+    per: dict[str, dict[str, Any]] = {}
+    for i, seq in enumerate(seqs):
+        per[seq.name] = {}
+        for g, series in gyros.items():
+            err = gyro_error(seq, series[i])
+            per[seq.name][g] = {'figures': figures(err, seq.rate_hz)}
+            if g == 'corrected' and corrected_std is not None:
+                per[seq.name][g]['covariance'] = covariance_check(err, corrected_std)
+    return {'recordings': per, 'pooled': pooled(per),
+            'method': 'gyro minus the ground-truth body rate Log(R_k^T R_k+1)/dt_k at trusted '
+                      'stamps; overlapping Allan deviation (allantools.oadev, octave taus); '
+                      'density: sigma(tau) sqrt(tau) where the slope is nearest -1/2; random '
+                      'walk: sigma(tau) sqrt(3/tau) where it is nearest +1/2; worst axis'}
+
+
+def noise(model_spec: str, data: str, sequences: list[str], out: str,
+          baseline: str | None = None, imu_topic: str | None = None,
+          pose_topic: str | None = None) -> dict[str, Any]:
+    """Run the noise figures of raw, calibrated and corrected gyro; write and return them."""
+    from ..core.modelfile import gyro_covariance
+    from ..data.load import load_sequence
+    from ..learn.checkpoint import load_model
+    from ..learn.model import correct_gyro
+    from .evaluate import default_baseline
+    net = load_model(model_spec)
+    baseline = default_baseline(net.meta, baseline)
+    calib = load_model(baseline) if baseline is not None else None
+    seqs, gyros = [], {'raw': [], 'calibrated': [], 'corrected': []}
+    for name in sequences:
+        seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
+                            min_samples=net.model.receptive_field)
+        seqs.append(seq)
+        gyros['raw'].append(seq.imu[:, :3])
+        if calib is not None:
+            gyros['calibrated'].append(correct_gyro(calib.model, seq.imu))
+        gyros['corrected'].append(correct_gyro(net.model, seq.imu))
+    gyros = {g: v for g, v in gyros.items() if v}
+    std = np.sqrt(np.diag(np.reshape(gyro_covariance(net), (3, 3))))
+    report = noise_report(seqs, gyros, std if std.any() else None)
+    report.update(model=str(net.path), baseline=baseline)
+    write(Path(out), report)
+    return report

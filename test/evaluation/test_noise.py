@@ -1,0 +1,28 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""Noise figures: the Allan fit recovers known noise, separates the poses' own noise."""
+
+from denoise_imu_ros.evaluation.noise import covariance_check, figures, yaml_snippet
+import numpy as np
+
+
+def test_the_fit_recovers_white_noise_and_random_walk_and_keeps_pose_noise_apart():
+    rate, n = 200.0, 200 * 600
+    rng = np.random.default_rng(0)
+    density, walk, angle = 2e-4, 2e-5, 1e-4   # rad/s/sqrt(Hz), rad/s^2/sqrt(Hz), rad
+    white = rng.normal(0, density * np.sqrt(rate), (n, 3))
+    drift = np.cumsum(rng.normal(0, walk / np.sqrt(rate), (n, 3)), axis=0)
+    poses = np.diff(rng.normal(0, angle, (n + 1, 3)), axis=0) * rate  # differentiated angles
+    fig = figures(white + drift + poses, rate)
+    assert abs(fig['gyroscope_noise_density'] / density - 1) < 0.2
+    assert 0.5 < fig['gyroscope_random_walk'] / walk < 2.0
+    assert all(abs(a['angle_noise_rad'] / angle - 1) < 0.2 for a in fig['per_axis'])
+    snippet = yaml_snippet('corrected', fig, 'a test')
+    assert 'gyroscope_noise_density: 2.' in snippet and 'gyroscope_random_walk:' in snippet
+
+
+def test_the_covariance_check_counts_samples_inside_one_two_three_sigma():
+    err = np.random.default_rng(1).normal(0, [0.01, 0.02, 0.03], (100000, 3))
+    check = covariance_check(err, np.array([0.01, 0.02, 0.03]))
+    np.testing.assert_allclose(check['within_sigma'], [0.6827, 0.9545, 0.9973], atol=0.005)
+    assert covariance_check(err, np.array([0.005, 0.01, 0.015]))['within_sigma'][0] < 0.4
