@@ -15,8 +15,10 @@
 Node start-up cost: import time, resident memory, whether torch was loaded.
 
 Each run is a fresh process that imports denoise_imu_ros.runtime.node and starts the node with
-a shipped model. With --other PATH (another checkout, e.g. an older commit made with
-``git worktree add``), the same is measured for that code in the same run, alternating.
+a shipped model; beside it, in the same run and alternating, the floor: a process that
+imports rclpy and the message packages the node uses and starts an empty node. With
+--other PATH (another checkout, e.g. an older commit made with ``git worktree add``),
+its node is measured too.
 Run: .venv/bin/python bench/node_import.py [--model euroc] [--runs 5] [--other PATH]
 """
 
@@ -46,10 +48,30 @@ print(json.dumps({'import_s': imported, 'start_s': started, 'torch': 'torch' in 
 """
 
 
-def probe(code: Path, model: str) -> dict:
-    """One fresh process importing the node from ``code`` and starting it."""
-    env = dict(os.environ, PYTHONPATH=str(code))
-    out = subprocess.run([sys.executable, '-c', PROBE, model], env=env, check=True,
+BARE = """
+import json, resource, sys, time
+t = time.perf_counter()
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import QuaternionStamped
+from sensor_msgs.msg import Imu
+from std_srvs.srv import Trigger
+imported = time.perf_counter() - t
+rclpy.init()
+node = rclpy.create_node('bare')
+started = time.perf_counter() - t
+node.destroy_node()
+rclpy.shutdown()
+print(json.dumps({'import_s': imported, 'start_s': started, 'torch': 'torch' in sys.modules,
+                  'rss_mb': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+"""
+
+
+def probe(code: Path | None, model: str) -> dict:
+    """One fresh process importing the node from ``code`` and starting it (None: the floor)."""
+    env = dict(os.environ, PYTHONPATH=str(code or ''))
+    out = subprocess.run([sys.executable, '-c', PROBE if code else BARE, model], env=env,
+                         check=True,
                          capture_output=True, text=True, cwd='/').stdout
     return json.loads(out.splitlines()[-1])
 
@@ -60,7 +82,7 @@ def main():
     parser.add_argument('--runs', type=int, default=5)
     parser.add_argument('--other', type=Path, help='another checkout to compare with')
     args = parser.parse_args()
-    codes = {'this checkout': Path(__file__).resolve().parents[1]}
+    codes = {'this checkout': Path(__file__).resolve().parents[1], 'rclpy + msgs': None}
     if args.other:
         codes['other'] = args.other.resolve()
     runs = {name: [] for name in codes}
@@ -72,6 +94,11 @@ def main():
         print(f'{name:14s}: import {med["import_s"]:.2f} s, import + start '
               f'{med["start_s"]:.2f} s, max RSS {med["rss_mb"]:.0f} MB, torch loaded: '
               f'{any(r["torch"] for r in rs)} (median of {len(rs)})')
+    med = {k: {m: np.median([r[m] for r in runs[k]]) for m in ('start_s', 'rss_mb')}
+           for k in ('this checkout', 'rclpy + msgs')}
+    node, bare = med['this checkout'], med['rclpy + msgs']
+    print(f'node / floor: import + start {node["start_s"] / bare["start_s"]:.2f}x, '
+          f'max RSS {node["rss_mb"] / bare["rss_mb"]:.2f}x')
 
 
 if __name__ == '__main__':

@@ -16,8 +16,10 @@ Streaming engine vs recomputing the window, side by side, on a real EuRoC test s
 
 Prints, for the same model and samples: the median and p99 per-sample cost of the
 numpy streaming engine, of the batch torch network recomputing the last 511 samples for
-every new sample, their ratio, and the largest difference between the streaming output
-over the whole sequence and the batch output. With --members K, the same for an
+every new sample, their ratio, the largest difference between the streaming output
+over the whole sequence and the batch output, and the engine's floor: the same
+matrix-vector products alone, back to back on preallocated vectors, and the ratio of
+the engine's cost to it. With --members K, the same for an
 ensemble of K networks (the model's weights K times over: the cost does not depend on
 the weights), timed in the same run, and the ensemble/single cost ratio.
 Run: .venv/bin/python bench/streaming.py [--model euroc] [--sequence V1_01_easy]
@@ -68,6 +70,8 @@ def main():
     print(f'sequence {args.sequence}: {len(imu)} samples, model {args.model}')
     print(f'streaming engine : median {np.median(costs) * 1e6:7.1f} us  '
           f'p99 {np.percentile(costs, 99) * 1e6:7.1f} us per sample')
+    print(f'its floor        : median {np.median(floor(model)) * 1e6:7.1f} us (the products '
+          f'alone); engine / floor {np.median(costs) / np.median(floor(model)):.2f}')
     print(f'window recompute : median {np.median(window_costs) * 1e6:7.1f} us  '
           f'p99 {np.percentile(window_costs, 99) * 1e6:7.1f} us per sample (torch, 1 thread)')
     print(f'speed-up (median): {np.median(window_costs) / np.median(costs):.1f}x')
@@ -77,9 +81,26 @@ def main():
         ens_costs, ens_out = stream(ensemble, imu)
         print(f'ensemble of {args.members}   : median {np.median(ens_costs) * 1e6:7.1f} us  '
               f'p99 {np.percentile(ens_costs, 99) * 1e6:7.1f} us per sample, '
-              f'{np.median(ens_costs) / np.median(costs):.2f}x the single network; '
+              f'{np.median(ens_costs) / np.median(costs):.2f}x the single network, '
+              f'{np.median(ens_costs) / np.median(floor(ensemble)):.2f}x its floor; '
               f'max |streaming - batch| '
               f'{np.abs(ens_out - correct_gyro(ensemble, imu)).max():.2e} rad/s')
+
+
+def floor(model, repeats: int = 5000) -> np.ndarray:
+    """Per-sample cost (s) of the engine's matrix-vector products alone, back to back."""
+    engine = StreamingCorrector.from_module(model)
+    products = [(buf.weight[0], buf.col[0, :, 0], buf.out) if buf.layer.groups == 1 else
+                (buf.weight, buf.col, buf.out.reshape(buf.layer.groups, -1, 1))
+                for buf in engine._hidden]
+    products.append((engine._out, engine._out_in, np.empty(3, np.float32)))
+    costs = np.empty(repeats)
+    for n in range(repeats):
+        t = time.perf_counter()
+        for w, x, y in products:
+            (np.dot if w.ndim == 2 else np.matmul)(w, x, out=y)
+        costs[n] = time.perf_counter() - t
+    return costs
 
 
 def stream(model, imu):

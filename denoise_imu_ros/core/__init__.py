@@ -14,20 +14,12 @@
 """
 The core: what every other room builds on, with numpy, scipy and safetensors alone.
 
-The network's geometry (``ModelConfig``), model files, recordings and sequences, the
-metrics, the input limits, message builders, atomic outputs and the errors of every
-area. It imports no other room, and never torch or rclpy.
+The network's geometry (``architecture``), model files (``modelfile``), recordings and
+sequences (``records``), the metrics, the input limits, message builders (``msgs``),
+atomic outputs and the errors of every area. It imports no other room, and never torch
+or rclpy. Import the module you need: this package imports none of them, so that the
+node does not load the offline metrics (and scipy's rotations) it never uses.
 """
 
-from .architecture import ModelConfig
-from .atomic import atomic_output
-from .errors import (DatasetError, DenoiseError, ModelFileError, OptionError, OutputError,
-                     TrainingError)
-from .metrics import attitude_errors, integrate, score, sequence_errors
-from .modelfile import ModelFile, read_model_file, shipped_models, write_model_file
-from .records import Recording, Sequence
-
-__all__ = ['DatasetError', 'DenoiseError', 'ModelConfig', 'ModelFile', 'ModelFileError',
-           'OptionError', 'OutputError', 'Recording', 'Sequence', 'TrainingError',
-           'atomic_output', 'attitude_errors', 'integrate', 'read_model_file', 'score',
-           'sequence_errors', 'shipped_models', 'write_model_file']
+__all__ = ['architecture', 'atomic', 'errors', 'limits', 'metrics', 'modelfile', 'msgs',
+           'records']

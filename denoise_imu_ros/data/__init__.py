@@ -15,14 +15,10 @@
 Recordings in and out: ASL folders and bags, the IMU time base, pose alignment, check-data.
 
 Builds on :mod:`denoise_imu_ros.core` (with rosbags for bags); never torch or rclpy.
+``load`` reads any recording (``load_recording``, ``load_sequence``, ``load_imu``);
+``asl`` and ``bags`` the two formats; ``timebase`` puts ground truth onto the IMU stamps;
+``pose_alignment`` estimates and applies a clock offset and frame rotation; ``check`` is
+check-data. Import the module you need: this package imports none of them.
 """
 
-from .bags import read_bag, write_bag
-from .check import check
-from .load import is_bag, load_imu, load_recording, load_sequence
-from .pose_alignment import apply_pose_alignment, estimate_pose_alignment
-from .timebase import crop, onto_imu_stamps, overlap
-
-__all__ = ['apply_pose_alignment', 'check', 'crop', 'estimate_pose_alignment', 'is_bag',
-           'load_imu', 'load_recording', 'load_sequence', 'onto_imu_stamps', 'overlap',
-           'read_bag', 'write_bag']
+__all__ = ['asl', 'bags', 'check', 'load', 'pose_alignment', 'timebase']

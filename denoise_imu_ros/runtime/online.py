@@ -36,12 +36,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
-import math
 from typing import Any, NamedTuple
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
+from . import rotation
 from .fusion import FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
 from ..core.limits import in_range
@@ -80,14 +79,6 @@ class Output(NamedTuple):
     orientation: np.ndarray | None = None  # (4,) xyzw, gravity-aided (with a filter)
 
 
-def gravity_attitude(accel: np.ndarray) -> Rotation:
-    """Roll and pitch from a (static) accelerometer reading, yaw 0 (z up, ENU-like)."""
-    ax, ay, az = accel
-    roll = math.atan2(ay, az)
-    pitch = math.atan2(-ax, math.hypot(ay, az))
-    return Rotation.from_euler('ZYX', [0.0, pitch, roll])
-
-
 @dataclass
 class OnlineDenoiser:
     """Streaming gyro correction and attitude integration with input checks."""
@@ -100,7 +91,7 @@ class OnlineDenoiser:
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods'), 0))
     _last_ns: int | None = None
-    _attitude: Rotation | None = None
+    _attitude: rotation.Quat | None = None
     _last_gyro: np.ndarray | None = None
     _pending_reset: bool = False
 
@@ -157,16 +148,17 @@ class OnlineDenoiser:
         if event is not None:
             self.engine.reset()
         if event in (Event.START, Event.TIME_JUMP) or self._pending_reset:
-            self._attitude = gravity_attitude(accel)
+            self._attitude = rotation.from_gravity(*map(float, accel))
             if self.fusion is not None:
                 self.fusion.reset()
             self._pending_reset = False
         elif event is None:  # sample k-1 drives the attitude from stamp k-1 to stamp k
             dt = (stamp_ns - self._last_ns) * 1e-9
-            self._attitude = self._attitude * Rotation.from_rotvec(self._last_gyro * dt)
+            step = rotation.exp(*(float(w) * dt for w in self._last_gyro))
+            self._attitude = rotation.multiply(self._attitude, step)
         corrected = self.engine.step(np.concatenate([gyro, accel]))
         self._last_ns, self._last_gyro = stamp_ns, corrected
         self.counts['accepted'] += 1
         orientation = None if self.fusion is None else self.fusion.update(corrected, accel)
-        return Output(stamp_ns=stamp_ns, gyro=corrected, attitude=self._attitude.as_quat(),
+        return Output(stamp_ns=stamp_ns, gyro=corrected, attitude=np.array(self._attitude),
                       event=event, orientation=orientation)

@@ -16,18 +16,22 @@ Exact per-sample evaluation of the network, in numpy, for online use.
 
 Each convolution keeps a buffer of its last (k - 1) * d + 1 inputs, so a new IMU sample
 costs one column of every layer (~76 k multiply-adds) instead of recomputing the
-511-sample window. BatchNorm (eval mode) is folded into the convolutions. Before the
-first sample every buffer is filled with the activations a constant input equal to that
-sample produces, which reproduces the batch model's left replication padding: the output
-equals :class:`~denoise_imu_ros.learn.model.GyroNet` in eval mode from the very first sample.
+511-sample window. BatchNorm (eval mode), the input normalisation and the output scale
+sigma_g (with an ensemble's averaging) are folded into the convolutions, and each bias
+into its matrix (an input that is always 1), so a hidden layer is four numpy calls on
+preallocated buffers: gather the taps, one matrix-vector product, GELU (two calls).
+Before the first sample every buffer is filled with the activations a constant input
+equal to that sample produces, which reproduces the batch model's left replication
+padding: the output equals :class:`~denoise_imu_ros.learn.model.GyroNet` in eval mode
+from the very first sample.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, NamedTuple
 
 import numpy as np
-from scipy.special import ndtr
 
 from ..core.architecture import BLOCK, BN_EPS, ModelConfig
 
@@ -53,28 +57,42 @@ class _Layer(NamedTuple):
         """Width of the layer's input (all groups)."""
         return self.summed.shape[1]
 
+    @property
+    def bias_total(self) -> np.ndarray:
+        """The groups' biases summed (the output layer's: the members' mean, folded in)."""
+        return self.bias.reshape(self.groups, -1).sum(0)
+
+
+# Phi, the standard normal CDF, tabulated once from math.erf: linear interpolation on this
+# grid is within 3e-8 of it, below float32 precision, in one compiled call (np.interp);
+# scipy.special's ndtr would cost the node 0.4 s of import. Phi(-10) is set to 0: the
+# exact tail underflows to denormal floats, which this CPU multiplies ~10x slower.
+_PHI_X = np.linspace(-10.0, 10.0, 20001)
+_PHI = np.array([0.5 * math.erfc(-v / math.sqrt(2.0)) for v in _PHI_X])
+_PHI[0] = 0.0
+
 
 def _gelu(x: np.ndarray) -> np.ndarray:
     """
-    GELU, x * Phi(x), taken as exactly 0 below x = -10 (where it is above -8e-23).
+    GELU, x * Phi(x) as torch's (erf-based), in place; exactly 0 below x = -10.
 
-    The exact tail underflows to denormal floats, which this CPU multiplies ~10x slower;
-    with the tail at 0 and no weight below TINY_WEIGHT, no product in the engine is
+    With the tail at 0 and no weight below TINY_WEIGHT, no product in the engine is
     denormal, so the engine needs no flush-to-zero mode (and no torch to set it).
     """
-    return np.where(x > -10.0, x * ndtr(x), x.dtype.type(0))
+    return np.multiply(x, np.interp(x, _PHI_X, _PHI), out=x)
 
 
 def _layers(cfg: ModelConfig, state: dict[str, np.ndarray]) -> list[_Layer]:
     """
     Convolutions of the network with its (eval-mode) BatchNorm folded in.
 
-    Folding is done in float64, the result kept in float32: a float32 matrix-vector
-    product costs about half as much, and the output still matches the (float32) batch
-    network to ~1e-8 rad/s. Weights that weight decay drove below TINY_WEIGHT are set to
-    0: as float32 they are (or their products are) denormal numbers, which this CPU
-    multiplies ~10x slower (the shipped EuRoC model: 278 against 27 us per sample), and
-    they change no output by more than ~1e-13 rad/s.
+    The first also takes the input normalisation, (u - mean) / std; the last the output
+    scale sigma_g and the 1 / K of an ensemble's mean. Folding is done in float64, the
+    result kept in float32: a float32 matrix-vector product costs about half as much,
+    and the output still matches the (float32) batch network to ~1e-7 rad/s. Weights
+    that weight decay drove below TINY_WEIGHT are set to 0: as float32 they are (or
+    their products are) denormal numbers, which x86 CPUs multiply about ten times more
+    slowly, and they change no output by more than ~1e-13 rad/s.
     """
     layers = []
     convs = cfg.convolutions()
@@ -86,6 +104,13 @@ def _layers(cfg: ModelConfig, state: dict[str, np.ndarray]) -> list[_Layer]:
             scale = state[bn + 'weight'] / np.sqrt(state[bn + 'running_var'] + BN_EPS)
             w = w * scale[:, None, None]
             b = (b - state[bn + 'running_mean']) * scale + state[bn + 'bias']
+        if i == 0:  # W (u - mean) / std = (W / std) u - W mean / std
+            mean, std = state['input_mean'], state['input_std']
+            b = b - (w * (mean / std)[None, :, None]).sum(axis=(1, 2))
+            w = w / std[None, :, None]
+        if not hidden:  # member m's three outputs are rows 3m..3m+2
+            scale = np.tile(state['gyro_std'], groups) / groups
+            w, b = w * scale[:, None, None], b * scale
         c_out, c_group, k = w.shape
         flat = np.ascontiguousarray(w.transpose(0, 2, 1)).reshape(groups, c_out // groups, -1)
         summed = np.zeros((c_out, c_group * groups))  # block-diagonal over the groups
@@ -111,24 +136,20 @@ class StreamingCorrector:
     def __init__(self, config: ModelConfig, arrays: dict[str, np.ndarray]) -> None:
         state = {k: np.asarray(v, dtype=np.float64) for k, v in arrays.items()}
         self.receptive_field = config.receptive_field
-        self._mean = state['input_mean'].astype(np.float32)
-        self._std = state['input_std'].astype(np.float32)
-        self._gyro_std = state['gyro_std']
         self._calib = np.eye(3) + state['delta']
-        if config.calibration_only:
-            self._layers: list[_Layer] = []
-            self._const = self._gyro_std * state['bias']
-        else:
-            self._layers = _layers(config, state)
-            self._const = np.zeros(3)
-        # History of each layer's input, stored twice over (at i and i + span) so the
-        # last `span` entries are always one contiguous slice: no modulo per tap.
-        self._span = [(ly.kernel - 1) * ly.dilation + 1 for ly in self._layers]
-        self._hist = [np.zeros((2 * s, ly.in_channels), np.float32)
-                      for s, ly in zip(self._span, self._layers)]
-        self._members = config.members
-        self._pos = 0
         self.samples = 0
+        self._const = np.zeros(3)
+        self._hidden: list[_Buffers] = []
+        if config.calibration_only:
+            self._const = state['gyro_std'] * state['bias']
+            return
+        *hidden, last = _layers(config, state)
+        self._hidden = [_Buffers(ly) for ly in hidden]
+        # the last hidden layer writes into a vector whose final entry stays 1: the input
+        # of the output layer, whose bias is its last column
+        self._out_in = np.ones(last.in_channels + 1, np.float32)
+        self._hidden[-1].out = self._out_in[:-1]
+        self._out = np.hstack([_dense(last), last.bias_total[:, None]]).astype(np.float32)
 
     @classmethod
     def from_module(cls, model: Any) -> StreamingCorrector:
@@ -142,40 +163,68 @@ class StreamingCorrector:
         """Forget the past: the next sample is treated as the first of a recording."""
         self.samples = 0
 
-    def _prime(self, x: np.ndarray) -> None:
-        """Fill every history as if ``x`` (normalised) had been the input forever."""
-        for ly, hist in zip(self._layers, self._hist):
-            hist[:] = x
-            x = ly.summed @ x + ly.bias
-            if ly.gelu:
-                x = _gelu(x)
-        self._pos = 0
-
     def step(self, imu: np.ndarray) -> np.ndarray:
         """Corrected gyro (3,) rad/s for one raw sample (6,): gyro rad/s, accel m/s^2."""
-        x = (imu.astype(np.float32) - self._mean) / self._std
+        if not self._hidden:
+            return self._calib @ imu[:3] + self._const
         if self.samples == 0:
-            self._prime(x)
+            x = imu.astype(np.float32)
+            for buf in self._hidden:
+                x = buf.prime(x)
         self.samples += 1
-        for ly, hist, span in zip(self._layers, self._hist, self._span):
-            i = self._pos % span
-            hist[i] = x
-            hist[i + span] = x
-            taps = hist[i + 1:i + span + 1:ly.dilation]     # (k, c_in), oldest first
-            if ly.groups == 1:
-                x = ly.weight[0] @ taps.reshape(-1) + ly.bias
-            else:  # one matrix-vector product per ensemble member, batched
-                per = taps.reshape(ly.kernel, ly.groups, -1).transpose(1, 0, 2)
-                x = (ly.weight @ per.reshape(ly.groups, -1, 1)).reshape(-1) + ly.bias
-            if ly.gelu:
-                x = _gelu(x)
-        self._pos += 1
-        if self._layers:
-            correction = self._gyro_std * x.reshape(self._members, 3).astype(np.float64).mean(0)
-        else:
-            correction = self._const
-        return self._calib @ imu[:3] + correction
+        x = imu
+        for buf in self._hidden:
+            x = buf.step(x)
+        return self._calib @ imu[:3] + self._out @ self._out_in
 
     def process(self, imu: np.ndarray) -> np.ndarray:
         """Run :meth:`step` over (N, 6) samples; returns (N, 3)."""
         return np.array([self.step(row) for row in imu]).reshape(-1, 3)
+
+
+HISTORY_SLACK = 1024  # rows a history grows by between two compactions
+
+
+class _Buffers:
+    """One hidden layer's input history, gathered taps and output, all preallocated."""
+
+    def __init__(self, ly: _Layer) -> None:
+        self.layer = ly
+        self.span = (ly.kernel - 1) * ly.dilation + 1
+        g, c = ly.groups, ly.in_channels // ly.groups
+        # the history is written once per sample and compacted every HISTORY_SLACK
+        # samples, so that the last `span` rows are always one strided slice
+        self.hist = np.zeros((g, self.span + HISTORY_SLACK, c), np.float32)
+        self.pos = self.span - 2
+        self.col = np.ones((g, ly.kernel * c + 1, 1), np.float32)  # taps, then a 1
+        self.taps = self.col[:, :-1, 0].reshape(g, ly.kernel, c)
+        self.weight = np.concatenate([ly.weight, ly.bias.reshape(g, -1, 1)], axis=2)
+        self.out = np.empty(ly.bias.shape[0], np.float32)
+
+    def prime(self, x: np.ndarray) -> np.ndarray:
+        """Fill the history as if ``x`` had been the input forever; return the output."""
+        g = self.layer.groups
+        self.hist[:, :self.span - 1] = x.reshape(g, 1, -1)
+        self.pos = self.span - 2
+        self.out[:] = self.layer.summed @ x + self.layer.bias
+        return _gelu(self.out)
+
+    def step(self, x: np.ndarray) -> np.ndarray:
+        """Take the newest input; return this layer's output (a view of its buffer)."""
+        if self.pos + 1 == self.hist.shape[1]:  # full: keep the last span - 1 rows
+            self.hist[:, :self.span - 1] = self.hist[:, self.pos - self.span + 2:]
+            self.pos = self.span - 2
+        self.pos += 1
+        g, d = self.layer.groups, self.layer.dilation
+        self.hist[:, self.pos] = x.reshape(g, -1)
+        np.copyto(self.taps, self.hist[:, self.pos - self.span + 1:self.pos + 1:d])
+        if g == 1:  # np.dot: a third of matmul's call overhead on small matrices
+            np.dot(self.weight[0], self.col[0, :, 0], out=self.out)
+        else:
+            np.matmul(self.weight, self.col, out=self.out.reshape(g, -1, 1))
+        return _gelu(self.out)
+
+
+def _dense(last: _Layer) -> np.ndarray:
+    """Return the output layer as one (3, C) matrix over every member's hidden channels."""
+    return np.hstack(list(last.weight))

@@ -81,3 +81,15 @@ def test_an_ensemble_is_the_mean_of_its_members_in_batch_and_streaming(imu):
     np.testing.assert_allclose(batch, mean, rtol=0, atol=1e-6)  # ... and average exactly
     np.testing.assert_allclose(StreamingCorrector.from_module(ensemble).process(imu[:1500]), batch,
                                rtol=0, atol=1e-6)
+
+
+def test_the_engine_gelu_is_the_exact_erf_gelu_to_float32_precision():
+    from denoise_imu_ros.runtime.streaming import _gelu
+    from scipy.special import ndtr
+    x = np.linspace(-20, 20, 400001)
+    exact = x * ndtr(x)
+    got = _gelu(x.astype(np.float32)).astype(np.float64)
+    inside = x > -10
+    assert np.abs(got - exact)[inside].max() < 2e-6 * 20  # float32 rounding of x itself
+    assert np.abs(_gelu(x.copy()) - exact)[inside].max() < 3e-7  # the table, in float64
+    assert (got[~inside] == 0).all()  # no denormal tail

@@ -1,0 +1,60 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The per-sample rotation arithmetic of the online attitude, on plain floats.
+
+One unit quaternion (xyzw, body to world) composed with one small rotation per sample:
+``scipy.spatial.transform`` costs more to import (about half the node's start-up) and
+to call than this work, so the robot path does it by hand here, once; everything
+offline uses scipy, and a test checks these against it.
+"""
+
+from __future__ import annotations
+
+import math
+
+Quat = tuple[float, float, float, float]  # x, y, z, w
+
+_SMALL_ANGLE = 1e-8  # rad: below it sin(a/2)/a is its Taylor series
+
+
+def exp(rx: float, ry: float, rz: float) -> Quat:
+    """Return the unit quaternion of a rotation vector (rad)."""
+    angle = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if angle < _SMALL_ANGLE:
+        k = 0.5 - angle * angle / 48.0
+    else:
+        k = math.sin(0.5 * angle) / angle
+    return rx * k, ry * k, rz * k, math.cos(0.5 * angle)
+
+
+def multiply(p: Quat, q: Quat) -> Quat:
+    """Hamilton product p q (rotation q, then p), renormalised against drift."""
+    px, py, pz, pw = p
+    qx, qy, qz, qw = q
+    x = pw * qx + px * qw + py * qz - pz * qy
+    y = pw * qy - px * qz + py * qw + pz * qx
+    z = pw * qz + px * qy - py * qx + pz * qw
+    w = pw * qw - px * qx - py * qy - pz * qz
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    return x / n, y / n, z / n, w / n
+
+
+def from_gravity(ax: float, ay: float, az: float) -> Quat:
+    """Return roll and pitch from a (static) accelerometer reading, yaw 0 (z up)."""
+    roll = math.atan2(ay, az)
+    pitch = math.atan2(-ax, math.hypot(ay, az))
+    cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
+    cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
+    return sr * cp, cr * sp, -sr * sp, cr * cp  # Rz(0) Ry(pitch) Rx(roll)

@@ -1,0 +1,39 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The robot path's own rotation arithmetic equals scipy's."""
+
+from denoise_imu_ros.runtime import rotation
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+
+def _same(q, r: Rotation) -> float:
+    return float((Rotation.from_quat(q).inv() * r).magnitude())
+
+
+@pytest.mark.parametrize('scale', [0.0, 1e-12, 1e-9, 1e-6, 1e-3, 0.1, 1.0, 3.0])
+def test_exp_equals_scipy_from_rotvec(scale):
+    for v in np.random.default_rng(0).normal(size=(50, 3)) * scale:
+        assert _same(rotation.exp(*v), Rotation.from_rotvec(v)) < 1e-12
+
+
+def test_multiply_equals_scipy_composition_and_stays_unit():
+    rng = np.random.default_rng(1)
+    p, q = Rotation.random(200, random_state=2), Rotation.random(200, random_state=3)
+    for a, b in zip(p.as_quat(), q.as_quat()):
+        c = rotation.multiply(tuple(a), tuple(b))
+        assert _same(c, Rotation.from_quat(a) * Rotation.from_quat(b)) < 1e-12
+        assert abs(np.linalg.norm(c) - 1) < 1e-15
+    # a long chain of small steps stays on the unit sphere and equals scipy's
+    q, ref = (0.0, 0.0, 0.0, 1.0), Rotation.identity()
+    for w in rng.normal(0, 0.01, (5000, 3)):
+        q, ref = rotation.multiply(q, rotation.exp(*w)), ref * Rotation.from_rotvec(w)
+    assert _same(q, ref) < 1e-9
+
+
+def test_from_gravity_equals_scipy_euler():
+    for roll, pitch in np.random.default_rng(4).uniform(-1.5, 1.5, (100, 2)):
+        tilt = Rotation.from_euler('ZYX', [0.0, pitch, roll])
+        accel = tilt.inv().apply([0.0, 0.0, 9.81])
+        assert _same(rotation.from_gravity(*accel), tilt) < 1e-12
