@@ -59,7 +59,7 @@ class _Layer(NamedTuple):
 
     @property
     def bias_total(self) -> np.ndarray:
-        """The groups' biases summed (the output layer's: the members' mean, folded in)."""
+        """Return the groups' biases summed (the output layer's: the members' mean)."""
         return self.bias.reshape(self.groups, -1).sum(0)
 
 
