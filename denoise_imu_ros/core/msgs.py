@@ -110,6 +110,19 @@ def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
                gyro_cov=gyro_cov, accel_cov=raw.linear_acceleration_covariance)
 
 
+def reorient(msg: Any, quat: np.ndarray, orientation_cov: Any) -> Any:
+    """
+    Set an Imu's orientation and its covariance in place; return the message.
+
+    The node publishes imu/corrected, then the same message with the fused orientation
+    as imu/data (a publish serialises at once): one message built per sample, not two.
+    """
+    o = msg.orientation
+    o.x, o.y, o.z, o.w = (float(v) for v in quat)
+    msg.orientation_covariance = np.asarray(orientation_cov, np.float64)
+    return msg
+
+
 def attitude(types: MsgTypes, raw: Any, frame_id: str, quat: np.ndarray) -> Any:
     """Build the imu/attitude message: the raw message's stamp, in the fixed frame."""
     return types.QuaternionStamped(header=header(types, stamp_ns(raw.header), frame_id),

@@ -217,13 +217,12 @@ class GyroDenoiser(Node):
         self._stamps.append(out.stamp_ns)
 
         embed = out.attitude if self._embed else None
-        self._pub_imu.publish(msgs.corrected_imu(self._types, msg, out.gyro, self._gyro_cov,
-                                                 embed, self._orientation_cov))
+        corrected = msgs.corrected_imu(self._types, msg, out.gyro, self._gyro_cov, embed,
+                                       self._orientation_cov)
+        self._pub_imu.publish(corrected)
         # a filter run at a rate it was not set up for is not published as if it were valid
         if self._pub_fused is not None and not self._rate_error:
-            self._pub_fused.publish(msgs.corrected_imu(self._types, msg, out.gyro,
-                                                       self._gyro_cov, out.orientation,
-                                                       self._fused_cov))
+            self._pub_fused.publish(msgs.reorient(corrected, out.orientation, self._fused_cov))
         elif self._pub_fused is not None:
             self.fused_withheld += 1
         # an attitude held across a gap, or integrated at a rate the model was not made
