@@ -25,7 +25,7 @@ import os
 from pathlib import Path
 import sys
 
-from .core.errors import DenoiseError
+from .core.errors import DenoiseError, OptionError, OutputError
 
 # Commands that run the torch network; the others (process-bag, play, check-data,
 # convert, init-recipe, correct --engine streaming) never import torch.
@@ -39,14 +39,32 @@ def _train(args: argparse.Namespace) -> None:
                       calibration_only=True if args.calibration_only else None,
                       whole_sequences=True if args.whole_sequences else None,
                       workers=args.workers, device=args.device)
+    _guard_output(args.out, [args.config], args.overwrite)  # before training, not after
     for folder in (Path(args.out).parent, args.candidates_dir):
-        _check_writable(folder)  # before the training, not after it
+        _check_writable(folder)
     result = train(cfg, progress=not args.quiet)
     result.save(args.out, args.candidates_dir)
     val = result.meta['validation']
     print(f'saved {args.out}: {result.meta["selected"]} weights (step {val["step"]}), '
           f'validation loss {val["loss"]:.4g}, tail AOE {val["aoe_mean_deg"]:.3f} deg, '
           f'{result.meta["train_seconds"]:.0f} s')
+
+
+def _guard_output(output: str | Path, inputs: list[str | Path], overwrite: bool) -> None:
+    """
+    Apply the one output policy: never over an input, nor over a file unless asked.
+
+    An output that is an input, or lies inside an input folder (an ASL recording's CSV,
+    a bag's inner file), is refused whatever ``--overwrite`` says.
+    """
+    out = Path(output).resolve()
+    for given in inputs:
+        inp = Path(given).resolve()
+        if out == inp or inp in out.parents:
+            raise OutputError(f'{output}: is an input of this command ({given}); refusing to '
+                              'write over it')
+    if out.exists() and not overwrite:
+        raise OutputError(f'{output}: exists already (pass --overwrite to replace it)')
 
 
 def _check_writable(folder: str | Path | None) -> None:
@@ -90,20 +108,24 @@ def _tune_fusion(args: argparse.Namespace) -> None:
 
 
 def _ensemble(args: argparse.Namespace) -> None:
+    from .core.modelfile import read_model_file
     from .learn.checkpoint import save_ensemble
+    _guard_output(args.out, [read_model_file(m).path for m in args.models], args.overwrite)
     loaded = save_ensemble(args.out, args.models)
     print(f'wrote {args.out}: the mean of {loaded.model.config.members} networks')
 
 
 def _check_data(args: argparse.Namespace) -> None:
-    import json
+    from .core import jsonio
     from .data.check import check, markdown
     from .data.load import load_recording
+    if not 0 < args.max_offset <= 60:
+        raise OptionError(f'--max-offset {args.max_offset:g}: must be above 0 and at most 60 s')
     rec = load_recording(args.input, args.imu_topic, args.pose_topic)
     report = check(rec, args.max_offset)
     sys.stdout.write(markdown(report))
     if args.json:
-        print(json.dumps(report))
+        print(jsonio.dumps(report))
     if report['usable'] == 'no':
         raise DenoiseError(f'{args.input}: not usable for training: '
                            + '; '.join(report['reasons']))
@@ -133,6 +155,7 @@ def _warn_if_not_recommended(model: str) -> None:
 
 def _correct(args: argparse.Namespace) -> None:
     from .evaluation.correct import correct_to_csv
+    _guard_output(args.output, [args.input], args.overwrite)
     _warn_if_not_recommended(args.model)
     n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic,
                        engine=args.engine)
@@ -143,6 +166,7 @@ def _convert(args: argparse.Namespace) -> None:
     from .data.asl import read_asl
     from .data.bags import IMU_TOPIC, POSE_TOPIC, write_bag
     from .data.timebase import crop, overlap
+    _guard_output(args.out_bag, [args.asl_dir], overwrite=False)
     rec = read_asl(args.asl_dir)
     rec = crop(overlap(rec) if args.overlap else rec, args.start, args.duration)
     write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress,
@@ -152,6 +176,7 @@ def _convert(args: argparse.Namespace) -> None:
 
 def _process_bag(args: argparse.Namespace) -> None:
     from .runtime.process_bag import process_bag
+    _guard_output(args.output, [args.input], overwrite=False)
     _warn_if_not_recommended(args.model)
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame)
@@ -196,6 +221,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help='draw training windows from the whole sequences, validation tails '
                         'included (validation figures become in-sample)')
     p.add_argument('--candidates-dir', help='also write every candidate model here')
+    p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=_train)
 
@@ -218,6 +244,7 @@ def build_parser() -> argparse.ArgumentParser:
                        'models of one recipe (run in one pass online and offline)')
     p.add_argument('models', nargs='+', help='model files (shipped names or paths)')
     p.add_argument('--out', required=True, help='model file to write')
+    p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.set_defaults(func=_ensemble)
 
     p = sub.add_parser('tune-fusion', help="choose the gravity-aided filters' settings on the "
@@ -282,6 +309,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--output', required=True, help='CSV: timestamp_ns,wx,wy,wz')
     p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',
                    help='whole-recording torch network, or the per-sample numpy engine')
+    p.add_argument('--overwrite', action='store_true', help='replace an existing --output')
     p.set_defaults(func=_correct)
 
     p = sub.add_parser('process-bag', parents=[topics],

@@ -129,3 +129,36 @@ def test_garbage_inputs_and_bad_options_are_one_line_errors(model_file, tmp_path
         assert main(argv) == 1, argv
         err = _error(capsys)
         assert message in err, (argv, err)
+
+
+def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_path, capsys):
+    """Issue 20, case 1 (and 13: a second process-bag is refused before any work)."""
+    import shutil
+    bag = tmp_path / 'in'
+    shutil.copytree(SAMPLE, bag)
+    before = {p: p.read_bytes() for p in bag.rglob('*') if p.is_file()}
+    inner = next(p for p in before if p.suffix == '.mcap')
+    for out in (bag, inner):
+        assert main(['correct', '--model', str(model_file), '--input', str(bag), '--output',
+                     str(out), '--engine', 'streaming']) == 1
+        assert 'is an input of this command' in _error(capsys)
+    asl = write_asl(tmp_path / 'asl', n_imu=800)
+    csv = asl / 'mav0' / 'imu0' / 'data.csv'
+    raw = csv.read_bytes()
+    assert main(['correct', '--model', str(model_file), '--input', str(asl), '--output',
+                 str(csv), '--overwrite']) == 1  # not even with --overwrite
+    assert 'is an input of this command' in _error(capsys) and csv.read_bytes() == raw
+    assert main(['ensemble', str(model_file), str(model_file), '--out', str(model_file)]) == 1
+    assert 'is an input of this command' in _error(capsys)
+    assert all(p.read_bytes() == data for p, data in before.items())
+    # an existing output is replaced only when asked
+    out = tmp_path / 'c.csv'
+    out.write_text('mine\n')
+    args = ['correct', '--model', str(model_file), '--input', str(asl), '--output', str(out)]
+    assert main(args) == 1 and 'exists already (pass --overwrite' in _error(capsys)
+    assert out.read_text() == 'mine\n'
+    assert main(args + ['--overwrite']) == 0 and out.read_text().startswith('timestamp_ns')
+    # process-bag twice to one output: the second is refused before it reads anything
+    assert main(['process-bag', str(bag), str(tmp_path / 'pb'), '--model', str(model_file)]) == 0
+    assert main(['process-bag', str(bag), str(tmp_path / 'pb'), '--model', str(model_file)]) == 1
+    assert 'exists already' in _error(capsys)

@@ -36,6 +36,7 @@ from .errors import DatasetError
 RATE_TOLERANCE = 0.05     # relative rate mismatch refused offline, an ERROR online
 MAX_GYRO_RAD_S = 100.0    # ~5,700 deg/s
 MAX_ACCEL_M_S2 = 2000.0   # ~200 g
+MAX_RATE_HZ = 100e3       # above, stamps are not nanoseconds (microseconds give 200 kHz)
 
 
 def in_range(gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:

@@ -94,12 +94,19 @@ def imu(types: MsgTypes, head: Any, gyro: Any, accel: Any,
                      linear_acceleration_covariance=np.asarray(accel_cov, np.float64))
 
 
+def finite_covariance(cov: Any) -> np.ndarray:
+    """Return a covariance as it is, or all zeros ('unknown', REP-145) if not finite."""
+    cov = np.asarray(cov, np.float64)
+    return cov if np.isfinite(cov).all() else np.zeros(9)
+
+
 def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
                   attitude: np.ndarray | None = None, orientation_cov: Any = None) -> Any:
     """
     Build the imu/corrected message of a raw one: header copied, never re-stamped.
 
-    The accelerometer and its covariance pass through; the orientation is the attitude
+    The accelerometer and its covariance pass through (a non-finite covariance becomes
+    zeros, 'unknown', never NaN on the wire); the orientation is the attitude
     with ``orientation_cov`` when given, else absent (covariance[0] = -1, REP-145).
     """
     a = raw.linear_acceleration
@@ -107,7 +114,7 @@ def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
     return imu(types, raw.header, gyro, (a.x, a.y, a.z),
                orientation=attitude if embed else (0.0, 0.0, 0.0, 1.0),
                orientation_cov=orientation_cov if embed else NO_ORIENTATION,
-               gyro_cov=gyro_cov, accel_cov=raw.linear_acceleration_covariance)
+               gyro_cov=gyro_cov, accel_cov=finite_covariance(raw.linear_acceleration_covariance))
 
 
 def reorient(msg: Any, quat: np.ndarray, orientation_cov: Any) -> Any:

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import DatasetError
-from .limits import describe, in_range, stream_rate_hz
+from .limits import describe, in_range, MAX_RATE_HZ, stream_rate_hz
 
 
 @dataclass(frozen=True)
@@ -95,6 +95,12 @@ def check_recording(rec: Recording, imu_file: object = None, gt_file: object = N
             kind = 'duplicate' if stamps[i + 1] == stamps[i] else 'non-monotonic'
             raise DatasetError(f'{where}: {kind} {what} stamp at sample {i + 1} '
                                f'({stamps[i]} then {stamps[i + 1]} ns)')
+        rate = stream_rate_hz(stamps)
+        if rate > MAX_RATE_HZ:
+            step = float(np.median(np.diff(stamps)))
+            raise DatasetError(f'{where}: {what} stamps {step:g} apart, {rate:.3g} Hz if they '
+                               'are nanoseconds: stamps in microseconds or milliseconds? '
+                               '(nanoseconds expected)')
     bad = np.flatnonzero(~in_range(rec.imu[:, :3], rec.imu[:, 3:]))
     if len(bad):
         raise DatasetError(f'{imu_file or rec.source}: IMU values out of the physical range '

@@ -20,7 +20,6 @@ convention of :mod:`denoise_imu_ros.core.metrics`; AOE and ROE skip ground-truth
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 import sys
 from typing import Any
@@ -31,6 +30,7 @@ from scipy.spatial.transform import Rotation
 from .filters import eval_filters, run, score
 from .plots import plot_roe, plot_sequence
 from .reports import crossval_table, eval_table, fused_table, growth_table
+from ..core import jsonio
 from ..core.errors import OptionError, OutputError
 from ..core.limits import check_rate
 from ..core.metrics import error_components, sequence_errors, tilt_growth_deg_min
@@ -80,8 +80,9 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     rows = eval_filters(loaded.meta, models['calibrated'].meta if 'calibrated' in models
                         else None)
     roe_all: dict[str, list[np.ndarray]] = {}
-    for name in sequences:
-        seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
+    for given in sequences:
+        name = Path(given).name  # 'base/' (tab completion) or a path: the recording's name
+        seq = load_sequence(Path(data) / given, imu_topic, pose_topic,
                             min_samples=loaded.model.receptive_field, align_poses=align_poses)
         check_rate(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
         if start_sample >= len(seq) - 1:
@@ -132,7 +133,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     crossval = loaded.meta.get('crossval')
     if isinstance(crossval, dict) and 'verdict' in crossval:
         report['crossval'] = crossval
-    (out_dir / 'results.json').write_text(json.dumps(report, indent=2))
+    (out_dir / 'results.json').write_text(jsonio.dumps(report, indent=2))
     table = (eval_table(results, average) + fused_table(fused, fused_average)
              + growth_table(results, fused))
     if 'crossval' in report:

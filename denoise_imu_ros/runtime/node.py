@@ -36,6 +36,7 @@ from geometry_msgs.msg import QuaternionStamped
 import numpy as np
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 import rclpy
+from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
@@ -147,8 +148,11 @@ class GyroDenoiser(Node):
                        reliability=ReliabilityPolicy.BEST_EFFORT),
             qos_overriding_options=QoSOverridingOptions.with_default_policies())
         self.create_service(Trigger, '~/reset_attitude', self._on_reset)
-        self.create_timer(1.0, self._publish_diagnostics)
-        self._waiting_timer = self.create_timer(10.0, self._still_waiting)
+        # wall-clock timers: with use_sim_time and no /clock (a bag played without --clock)
+        # sim time stands still, and the rate check and diagnostics must still run
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.create_timer(1.0, self._publish_diagnostics, clock=steady)
+        self._waiting_timer = self.create_timer(10.0, self._still_waiting, clock=steady)
 
         self._stamps: deque[int] = deque(maxlen=int(2 * self._model_rate) + 1)
         self._rate_error = False  # set by the diagnostics timer from the measured rate

@@ -89,7 +89,8 @@ class OnlineDenoiser:
     time_jump_s: float = 1.0            # backward stamp jump that resets everything
     fusion: GravityFilter | None = None  # the gravity-aided orientation, if wanted
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
-        (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods'), 0))
+        (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
+         'non_finite_covariance'), 0))
     _last_ns: int | None = None
     _attitude: rotation.Quat | None = None
     _last_gyro: np.ndarray | None = None
@@ -116,7 +117,14 @@ class OnlineDenoiser:
         return cause
 
     def process_imu(self, msg: Any) -> Output | Drop:
-        """Correct one sensor_msgs/Imu (rclpy or rosbags message); see :meth:`process`."""
+        """
+        Correct one sensor_msgs/Imu (rclpy or rosbags message); see :meth:`process`.
+
+        A non-finite accelerometer covariance is counted (``non_finite_covariance``): the
+        messages built from it carry zeros instead (``msgs.finite_covariance``).
+        """
+        if not np.isfinite(msg.linear_acceleration_covariance).all():
+            self.counts['non_finite_covariance'] += 1
         return self.process(*imu_fields(msg))
 
     def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray) -> Output | Drop:

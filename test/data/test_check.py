@@ -160,3 +160,22 @@ def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
     assert '16/32 are noise-dominated' in out.read_text().splitlines()[2]
     assert out.read_text().splitlines()[6].startswith(
         '# supervision: the poses of dataset-room5_512_16 do not lower their own attitude')
+
+
+def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_path, capsys):
+    """Issue 20, case 13."""
+    root = write_asl(tmp_path / 's', n_imu=2000)
+    csv = root / 'mav0' / 'imu0' / 'data.csv'
+    lines = csv.read_text().splitlines()
+    micro = [lines[0]] + [f'{int(x.split(",")[0]) // 1000},{x.split(",", 1)[1]}'
+                          for x in lines[1:]]
+    csv.write_text('\n'.join(micro) + '\n')
+    for cmd in (['check-data', str(root)],
+                ['init-recipe', '--data', str(tmp_path), '--sequences', 's',
+                 '--out', str(tmp_path / 'r.yaml')]):
+        assert main(cmd) == 1
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and 'stamps in microseconds or milliseconds?' in err
+    for bad in ('-1', '0', 'nan'):
+        assert main(['check-data', str(root), '--max-offset', bad]) == 1
+        assert '--max-offset' in capsys.readouterr().err

@@ -45,3 +45,21 @@ def test_eval_writes_json_markdown_and_figures(model_file, tmp_path):
     assert 'Tilt error growth' in (out / 'results.md').read_text()
     for png in (f'{SAMPLE.name}.png', 'roe.png'):
         assert (out / png).read_bytes()[:4] == b'\x89PNG'
+
+
+def test_eval_of_a_short_recording_writes_strict_json_and_plots(model_file, tmp_path):
+    """Issue 20, cases 11 and 12: never 35 m travelled, and a name ending in '/'."""
+    from helpers import write_asl
+    write_asl(tmp_path / 'data' / 'base', n_imu=3000)  # 15 s turning on the spot
+    out = tmp_path / 'eval'
+    assert main(['eval', '--model', str(model_file), '--data', str(tmp_path / 'data'),
+                 '--sequences', 'base/', '--out', str(out), '--baseline', str(model_file)]) == 0
+    text = (out / 'results.json').read_text()
+    assert 'NaN' not in text and 'Infinity' not in text
+    report = json.loads(text)
+    assert report['sequences']['base']['network']['roe_median_deg'] == {
+        '7': None, '21': None, '35': None}
+    for png in ('base.png', 'roe.png'):
+        assert (out / png).read_bytes()[:4] == b'\x89PNG'
+    assert sorted(p.name for p in out.iterdir()) == ['base.png', 'results.json', 'results.md',
+                                                     'roe.png']

@@ -214,6 +214,17 @@ def test_use_sim_time_is_accepted(harness):
     assert len(h.corrected) == 3
 
 
+def test_without_clock_diagnostics_and_the_rate_check_still_run(harness):
+    """Issue 20, case 6: use_sim_time and no /clock (a bag played without --clock)."""
+    h = harness(use_sim_time=True)
+    h.send([imu_msg(10**9 + k * 2_500_000, [0, 0, 0], [0, 0, 9.81]) for k in range(400)])
+    h.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR for d in h.diagnostics
+                             for s in d.status), timeout=5.0)  # 400 Hz into a 200 Hz model
+    h.send([imu_msg(10**9 + (400 + k) * 2_500_000, [0, 0, 0], [0, 0, 9.81])
+            for k in range(10)])
+    assert h.node.attitude_withheld >= 10 and h.node.fused_withheld >= 10
+
+
 def test_qos_is_overridable_through_parameters(harness):
     h = harness(**{'qos_overrides./imu/corrected.publisher.reliability': 'best_effort',
                    'qos_overrides./imu/corrected.publisher.depth': 7})

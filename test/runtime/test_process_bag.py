@@ -92,3 +92,38 @@ def test_every_offline_tool_refuses_a_stream_at_another_rate(model_file, tmp_pat
         assert main(cmd + ['--model', str(model_file)]) == 1
         assert 'IMU rate 100.0 Hz, the model was trained at 200.0 Hz' in capsys.readouterr().err
     assert not (tmp_path / 'out').exists() and not (tmp_path / 'o.csv').exists()
+
+
+def test_a_non_finite_input_covariance_is_never_published(harness, tmp_path):
+    """Issue 20, case 9: NaN accelerometer covariance in, zeros ('unknown') out, counted."""
+    import math
+    from denoise_imu_ros.cli import main as cli
+    from denoise_imu_ros.core import msgs
+    from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
+    from helpers import imu_msg, write_untrained_model
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag2 import Writer
+    model = write_untrained_model(tmp_path / 'm.safetensors', {'sample_rate_hz': 200.0})
+    stamps = 10**9 + 5_000_000 * np.arange(600)
+    nan_cov = [math.nan] + [0.0] * 8
+    h = harness()
+    sent = [imu_msg(t, [0, 0, 0.1], [0, 0, 9.81]) for t in stamps]
+    for m in sent:
+        m.linear_acceleration_covariance[0] = math.nan
+    h.send(sent)
+    assert h.node._denoiser.counts['non_finite_covariance'] == 600
+    for m in h.corrected + h.fused:
+        assert list(m.linear_acceleration_covariance) == [0.0] * 9
+    with Writer(tmp_path / 'in', version=9) as w:
+        conn = w.add_connection('/imu', IMU_TYPE, typestore=TYPESTORE)
+        for t in stamps:
+            msg = msgs.imu(BAG_TYPES, msgs.header(BAG_TYPES, int(t), 'imu'), [0, 0, 0.1],
+                           [0, 0, 9.81], accel_cov=nan_cov)
+            w.write(conn, int(t), TYPESTORE.serialize_cdr(msg, IMU_TYPE))
+    assert cli(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+                '--model', str(model)]) == 0
+    with AnyReader([tmp_path / 'out']) as reader:
+        conns = [c for c in reader.connections if c.topic in ('/imu/corrected', '/imu/data')]
+        covs = [reader.deserialize(raw, c.msgtype).linear_acceleration_covariance
+                for c, _, raw in reader.messages(connections=conns)]
+    assert len(covs) == 1200 and all(np.array_equal(c, np.zeros(9)) for c in covs)
