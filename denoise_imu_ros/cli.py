@@ -24,6 +24,7 @@ import argparse
 import os
 from pathlib import Path
 import sys
+import tempfile
 
 from .core.errors import DenoiseError, OptionError, OutputError
 
@@ -43,7 +44,12 @@ def _train(args: argparse.Namespace) -> None:
     for folder in (Path(args.out).parent, args.candidates_dir):
         _check_writable(folder)
     result = train(cfg, progress=not args.quiet)
-    result.save(args.out, args.candidates_dir)
+    try:
+        result.save(args.out, args.candidates_dir)
+    except OutputError as err:  # a full disk, say: the finished training is not lost
+        kept = Path(tempfile.mkdtemp(prefix='denoise-imu-')) / Path(args.out).name
+        result.save(kept)
+        raise OutputError(f'{err}; the trained model was kept at {kept}') from err
     val = result.meta['validation']
     print(f'saved {args.out}: {result.meta["selected"]} weights (step {val["step"]}), '
           f'validation loss {val["loss"]:.4g}, tail AOE {val["aoe_mean_deg"]:.3f} deg, '
@@ -345,6 +351,9 @@ def main(argv: list[str] | None = None) -> int:
     except DenoiseError as err:
         print(f'denoise-imu {args.command}: error: {err}', file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print(f'denoise-imu {args.command}: interrupted', file=sys.stderr)
+        return 130
     return 0
 
 

@@ -71,6 +71,33 @@ def common_rate(rates_hz: dict[str, float], where: object) -> float:
     return float(np.median(rates))
 
 
+GRAVITY_M_S2 = 9.81
+ACCEL_NORM_RANGE = (3.0, 30.0)   # mean |accel| of any recording not in free fall, m/s^2
+GYRO_SCALE_LIMIT = 20.0         # gyro spread this many times the model's: not rad/s
+
+
+def check_units(imu: np.ndarray, source: object,
+                model_input_std: np.ndarray | None = None) -> None:
+    """
+    Refuse IMU data in the wrong units, naming the likely cause.
+
+    The mean accelerometer norm is gravity's, ~9.81 m/s^2, on any recording that is not
+    in free fall: ~1 says g. A gyro whose spread is GYRO_SCALE_LIMIT times the model's
+    training data (57 times: deg/s) is not in rad/s.
+    """
+    norm = float(np.mean(np.linalg.norm(imu[:, 3:], axis=1)))
+    if not ACCEL_NORM_RANGE[0] <= norm <= ACCEL_NORM_RANGE[1]:
+        hint = ('accelerometer in g?' if 0.3 <= norm <= 3.0 else
+                'accelerometer not in m/s^2?')
+        raise DatasetError(f'{source}: mean accelerometer norm {norm:.3g} m/s^2, gravity is '
+                           f'{GRAVITY_M_S2}: {hint}')
+    if model_input_std is not None:
+        ratio = float(np.max(np.std(imu[:, :3], axis=0) / model_input_std[:3]))
+        if ratio > GYRO_SCALE_LIMIT:
+            raise DatasetError(f'{source}: the gyro varies {ratio:.0f} times as much as the '
+                               "model's training data: gyro in deg/s? (rad/s expected)")
+
+
 def check_rate(stamps_ns: np.ndarray, model_rate_hz: float | None, source: object) -> None:
     """Refuse a recording whose IMU rate is more than RATE_TOLERANCE off the model's."""
     rate = stream_rate_hz(stamps_ns)

@@ -39,7 +39,7 @@ from safetensors.numpy import load_file, save_file
 
 from .architecture import ModelConfig
 from .atomic import atomic_output
-from .errors import ModelFileError
+from .errors import ModelFileError, OutputError
 from .. import __version__
 
 FORMAT = 'denoise_imu_ros.gyro_model'
@@ -124,10 +124,14 @@ def write_model_file(path: str | Path, config: ModelConfig, arrays: dict[str, np
               'receptive_field': str(config.receptive_field)}
     # the architecture written is the model's own, whatever metadata was copied along
     header.update({k: json.dumps(v) for k, v in meta.items() if k not in header})
-    with atomic_output(path, overwrite=True) as tmp:
-        save_file({k: np.asarray(v, order='C') for k, v in arrays.items()}, str(tmp),
-                  metadata=header)
-        tmp.chmod(0o644)  # a shared artefact, not a secret
+    try:
+        with atomic_output(path, overwrite=True) as tmp:
+            save_file({k: np.asarray(v, order='C') for k, v in arrays.items()}, str(tmp),
+                      metadata=header)
+            tmp.chmod(0o644)  # a shared artefact, not a secret
+    except OSError as err:  # a full disk, a read-only folder
+        raise OutputError(f'{path}: cannot write the model file ({err.strerror or err})'
+                          ) from err
 
 
 def add_metadata(path: str | Path, **meta: Any) -> None:

@@ -43,6 +43,7 @@ from scipy.spatial.transform import Rotation
 from .pose_alignment import estimate_pose_alignment, MAX_OFFSET_S
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
+from ..core.limits import ACCEL_NORM_RANGE, GRAVITY_M_S2
 from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residuals, integrate,
                             sequence_errors)
 from ..core.records import Recording, Sequence
@@ -57,6 +58,7 @@ ROTATION_TOLERANCE_DEG = 0.2  # above, and SIGNIFICANCE standard errors: apply t
 SIGNIFICANCE = 2.0
 OFFSET_SPREAD_S = 4e-3     # quarters spread wider (clean ones: 3.2 ms at most): drift
 PAPER_INCREMENT_S = 0.08  # the paper's 16 samples at 200 Hz (and twice it, 32)
+DEG_PER_RAD_LOW = 20.0    # a gyro scale above this against the poses: degrees, not radians
 SUPERVISION_LONG_S = 1.0  # the longest increment the supervision check also fits on
 
 
@@ -170,14 +172,16 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     report.update(_increments(report, seq.rate_hz))
     long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
     report['supervision'] = supervision(seq, (*report['paper_increments'], long))
-    report['usable'], report['reasons'] = _usable(report, max_offset_s)
+    units = _units(report)  # wrong units explain every other symptom: say only that
+    report['usable'], report['reasons'] = ('no', units) if units else _usable(report,
+                                                                              max_offset_s)
     quarters = report['time_offset_quarters_s']
-    if max(quarters) - min(quarters) > OFFSET_SPREAD_S:
+    if not units and max(quarters) - min(quarters) > OFFSET_SPREAD_S:
         report['reasons'].append(
             'the clock offset is not constant: '
             f'{", ".join(f"{1e3 * q:+.1f}" for q in quarters)} ms on the four quarters of the '
             'recording (pose latency varies, or a clock drifts); one offset cannot fix that')
-    if not report['supervision']['helps']:
+    if not units and not report['supervision']['helps']:
         report['reasons'].append(report['supervision']['summary'])
     report['verdict'] = {'yes': 'usable for training', 'after alignment':
                          'usable for training with alignment applied',
@@ -197,7 +201,8 @@ def _streams(rec: Recording, seq: Sequence) -> dict[str, Any]:
             'imu_stamp_jitter_ms': 1e3 * float(imu_dt.std()),
             'pose_rate_hz': 1.0 / float(np.median(np.diff(rec.gt_stamp_ns) * 1e-9)),
             'pose_holes': len(starts), 'pose_longest_hole_s': longest,
-            'pose_hole_fraction': float(holes.mean()), 'duration_s': float(imu_dt.sum())}
+            'pose_hole_fraction': float(holes.mean()), 'duration_s': float(imu_dt.sum()),
+            'accel_norm_mean_m_s2': float(np.mean(np.linalg.norm(seq.imu[:, 3:], axis=1)))}
 
 
 def _increments(report: dict[str, Any], rate_hz: float) -> dict[str, Any]:
@@ -244,6 +249,21 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
             f'{report["imu_from_pose_rotation_deg"]:.2f} deg from the IMU\'s: apply both '
             'before training']
     return 'yes', []
+
+
+def _units(report: dict[str, Any]) -> list[str]:
+    """Return what the accelerometer's norm and the gyro's scale say of the units."""
+    reasons = []
+    norm = report['accel_norm_mean_m_s2']
+    if not ACCEL_NORM_RANGE[0] <= norm <= ACCEL_NORM_RANGE[1]:
+        reasons.append(f'mean accelerometer norm {norm:.3g} m/s^2, gravity is {GRAVITY_M_S2}: '
+                       + ('accelerometer in g?' if 0.3 <= norm <= 3.0 else
+                          'accelerometer not in m/s^2?'))
+    scale = [1 + v / 100 for v in report['gyro_scale_error_percent'] if v is not None]
+    if scale and min(scale) > DEG_PER_RAD_LOW:
+        reasons.append(f"the gyro reads {np.median(scale):.1f} times the poses' rate "
+                       '(57.3 for degrees): gyro in deg/s? (rad/s expected)')
+    return reasons
 
 
 def _significant(value: float, std: float, tolerance: float) -> bool:

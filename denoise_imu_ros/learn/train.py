@@ -31,6 +31,7 @@ import dataclasses
 from dataclasses import dataclass
 import math
 from pathlib import Path
+import signal
 import time
 from typing import Any
 
@@ -308,6 +309,10 @@ def train(cfg: TrainConfig, progress: bool = True) -> TrainResult:
     try:
         parallel.join(0, cfg.workers, store)
         return _run(cfg, 0, seqs, progress)
+    except KeyboardInterrupt:  # Ctrl-C: the workers, which ignore it, go at once
+        for proc in workers:
+            proc.terminate()
+        raise
     except RuntimeError as err:  # the process group broke: was it a worker?
         for proc in workers:
             proc.join(timeout=10)
@@ -327,6 +332,7 @@ def train(cfg: TrainConfig, progress: bool = True) -> TrainResult:
 
 def _worker(cfg: TrainConfig, rank: int, port: int) -> None:
     """Entry point of the data-parallel processes other than the first."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the first process's to handle
     parallel.join(rank, cfg.workers, port)
     try:
         _run(cfg, rank, load_sequences(cfg), False)

@@ -179,3 +179,28 @@ def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_p
     for bad in ('-1', '0', 'nan'):
         assert main(['check-data', str(root), '--max-offset', bad]) == 1
         assert '--max-offset' in capsys.readouterr().err
+
+
+@pytest.mark.parametrize('column, factor, cause', [
+    (slice(4, 7), 1 / 9.81, 'accelerometer in g?'),
+    (slice(1, 4), 180 / math.pi, 'gyro in deg/s?')])
+def test_wrong_units_are_named_by_check_data_correct_and_eval(
+        euroc, tmp_path, capsys, model_file, column, factor, cause):
+    """Issue 20, case 7: a 45 s crop of MH_01 with one sensor in other units."""
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import write_bag
+    from denoise_imu_ros.data.timebase import crop
+    rec = crop(read_asl(euroc / 'MH_01_easy'), 0.0, 45.0)
+    imu = rec.imu.copy()
+    imu[:, column.start - 1:column.stop - 1] *= factor
+    write_bag(dataclasses.replace(rec, imu=imu), tmp_path / 'bag')
+    assert main(['check-data', str(tmp_path / 'bag')]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.endswith(cause + (' (rad/s expected)'
+                                                               if 'gyro' in cause else ''))
+    for cmd in (['correct', '--model', 'euroc', '--input', str(tmp_path / 'bag'), '--output',
+                 str(tmp_path / 'c.csv'), '--engine', 'streaming'],
+                ['eval', '--model', 'euroc', '--data', str(tmp_path), '--sequences', 'bag',
+                 '--out', str(tmp_path / 'ev'), '--no-plots']):
+        assert main(cmd) == 1
+        assert cause in capsys.readouterr().err

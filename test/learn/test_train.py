@@ -2,6 +2,8 @@
 # Licensed under the Apache License, Version 2.0
 """A few training steps on short real segments: the loss goes down, failures are clear."""
 
+from pathlib import Path
+
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError, TrainingError
 from denoise_imu_ros.data.load import load_sequence
@@ -204,3 +206,42 @@ def test_a_binary_recipe_is_a_clear_error(tmp_path):
     (tmp_path / 'r.yaml').write_bytes(b'\xff\xfe\x00garbage')
     with pytest.raises(TrainingError, match='cannot read training config'):
         load_config(tmp_path / 'r.yaml')
+
+
+def _finished_training(monkeypatch):
+    """Make `train` return at once with a finished (untrained) result."""
+    from helpers import untrained_model
+    result = train_module.TrainResult(untrained_model(), {
+        'selected': 'swa', 'train_seconds': 1.0, 'sample_rate_hz': 200.0,
+        'validation': {'step': 1, 'loss': 1.0, 'aoe_mean_deg': 1.0}}, {})
+    monkeypatch.setattr(train_module, 'train', lambda cfg, progress: result)
+
+
+def test_a_finished_training_is_never_lost_when_its_output_cannot_be_written(
+        tmp_path, capsys, monkeypatch):
+    """Issue 20, case 3: the save fails (a full disk): the model is kept elsewhere, said so."""
+    from denoise_imu_ros.core.errors import OutputError
+    _finished_training(monkeypatch)
+    out = tmp_path / 'model.safetensors'
+    real = train_module.save_model
+
+    def full_disk(path, model, meta):
+        if Path(path) == out:
+            raise OutputError(f'{path}: cannot write the model file (No space left on device)')
+        real(path, model, meta)
+    monkeypatch.setattr(train_module, 'save_model', full_disk)
+    assert main(['train', '--config', str(CONFIG), '--out', str(out)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and 'No space left on device' in err
+    kept = Path(err.split('the trained model was kept at ')[1])
+    assert kept.name == 'model.safetensors' and load_model(kept).meta['selected'] == 'swa'
+
+
+def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path, capsys, monkeypatch):
+    """Issue 20, case 14."""
+    def interrupted(cfg, progress):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(train_module, 'train', interrupted)
+    assert main(['train', '--config', str(CONFIG), '--out', str(tmp_path / 'm.safetensors')]) \
+        == 130
+    assert capsys.readouterr().err.strip() == 'denoise-imu train: interrupted'
