@@ -47,7 +47,7 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
 from .fusion import FusionSettings, orientation_covariance, settings_of
-from .online import Drop, Event, OnlineDenoiser
+from .online import Drop, DROP_CAUSES, Event, OnlineDenoiser
 from ..core import msgs
 from ..core.errors import DenoiseError
 from ..core.limits import RATE_TOLERANCE, stream_rate_hz
@@ -183,6 +183,7 @@ class GyroDenoiser(Node):
         self._denoiser.max_gap_factor = p('max_gap_factor').value
         self._denoiser.time_jump_s = p('time_jump_threshold').value
         self._rate_tolerance = p('rate_tolerance').value
+        self._denoiser.rate_tolerance = self._rate_tolerance
 
     def _on_parameters(self, _params: list) -> None:
         self._apply_parameters()
@@ -225,13 +226,14 @@ class GyroDenoiser(Node):
                                        self._orientation_cov)
         self._pub_imu.publish(corrected)
         # a filter run at a rate it was not set up for is not published as if it were valid
-        if self._pub_fused is not None and not self._rate_error:
+        off_rate = self._rate_error or self._denoiser.rate_suspect
+        if self._pub_fused is not None and not off_rate:
             self._pub_fused.publish(msgs.reorient(corrected, out.orientation, self._fused_cov))
         elif self._pub_fused is not None:
             self.fused_withheld += 1
         # an attitude held across a gap, or integrated at a rate the model was not made
         # for, is not published as if it were valid
-        if out.event != Event.GAP and not self._rate_error:
+        if out.event != Event.GAP and not off_rate:
             self._pub_att.publish(msgs.attitude(self._types, msg, self._fixed_frame,
                                                 out.attitude))
         else:
@@ -267,6 +269,11 @@ class GyroDenoiser(Node):
             status.message = (f'input rate {rate:.1f} Hz differs from the model rate '
                               f'{self._model_rate:.1f} Hz: corrections are not valid, '
                               'imu/attitude and imu/data not published')
+            self.get_logger().error(status.message, throttle_duration_sec=10.0)
+        elif counts['accepted'] == 0 and any(counts[c] for c in DROP_CAUSES):
+            status.level = DiagnosticStatus.ERROR
+            status.message = 'no message accepted: dropped ' + ', '.join(
+                f'{counts[c]} ({c.replace("_", " ")})' for c in DROP_CAUSES if counts[c])
             self.get_logger().error(status.message, throttle_duration_sec=10.0)
         elif counts['accepted'] == 0:
             status.level, status.message = DiagnosticStatus.WARN, 'no input yet'

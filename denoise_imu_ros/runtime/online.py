@@ -28,8 +28,13 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
 - a gap longer than ``max_gap_factor`` nominal periods: the network history restarts
   (as at start-up) and the attitude is held across the gap, which cannot be integrated;
   the gravity-aided orientation goes on (gravity corrects its tilt; its yaw is held);
+- a stamp more than FORWARD_JUMP_S ahead (a second publisher on another clock, a clock
+  set): full reset as for a backward jump, and no periods counted as skipped;
 - every nominal period without a sample is counted (``skipped_periods``): samples lost
-  upstream or in a subscription queue show there, not only as a lower rate.
+  upstream or in a subscription queue show there, not only as a lower rate;
+- RATE_RUN consecutive stamp intervals more than ``rate_tolerance`` off the model's
+  period make :attr:`rate_suspect` true until an interval is on time again: the node
+  withholds its attitudes from that sample on, without waiting for its rate check.
 """
 
 from __future__ import annotations
@@ -43,7 +48,7 @@ import numpy as np
 from . import rotation
 from .fusion import FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
-from ..core.limits import in_range
+from ..core.limits import in_range, RATE_TOLERANCE
 from ..core.modelfile import ModelFile, sample_rate
 from ..core.msgs import imu_fields
 
@@ -67,6 +72,8 @@ class Event(str, Enum):
 
 
 DROP_CAUSES = tuple(d.value for d in Drop)
+FORWARD_JUMP_S = 60.0  # a stamp this far ahead is another clock, not a dropout
+RATE_RUN = 10          # consecutive off-period intervals that make a stream suspect
 
 
 class Output(NamedTuple):
@@ -88,6 +95,7 @@ class OnlineDenoiser:
     max_gap_factor: float = 3.0         # gap threshold, in nominal sample periods
     time_jump_s: float = 1.0            # backward stamp jump that resets everything
     fusion: GravityFilter | None = None  # the gravity-aided orientation, if wanted
+    rate_tolerance: float = RATE_TOLERANCE  # relative interval error of an off-rate stream
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
          'non_finite_covariance'), 0))
@@ -95,6 +103,7 @@ class OnlineDenoiser:
     _attitude: rotation.Quat | None = None
     _last_gyro: np.ndarray | None = None
     _pending_reset: bool = False
+    _off_rate_run: int = 0
 
     @classmethod
     def from_model_file(cls, model: ModelFile, fusion: FusionSettings | None = None,
@@ -107,6 +116,11 @@ class OnlineDenoiser:
         rate = sample_rate(model)
         return cls(StreamingCorrector(model.config, model.arrays), rate,
                    fusion=None if fusion is None else GravityFilter(rate, fusion), **options)
+
+    @property
+    def rate_suspect(self) -> bool:
+        """Whether the last RATE_RUN stamp intervals were all off the model's period."""
+        return self._off_rate_run >= RATE_RUN
 
     def reset_attitude(self) -> None:
         """Re-initialise the attitude (and the orientation) from the next accelerometer."""
@@ -145,6 +159,9 @@ class OnlineDenoiser:
                 return self._drop(Drop.OUT_OF_ORDER)
             event = Event.TIME_JUMP
             self.counts['time_jump_resets'] += 1
+        elif (stamp_ns - self._last_ns) * 1e-9 > FORWARD_JUMP_S:
+            event = Event.TIME_JUMP
+            self.counts['time_jump_resets'] += 1
         else:
             # nominal periods with no sample: lost upstream or in a queue (or a slow stream)
             periods = round((stamp_ns - self._last_ns) * 1e-9 * self.rate_hz)
@@ -152,6 +169,9 @@ class OnlineDenoiser:
             if (stamp_ns - self._last_ns) * 1e-9 > self.max_gap_factor / self.rate_hz:
                 event = Event.GAP
                 self.counts['gap_resets'] += 1
+            else:
+                off = abs((stamp_ns - self._last_ns) * 1e-9 * self.rate_hz - 1)
+                self._off_rate_run = self._off_rate_run + 1 if off > self.rate_tolerance else 0
 
         if event is not None:
             self.engine.reset()

@@ -310,3 +310,23 @@ def test_help_and_unknown_arguments(capsys):
     assert out.startswith('usage: gyro_denoiser') and 'max_gap_factor' in out
     assert main(['--model', 'tumvi']) == 1
     assert "unknown arguments '--model tumvi'" in capsys.readouterr().err
+
+
+def test_every_message_dropped_is_an_error_naming_the_cause(harness):
+    """Issue 20, case 10: every stamp zero is not 'no input yet'."""
+    h = harness()
+    h.send([imu_msg(0, [0, 0, 0], [0, 0, 9.81]) for _ in range(50)])
+    h.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR for d in h.diagnostics
+                             for s in d.status), timeout=3.0)
+    status = [s for d in h.diagnostics for s in d.status][-1]
+    assert status.message == 'no message accepted: dropped 50 (zero stamp)'
+
+
+def test_a_rate_change_withholds_the_attitude_within_ten_samples(harness):
+    """Issue 20, case 10: 200 -> 100 Hz; not 2.3 s of attitudes published as valid."""
+    h = harness()
+    stamps = [10**9 + k * 5_000_000 for k in range(600)]
+    stamps += [stamps[-1] + k * 10_000_000 for k in range(1, 101)]
+    h.send([imu_msg(t, [0, 0, 0.1], [0, 0, 9.81]) for t in stamps])
+    assert len(h.attitude) == 600 + 9 and h.node.attitude_withheld == 91
+    assert len(h.fused) == 600 + 9

@@ -67,7 +67,8 @@ def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
     assert den.counts == {'non_finite': 2, 'out_of_range': 2, 'zero_stamp': 1,
                           'duplicate_stamp': 1,
                           'out_of_order': 1, 'accepted': 2, 'gap_resets': 0,
-                          'time_jump_resets': 0, 'skipped_periods': 0}
+                          'time_jump_resets': 0, 'skipped_periods': 0,
+                          'non_finite_covariance': 0}
 
 
 def test_missing_samples_are_counted_from_the_stamps(seq, model):
@@ -174,3 +175,22 @@ def test_property_no_sample_raises_or_yields_a_non_finite_output(
             assert abs(np.linalg.norm(out.attitude) - 1) < 1e-9
     counted = den.counts['accepted'] + sum(den.counts[c] for c in DROP_CAUSES)
     assert counted == len(stream)  # every sample accepted or dropped with a cause
+
+
+def test_a_second_clock_and_a_rate_change_are_told_from_losses(seq, model):
+    """Issue 20, case 10: no 1.6e14 skipped periods; an off-rate stream is caught at once."""
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    imu = seq.imu
+    t = 10**9
+    den.process(t, imu[0, :3], imu[0, 3:])
+    out = den.process(t + 10**15, imu[1, :3], imu[1, 3:])  # another publisher's clock
+    assert out.event == Event.TIME_JUMP and den.counts['skipped_periods'] == 0
+    t += 10**15
+    flags = []
+    for k in range(1, 30):  # 100 Hz into the 200 Hz model
+        den.process(t + k * 10_000_000, imu[k, :3], imu[k, 3:])
+        flags.append(den.rate_suspect)
+    assert flags.index(True) == 9 and all(flags[9:])
+    t += 29 * 10_000_000
+    den.process(t + 5_000_000, imu[30, :3], imu[30, 3:])  # on time again
+    assert not den.rate_suspect
