@@ -196,8 +196,8 @@ def test_wrong_units_are_named_by_check_data_correct_and_eval(
     write_bag(dataclasses.replace(rec, imu=imu), tmp_path / 'bag')
     assert main(['check-data', str(tmp_path / 'bag')]) == 1
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and err.endswith(cause + (' (rad/s expected)'
-                                                               if 'gyro' in cause else ''))
+    tail = cause + (' (rad/s expected)' if 'gyro' in cause else '')
+    assert len(err.splitlines()) == 1 and err.endswith(tail)
     for cmd in (['correct', '--model', 'euroc', '--input', str(tmp_path / 'bag'), '--output',
                  str(tmp_path / 'c.csv'), '--engine', 'streaming'],
                 ['eval', '--model', 'euroc', '--data', str(tmp_path), '--sequences', 'bag',
