@@ -71,6 +71,32 @@ def common_rate(rates_hz: dict[str, float], where: object) -> float:
     return float(np.median(rates))
 
 
+MAX_GAP_FACTOR = 3.0  # an IMU interval above this many periods is a hole (node and tools)
+
+
+def imu_holes(stamps_ns: np.ndarray, rate_hz: float | None = None,
+              factor: float = MAX_GAP_FACTOR) -> np.ndarray:
+    """Return the indices i of the intervals i -> i + 1 longer than ``factor`` periods."""
+    rate = rate_hz or stream_rate_hz(stamps_ns)
+    return np.flatnonzero(np.diff(np.asarray(stamps_ns, np.int64)) * 1e-9 > factor / rate)
+
+
+def check_gaps(stamps_ns: np.ndarray, rate_hz: float | None, source: object) -> None:
+    """
+    Refuse an IMU recording with a hole: the node restarts its network at one.
+
+    Offline tools would otherwise integrate across it as one step, or run the network
+    across it, and disagree with the node; split the recording at the hole instead.
+    """
+    holes = imu_holes(stamps_ns, rate_hz)
+    if len(holes):
+        i = int(holes[0])
+        span = (stamps_ns[i + 1] - stamps_ns[i]) * 1e-9
+        raise DatasetError(f'{source}: IMU hole of {span:.3g} s after sample {i} ({len(holes)} '
+                           f'longer than {MAX_GAP_FACTOR:g} periods): the node restarts there; '
+                           'split the recording at its holes')
+
+
 GRAVITY_M_S2 = 9.81
 ACCEL_NORM_RANGE = (3.0, 30.0)   # mean |accel| of any recording not in free fall, m/s^2
 GYRO_SCALE_LIMIT = 20.0         # gyro spread this many times the model's: not rad/s

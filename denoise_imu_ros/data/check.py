@@ -43,7 +43,7 @@ from scipy.spatial.transform import Rotation
 from .pose_alignment import estimate_pose_alignment, MAX_OFFSET_S
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
-from ..core.limits import ACCEL_NORM_RANGE, GRAVITY_M_S2
+from ..core.limits import ACCEL_NORM_RANGE, GRAVITY_M_S2, imu_holes, MAX_GAP_FACTOR
 from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residuals, integrate,
                             sequence_errors)
 from ..core.records import Recording, Sequence
@@ -192,6 +192,7 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
 def _streams(rec: Recording, seq: Sequence) -> dict[str, Any]:
     """Return the rates, stamp jitter, pose holes and duration of a recording."""
     imu_dt = np.diff(seq.stamp_ns) * 1e-9
+    gaps = imu_holes(seq.stamp_ns)
     holes = ~seq.gt_valid
     starts = np.flatnonzero(np.diff(np.r_[0, holes.astype(np.int8)]) == 1)
     ends = np.flatnonzero(np.diff(np.r_[holes.astype(np.int8), 0]) == -1)
@@ -202,7 +203,8 @@ def _streams(rec: Recording, seq: Sequence) -> dict[str, Any]:
             'pose_rate_hz': 1.0 / float(np.median(np.diff(rec.gt_stamp_ns) * 1e-9)),
             'pose_holes': len(starts), 'pose_longest_hole_s': longest,
             'pose_hole_fraction': float(holes.mean()), 'duration_s': float(imu_dt.sum()),
-            'accel_norm_mean_m_s2': float(np.mean(np.linalg.norm(seq.imu[:, 3:], axis=1)))}
+            'accel_norm_mean_m_s2': float(np.mean(np.linalg.norm(seq.imu[:, 3:], axis=1))),
+            'imu_holes': len(gaps), 'imu_longest_hole_s': float(imu_dt[gaps].max(initial=0.0))}
 
 
 def _increments(report: dict[str, Any], rate_hz: float) -> dict[str, Any]:
@@ -235,6 +237,10 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
             f'(rate residual {report["rate_residual_rms_deg_s"]:.1f} deg/s RMS against '
             f'{motion:.1f} deg/s of motion): the offset is beyond the search range, or the '
             'poses are not of this IMU')
+    if report['imu_holes']:
+        reasons.append(f'{report["imu_holes"]} IMU holes longer than {MAX_GAP_FACTOR:g} periods '
+                       f'(longest {report["imu_longest_hole_s"]:.3g} s): split the recording '
+                       'at its holes')
     for axis, rms in zip('xyz', report['excitation_rms_deg_s']):
         if rms < MIN_EXCITATION_DEG_S:
             reasons.append(f'no rotation about the IMU {axis} axis ({rms:.2f} deg/s RMS)')
@@ -275,7 +281,8 @@ def markdown(report: dict[str, Any]) -> str:
     """Human-readable report of :func:`check`."""
     r = report
     lines = [f'{r["name"]}: {r["duration_s"]:.1f} s',
-             f'  IMU {r["imu_rate_hz"]:.2f} Hz, stamp jitter {r["imu_stamp_jitter_ms"]:.3f} ms',
+             f'  IMU {r["imu_rate_hz"]:.2f} Hz, stamp jitter {r["imu_stamp_jitter_ms"]:.3f} ms, '
+             f'{r["imu_holes"]} holes (longest {r["imu_longest_hole_s"]:.3f} s)',
              f'  poses {r["pose_rate_hz"]:.1f} Hz, {r["pose_holes"]} holes (longest '
              f'{r["pose_longest_hole_s"]:.2f} s, {100 * r["pose_hole_fraction"]:.1f} % of '
              'IMU stamps)']

@@ -27,7 +27,7 @@ import numpy as np
 
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
-from ..core.limits import check_rate, check_units
+from ..core.limits import check_gaps, check_rate, check_units
 from ..core.modelfile import read_model_file
 from ..data.load import load_imu
 from ..runtime.streaming import StreamingCorrector
@@ -59,6 +59,7 @@ def correct_to_csv(model_spec: str, source: str, output: str,
                            f'receptive field ({field})')
     check_rate(rec.imu_stamp_ns, loaded.meta.get('sample_rate_hz'), source)
     check_units(rec.imu, source, loaded.arrays['input_std'])
+    check_gaps(rec.imu_stamp_ns, loaded.meta.get('sample_rate_hz'), source)
     omega = corrected_gyro(loaded.path, rec.imu, engine)
     with atomic_output(output, overwrite=True) as tmp, open(tmp, 'w') as f:
         f.write('timestamp_ns,wx,wy,wz\n')

@@ -32,7 +32,7 @@ from .plots import plot_roe, plot_sequence
 from .reports import crossval_table, eval_table, fused_table, growth_table
 from ..core import jsonio
 from ..core.errors import OptionError, OutputError
-from ..core.limits import check_rate, check_units
+from ..core.limits import check_gaps, check_rate, check_units
 from ..core.metrics import error_components, sequence_errors, tilt_growth_deg_min
 from ..core.modelfile import shipped_models
 from ..core.records import Sequence
@@ -86,6 +86,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
                             min_samples=loaded.model.receptive_field, align_poses=align_poses)
         check_rate(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
         check_units(seq.imu, name, loaded.model.input_std.numpy())
+        check_gaps(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
         if start_sample >= len(seq) - 1:
             raise OptionError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')
         gyros = {'raw': seq.imu[:, :3]}

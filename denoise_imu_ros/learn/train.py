@@ -46,7 +46,7 @@ from .config import LossConfig, TrainConfig
 from .loss import increment_loss
 from .model import GyroNet
 from ..core.errors import TrainingError
-from ..core.limits import common_rate
+from ..core.limits import check_gaps, common_rate
 from ..core.metrics import increment_residuals, sequence_errors, trusted_blocks
 from ..core.modelfile import code_version
 from ..core.records import Sequence
@@ -109,6 +109,7 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
                     f'{Path(cfg.data) / name}: no {cfg.increments[0]}-sample increment with '
                     f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
                     'IMU stamps have trusted ground truth): nothing to supervise the loss')
+        check_gaps(seq.stamp_ns, None, Path(cfg.data) / name)
         seqs.append(seq)
     common_rate({s.name: s.rate_hz for s in seqs}, cfg.data)
     return seqs

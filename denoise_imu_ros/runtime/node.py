@@ -50,7 +50,7 @@ from .fusion import FusionSettings, orientation_covariance, settings_of
 from .online import Drop, DROP_CAUSES, Event, OnlineDenoiser
 from ..core import msgs
 from ..core.errors import DenoiseError
-from ..core.limits import RATE_TOLERANCE, stream_rate_hz
+from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE, stream_rate_hz
 from ..core.modelfile import deployment_warning, gyro_covariance, ModelFile, read_model_file
 
 
@@ -82,7 +82,7 @@ PARAMETERS = [
     ('angular_velocity_stddev', -1.0, _param(
         'rad/s; < 0 uses the per-axis residual std the model measured on its '
         'validation data.', floats=(-1.0, 10.0))),
-    ('max_gap_factor', 3.0, _param(
+    ('max_gap_factor', MAX_GAP_FACTOR, _param(
         'A stamp gap above this many nominal periods restarts the network history '
         '(warm-up) and holds the attitude across the gap.', floats=(1.5, 1000.0))),
     ('time_jump_threshold', 1.0, _param(

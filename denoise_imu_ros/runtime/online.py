@@ -48,7 +48,7 @@ import numpy as np
 from . import rotation
 from .fusion import FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
-from ..core.limits import in_range, RATE_TOLERANCE
+from ..core.limits import in_range, MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import ModelFile, sample_rate
 from ..core.msgs import imu_fields
 
@@ -92,7 +92,7 @@ class OnlineDenoiser:
 
     engine: StreamingCorrector
     rate_hz: float                      # the model's sample rate
-    max_gap_factor: float = 3.0         # gap threshold, in nominal sample periods
+    max_gap_factor: float = MAX_GAP_FACTOR  # gap threshold, in nominal sample periods
     time_jump_s: float = 1.0            # backward stamp jump that resets everything
     fusion: GravityFilter | None = None  # the gravity-aided orientation, if wanted
     rate_tolerance: float = RATE_TOLERANCE  # relative interval error of an off-rate stream

@@ -5,6 +5,7 @@
 import dataclasses
 import json
 import math
+import re
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.data.asl import read_asl
@@ -204,3 +205,25 @@ def test_wrong_units_are_named_by_check_data_correct_and_eval(
                  '--out', str(tmp_path / 'ev'), '--no-plots']):
         assert main(cmd) == 1
         assert cause in capsys.readouterr().err
+
+
+def test_an_imu_hole_is_named_offline_as_the_node_treats_it(euroc, tmp_path, capsys):
+    """Issue 20, case 8: one 5 s hole in 45 s of MH_01."""
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import write_bag
+    from denoise_imu_ros.data.timebase import crop
+    rec = crop(read_asl(euroc / 'MH_01_easy'), 0.0, 45.0)
+    t = (rec.imu_stamp_ns - rec.imu_stamp_ns[0]) * 1e-9
+    keep = (t < 20) | (t >= 25)
+    write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[keep], imu=rec.imu[keep]),
+              tmp_path / 'bag')
+    assert main(['check-data', str(tmp_path / 'bag')]) == 1
+    assert '1 IMU holes longer than 3 periods (longest 5.01 s)' in capsys.readouterr().err
+    for cmd in (['correct', '--model', 'euroc', '--input', str(tmp_path / 'bag'), '--output',
+                 str(tmp_path / 'c.csv'), '--engine', 'streaming'],
+                ['eval', '--model', 'euroc', '--data', str(tmp_path), '--sequences', 'bag',
+                 '--out', str(tmp_path / 'ev'), '--no-plots']):
+        assert main(cmd) == 1
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1
+        assert re.search(r'IMU hole of 5.01 s after sample \d+ \(1 longer than 3 periods', err)
