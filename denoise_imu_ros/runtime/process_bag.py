@@ -25,13 +25,15 @@ from __future__ import annotations
 
 from pathlib import Path
 import tempfile
+from typing import Any
 
 import numpy as np
 from rosbags.convert import convert, ConverterError
-from rosbags.rosbag2 import StoragePlugin, Writer, WriterError
+from rosbags.rosbag2 import (CompressionFormat, CompressionMode, StoragePlugin, Writer,
+                             WriterError)
 
 from .fusion import orientation_covariance, settings_of
-from .online import Drop, DROP_CAUSES, OnlineDenoiser
+from .online import Drop, DROP_CAUSES, OnlineDenoiser, Output
 from ..core import msgs
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
@@ -63,8 +65,15 @@ def _ros2_source(src: Path, workdir: Path) -> Path:
 
 def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
-                fixed_frame: str = 'odom') -> dict[str, int]:
-    """Copy a bag, add the corrected IMU, orientation and attitude; return the counts."""
+                fixed_frame: str = 'odom', compress: bool | None = None) -> dict[str, int]:
+    """
+    Copy a bag, add the corrected IMU, orientation and attitude; return the counts.
+
+    The IMU samples go through the pipeline in header-stamp order (a recorder's transport
+    latency reorders receive times, and the pipeline would drop every late one), and each
+    output is written at its input's receive time, beside it. Copied topics keep their
+    recorded QoS; ``compress`` (zstd) defaults to the input's compression.
+    """
     src = Path(src)
     if not src.exists():
         raise DatasetError(f'{src}: bag not found')
@@ -75,33 +84,52 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
         try:
-            with open_bag(_ros2_source(src, Path(tmp))) as rd, \
-                    Writer(partial, version=9, storage_plugin=plugin) as wr:
+            with open_bag(_ros2_source(src, Path(tmp))) as rd:
                 imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
-                check_rate([stamp_ns(rd.deserialize(raw, c.msgtype).header)
-                            for c, _, raw in rd.messages(connections=imu_conns)],
-                           den.rate_hz, src)
-                out = {c.id: wr.add_connection(c.topic, c.msgtype, typestore=rd.typestore)
-                       for c in rd.connections}
-                corr = wr.add_connection(CORRECTED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
-                fused = wr.add_connection(FUSED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
-                att = wr.add_connection(ATTITUDE_TOPIC, ATTITUDE_TYPE, typestore=TYPESTORE)
-                imu_ids = {c.id for c in imu_conns}
-                for conn, stamp, raw in rd.messages():
-                    wr.write(out[conn.id], stamp, raw)
-                    if conn.id not in imu_ids:
-                        continue
-                    msg = rd.deserialize(raw, conn.msgtype)
-                    res = den.process_imu(msg)
-                    if isinstance(res, Drop):
-                        continue
-                    corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov)
-                    oriented = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov,
-                                                  res.orientation, fused_cov)
-                    attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
-                    wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
-                    wr.write(fused, stamp, TYPESTORE.serialize_cdr(oriented, IMU_TYPE))
-                    wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
+                results = _run_in_stamp_order(rd, imu_conns, den, src)
+                compressed = any(getattr(r, 'compression_mode', None) for r in rd.readers)
+                wr = Writer(partial, version=9, storage_plugin=plugin)
+                if compressed if compress is None else compress:
+                    wr.set_compression(CompressionMode.STORAGE if plugin == StoragePlugin.MCAP
+                                       else CompressionMode.MESSAGE, CompressionFormat.ZSTD)
+                with wr:
+                    out = {c.id: wr.add_connection(
+                        c.topic, c.msgtype, typestore=rd.typestore,
+                        offered_qos_profiles=getattr(c.ext, 'offered_qos_profiles', ()))
+                        for c in rd.connections}
+                    corr = wr.add_connection(CORRECTED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
+                    fused = wr.add_connection(FUSED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
+                    att = wr.add_connection(ATTITUDE_TOPIC, ATTITUDE_TYPE, typestore=TYPESTORE)
+                    imu_ids = {c.id for c in imu_conns}
+                    k = -1
+                    for conn, stamp, raw in rd.messages():
+                        wr.write(out[conn.id], stamp, raw)
+                        if conn.id not in imu_ids:
+                            continue
+                        k += 1
+                        res = results[k]
+                        if isinstance(res, Drop):
+                            continue
+                        msg = rd.deserialize(raw, conn.msgtype)
+                        corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov)
+                        oriented = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov,
+                                                      res.orientation, fused_cov)
+                        attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
+                        wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
+                        wr.write(fused, stamp, TYPESTORE.serialize_cdr(oriented, IMU_TYPE))
+                        wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
         except (*CORRUPT, WriterError, FileExistsError) as err:
             raise DatasetError(f'{src} -> {dst}: {err}') from err
     return {k: v for k, v in den.counts.items() if v or k in DROP_CAUSES}
+
+
+def _run_in_stamp_order(rd: Any, imu_conns: list, den: OnlineDenoiser,
+                        src: Path) -> list[Output | Drop]:
+    """Return the pipeline's result for every IMU message (receive order), run by stamp."""
+    imu = [rd.deserialize(raw, c.msgtype) for c, _, raw in rd.messages(connections=imu_conns)]
+    stamps = np.array([stamp_ns(m.header) for m in imu], dtype=np.int64)
+    check_rate(np.sort(stamps), den.rate_hz, src)
+    results: list[Output | Drop | None] = [None] * len(imu)
+    for k in np.argsort(stamps, kind='stable'):
+        results[k] = den.process_imu(imu[k])
+    return results

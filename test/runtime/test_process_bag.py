@@ -127,3 +127,59 @@ def test_a_non_finite_input_covariance_is_never_published(harness, tmp_path):
         covs = [reader.deserialize(raw, c.msgtype).linear_acceleration_covariance
                 for c, _, raw in reader.messages(connections=conns)]
     assert len(covs) == 1200 and all(np.array_equal(c, np.zeros(9)) for c in covs)
+
+
+def test_receive_order_jitter_drops_nothing_and_qos_and_compression_are_kept(
+        tmp_path, model_file):
+    """Issue 20, cases 2 and 4."""
+    from denoise_imu_ros.cli import main as cli
+    from denoise_imu_ros.core import msgs
+    from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
+    from denoise_imu_ros.runtime.player import read_imu_messages
+    from rosbags.highlevel import AnyReader
+    from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
+                                    QosReliability, QosTime)
+    from rosbags.rosbag2 import Writer
+    imu = read_imu_messages(SAMPLE)[:3000]
+    rng = np.random.default_rng(0)
+    latency = rng.uniform(1e6, 15e6, len(imu)).astype(np.int64)  # 1-15 ms of transport
+    never = QosTime(sec=0, nsec=0)
+    static = Qos(history=QosHistory.KEEP_LAST, depth=1, reliability=QosReliability.RELIABLE,
+                 durability=QosDurability.TRANSIENT_LOCAL, deadline=never, lifespan=never,
+                 liveliness=QosLiveliness.AUTOMATIC, liveliness_lease_duration=never,
+                 avoid_ros_namespace_conventions=False)
+    with Writer(tmp_path / 'jittered', version=9) as w:
+        conn = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        tf = w.add_connection('/tf_static', 'tf2_msgs/msg/TFMessage', typestore=TYPESTORE,
+                              offered_qos_profiles=[static])
+        w.write(tf, 1, TYPESTORE.serialize_cdr(TYPESTORE.types['tf2_msgs/msg/TFMessage'](
+            transforms=[]), 'tf2_msgs/msg/TFMessage'))
+        for k in np.argsort([msgs.stamp_ns(m.header) + d for m, d in zip(imu, latency)]):
+            m = msgs.copy_imu(BAG_TYPES, imu[k])
+            w.write(conn, msgs.stamp_ns(m.header) + int(latency[k]),
+                    TYPESTORE.serialize_cdr(m, IMU_TYPE))
+    assert cli(['process-bag', str(tmp_path / 'jittered'), str(tmp_path / 'out'),
+                '--model', str(model_file), '--compress']) == 0
+    assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'ordered'),
+                '--model', str(model_file)]) == 0
+
+    def corrected(bag):
+        with AnyReader([bag]) as reader:
+            conns = [c for c in reader.connections if c.topic == '/imu/corrected']
+            got = {}
+            for c, _, raw in reader.messages(connections=conns):
+                m = reader.deserialize(raw, c.msgtype)
+                got[msgs.stamp_ns(m.header)] = (m.angular_velocity.x, m.angular_velocity.z)
+            qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
+            return got, qos
+    jittered, qos = corrected(tmp_path / 'out')
+    ordered, _ = corrected(tmp_path / 'ordered')
+    assert len(jittered) == 3000  # nothing dropped as out of order
+    assert all(jittered[t] == ordered[t] for t in jittered)  # what header order gives
+    # transient local kept, for the late subscribers of a replay
+    assert qos['/tf_static'][0].durability == QosDurability.TRANSIENT_LOCAL
+    size = sum(f.stat().st_size for f in (tmp_path / 'out').iterdir())
+    plain = tmp_path / 'plain'
+    assert cli(['process-bag', str(tmp_path / 'jittered'), str(plain), '--model',
+                str(model_file)]) == 0
+    assert size < 0.7 * sum(f.stat().st_size for f in plain.iterdir())
