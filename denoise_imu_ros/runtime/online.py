@@ -31,7 +31,9 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
 - a stamp more than FORWARD_JUMP_S ahead (a second publisher on another clock, a clock
   set): full reset as for a backward jump, and no periods counted as skipped;
 - every nominal period without a sample is counted (``skipped_periods``): samples lost
-  upstream or in a subscription queue show there, not only as a lower rate;
+  upstream or in a subscription queue show there, not only as a lower rate; so is every
+  period of the stream's own rate (``skipped_input_periods``, the median of its recent
+  intervals), which counts losses of a stream faster than the model too;
 - RATE_RUN consecutive stamp intervals more than ``rate_tolerance`` off the model's
   period make :attr:`rate_suspect` true until an interval is on time again: the node
   withholds its attitudes from that sample on, without waiting for its rate check.
@@ -74,6 +76,7 @@ class Event(str, Enum):
 DROP_CAUSES = tuple(d.value for d in Drop)
 FORWARD_JUMP_S = 60.0  # a stamp this far ahead is another clock, not a dropout
 RATE_RUN = 10          # consecutive off-period intervals that make a stream suspect
+INPUT_WINDOW = 32      # intervals whose median is the stream's own period
 
 
 class Output(NamedTuple):
@@ -98,12 +101,14 @@ class OnlineDenoiser:
     rate_tolerance: float = RATE_TOLERANCE  # relative interval error of an off-rate stream
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
-         'non_finite_covariance'), 0))
+         'skipped_input_periods', 'non_finite_covariance'), 0))
     _last_ns: int | None = None
     _attitude: rotation.Quat | None = None
     _last_gyro: np.ndarray | None = None
     _pending_reset: bool = False
     _off_rate_run: int = 0
+    _intervals: list[int] = field(default_factory=list)  # recent ones, ns
+    _input_period_ns: float = 0.0  # their median, refreshed every INPUT_WINDOW samples
 
     @classmethod
     def from_model_file(cls, model: ModelFile, fusion: FusionSettings | None = None,
@@ -116,6 +121,16 @@ class OnlineDenoiser:
         rate = sample_rate(model)
         return cls(StreamingCorrector(model.config, model.arrays), rate,
                    fusion=None if fusion is None else GravityFilter(rate, fusion), **options)
+
+    def _count_input_periods(self, interval_ns: int) -> None:
+        """Count the periods of the stream's own recent rate that went without a sample."""
+        if self._input_period_ns > 0:
+            missed = round(interval_ns / self._input_period_ns) - 1
+            self.counts['skipped_input_periods'] += max(missed, 0)
+        self._intervals.append(interval_ns)
+        if len(self._intervals) == INPUT_WINDOW:
+            self._input_period_ns = float(np.median(self._intervals))
+            self._intervals.clear()
 
     @property
     def rate_suspect(self) -> bool:
@@ -172,6 +187,7 @@ class OnlineDenoiser:
             else:
                 off = abs((stamp_ns - self._last_ns) * 1e-9 * self.rate_hz - 1)
                 self._off_rate_run = self._off_rate_run + 1 if off > self.rate_tolerance else 0
+            self._count_input_periods(stamp_ns - self._last_ns)
 
         if event is not None:
             self.engine.reset()

@@ -68,7 +68,7 @@ def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
                           'duplicate_stamp': 1,
                           'out_of_order': 1, 'accepted': 2, 'gap_resets': 0,
                           'time_jump_resets': 0, 'skipped_periods': 0,
-                          'non_finite_covariance': 0}
+                          'skipped_input_periods': 0, 'non_finite_covariance': 0}
 
 
 def test_missing_samples_are_counted_from_the_stamps(seq, model):
@@ -194,3 +194,16 @@ def test_a_second_clock_and_a_rate_change_are_told_from_losses(seq, model):
     t += 29 * 10_000_000
     den.process(t + 5_000_000, imu[30, :3], imu[30, 3:])  # on time again
     assert not den.rate_suspect
+
+
+def test_losses_of_a_stream_faster_than_the_model_are_counted(seq, model):
+    """Issue 20, case 5: 1 kHz into the 200 Hz model, every fifth message lost."""
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    kept = [k for k in range(2000) if k % 5 != 4]
+    for k in kept:
+        den.process(10**9 + k * 1_000_000, seq.imu[k % 500, :3], seq.imu[k % 500, 3:])
+    # every loss after the first window of intervals (the stream's own period) and before
+    # the last sample (a loss shows when the next sample comes) is counted
+    assert den.counts['skipped_input_periods'] == sum(1 for k in range(41, 1999)
+                                                      if k % 5 == 4)
+    assert den.counts['skipped_periods'] == 0  # in periods of the model's rate: none
