@@ -22,7 +22,7 @@ venv: $(VENV)/.installed
 # Unit, integration and lint tests (tests needing ../shared/data skip without it), on
 # two processes (each its own DDS domain); prints the wall time of the tests alone.
 test: venv
-	@start=$$(date +%s); $(ROS_ENV) $(BIN)/python -m pytest -n 2 test; status=$$?; \
+	@start=$$(date +%s); $(ROS_ENV) $(BIN)/python -m pytest -n 2 --dist worksteal test; status=$$?; \
 	echo "make test: tests took $$(( $$(date +%s) - start )) s"; exit $$status
 
 # The bundled EuRoC test-sequence sample (90 s of V1_03): offline evaluation with the

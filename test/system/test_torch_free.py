@@ -47,18 +47,20 @@ def _cli(env: dict, *args: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=300)
 
 
-def test_the_offline_commands_run_without_torch(no_torch_env, tmp_path):
-    asl = write_asl(tmp_path / 'asl', n_imu=2000)
-    for args, expect in [
-            (['convert', str(asl), str(tmp_path / 'converted')], 'wrote'),
-            (['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model', 'euroc'], 'wrote'),
-            (['correct', '--model', 'euroc', '--input', str(SAMPLE), '--output',
-              str(tmp_path / 'c.csv'), '--engine', 'streaming'], 'wrote 18000'),
-            (['check-data', str(SAMPLE)], 'verdict: usable for training'),
-            (['init-recipe', '--data', str(SAMPLE.parent), '--sequences', SAMPLE.name,
-              '--out', str(tmp_path / 'recipe.yaml')], 'wrote')]:
-        run = _cli(no_torch_env, *args)
-        assert run.returncode == 0 and expect in run.stdout, (args[0], run.stderr)
+@pytest.mark.parametrize('command', ['convert', 'process-bag', 'correct', 'check-data',
+                                     'init-recipe'])
+def test_the_offline_commands_run_without_torch(no_torch_env, tmp_path, command):
+    args, expect = {
+        'convert': ([str(write_asl(tmp_path / 'asl', n_imu=2000)), str(tmp_path / 'bag')],
+                    'wrote'),
+        'process-bag': ([str(SAMPLE), str(tmp_path / 'out'), '--model', 'euroc'], 'wrote'),
+        'correct': (['--model', 'euroc', '--input', str(SAMPLE), '--output',
+                     str(tmp_path / 'c.csv'), '--engine', 'streaming'], 'wrote 18000'),
+        'check-data': ([str(SAMPLE)], 'verdict: usable for training'),
+        'init-recipe': (['--data', str(SAMPLE.parent), '--sequences', SAMPLE.name, '--out',
+                         str(tmp_path / 'recipe.yaml')], 'wrote')}[command]
+    run = _cli(no_torch_env, command, *args)
+    assert run.returncode == 0 and expect in run.stdout, (command, run.stderr)
 
 
 def test_play_runs_without_torch(no_torch_env, tmp_path):
