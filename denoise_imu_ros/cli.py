@@ -40,7 +40,8 @@ def _train(args: argparse.Namespace) -> None:
                       calibration_only=True if args.calibration_only else None,
                       whole_sequences=True if args.whole_sequences else None,
                       workers=args.workers, device=args.device)
-    _guard_output(args.out, [args.config], args.overwrite)  # before training, not after
+    inputs = [args.config, *(Path(cfg.data) / s for s in cfg.sequences)]
+    _guard_output(args.out, inputs, args.overwrite)  # before training, not after
     for folder in (Path(args.out).parent, args.candidates_dir):
         _check_writable(folder)
     result = train(cfg, progress=not args.quiet)
@@ -99,6 +100,7 @@ def _crossval(args: argparse.Namespace) -> None:
 
 def _init_recipe(args: argparse.Namespace) -> None:
     from .learn.recipe import init_recipe, write_recipe
+    _guard_output(args.out, [Path(args.data) / s for s in args.sequences], args.overwrite)
     recipe, why = init_recipe(args.data, args.sequences, args.imu_topic, args.pose_topic)
     write_recipe(args.out, recipe, why)
     print(f'wrote {args.out}:\n' + ''.join(f'  {line}\n' for line in why), end='')
@@ -160,8 +162,9 @@ def _warn_if_not_recommended(model: str) -> None:
 
 
 def _correct(args: argparse.Namespace) -> None:
+    from .core.modelfile import read_model_file
     from .evaluation.correct import correct_to_csv
-    _guard_output(args.output, [args.input], args.overwrite)
+    _guard_output(args.output, [args.input, read_model_file(args.model).path], args.overwrite)
     _warn_if_not_recommended(args.model)
     n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic,
                        engine=args.engine)
@@ -181,8 +184,9 @@ def _convert(args: argparse.Namespace) -> None:
 
 
 def _process_bag(args: argparse.Namespace) -> None:
+    from .core.modelfile import read_model_file
     from .runtime.process_bag import process_bag
-    _guard_output(args.output, [args.input], overwrite=False)
+    _guard_output(args.output, [args.input, read_model_file(args.model).path], overwrite=False)
     _warn_if_not_recommended(args.model)
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame,
@@ -307,6 +311,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--data', required=True, help='folder holding the recordings')
     p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags in it')
     p.add_argument('--out', default='recipe.yaml', help='recipe to write')
+    p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.set_defaults(func=_init_recipe)
 
     p = sub.add_parser('correct', parents=[topics],
@@ -320,7 +325,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_correct)
 
     p = sub.add_parser('process-bag', parents=[topics],
-                       help='copy a bag and add /imu/corrected and /imu/attitude (as the node)')
+                       help='copy a bag and add /imu/corrected, /imu/data and /imu/attitude '
+                            '(as the node)')
     p.add_argument('input', help='ROS 1 or ROS 2 bag')
     p.add_argument('output', help='ROS 2 bag to write (must not exist)')
     p.add_argument('--model', required=True)

@@ -150,6 +150,13 @@ def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_p
     assert 'is an input of this command' in _error(capsys) and csv.read_bytes() == raw
     assert main(['ensemble', str(model_file), str(model_file), '--out', str(model_file)]) == 1
     assert 'is an input of this command' in _error(capsys)
+    model = model_file.read_bytes()
+    assert main(['correct', '--model', str(model_file), '--input', str(asl), '--output',
+                 str(model_file), '--overwrite']) == 1  # the model is an input too
+    assert 'is an input of this command' in _error(capsys) and model_file.read_bytes() == model
+    assert main(['init-recipe', '--data', str(tmp_path), '--sequences', 'asl', '--out',
+                 str(csv)]) == 1
+    assert 'is an input of this command' in _error(capsys) and csv.read_bytes() == raw
     assert all(p.read_bytes() == data for p, data in before.items())
     # an existing output is replaced only when asked
     out = tmp_path / 'c.csv'

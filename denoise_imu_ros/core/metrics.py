@@ -234,7 +234,8 @@ def fused_errors(est: Rotation, gt: Rotation, valid: np.ndarray, t_s: np.ndarray
     Scored from that stamp on, ground-truth holes skipped.
     """
     later = np.flatnonzero((t_s - t_s[0] >= align_at_s) & valid)
-    k = int(later[0]) if len(later) else 0
+    trusted = np.flatnonzero(valid)
+    k = int(later[0]) if len(later) else int(trusted[0]) if len(trusted) else 0
     yaw0 = error_components(est[k:k + 1], gt[k:k + 1])[2][0]
     aligned = Rotation.from_rotvec([0.0, 0.0, -np.radians(yaw0)]) * est[k:]
     angle, tilt, yaw = error_components(aligned, gt[k:])

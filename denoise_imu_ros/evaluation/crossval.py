@@ -24,7 +24,6 @@ of the input gyro too. The verdict says which of the three to deploy.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 import sys
 from typing import Any
@@ -32,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from .reports import CROSSVAL_METHODS
+from ..core import jsonio
 from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..data.load import load_sequence
@@ -82,7 +82,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     report.update(recipe=str(config), folds=fold_list, seed=recipe.seed, steps=recipe.steps)
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-        (out / 'crossval.json').write_text(json.dumps(report, indent=2))
+        (out / 'crossval.json').write_text(jsonio.dumps(report, indent=2))
     return report
 
 

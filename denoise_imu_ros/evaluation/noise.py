@@ -34,7 +34,6 @@ lies within 1, 2 and 3 of its standard deviations (68.3 / 95.4 / 99.7 % if Gauss
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -44,6 +43,7 @@ import numpy as np
 from scipy.optimize import nnls
 from scipy.spatial.transform import Rotation
 
+from ..core import jsonio
 from ..core.errors import OutputError
 from ..core.records import Sequence
 
@@ -126,7 +126,7 @@ def write(out: Path, report: dict[str, Any]) -> None:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise OutputError(f'{out}: cannot create the output folder ({err.strerror})') from err
-    (out / 'noise.json').write_text(json.dumps(report, indent=2))
+    (out / 'noise.json').write_text(jsonio.dumps(report, indent=2))
     (out / 'noise.yaml').write_text('\n'.join(
         yaml_snippet(g, f, ', '.join(report['recordings']))
         for g, f in report['pooled'].items()))
@@ -183,9 +183,9 @@ def noise_report(seqs: list[Sequence], gyros: dict[str, list[np.ndarray]],
                 per[seq.name][g]['covariance'] = covariance_check(err, corrected_std)
     return {'recordings': per, 'pooled': pooled(per),
             'method': 'gyro minus the ground-truth body rate Log(R_k^T R_k+1)/dt_k at trusted '
-                      'stamps; overlapping Allan deviation (allantools.oadev, octave taus); '
-                      'density: sigma(tau) sqrt(tau) where the slope is nearest -1/2; random '
-                      'walk: sigma(tau) sqrt(3/tau) where it is nearest +1/2; worst axis'}
+                      'stamps; overlapping Allan deviation (allantools.oadev, octave taus) '
+                      'fitted with 3Q^2/tau^2 + N^2/tau + B^2 2ln2/pi + K^2 tau/3 (NNLS, '
+                      'relative to each point); N and K of the worst axis'}
 
 
 def noise(model_spec: str, data: str, sequences: list[str], out: str,

@@ -33,6 +33,7 @@ that of the first sample's, arbitrary.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+import math
 from typing import Any
 
 import numpy as np
@@ -128,6 +129,8 @@ def orientation_covariance(meta: dict[str, Any], stddev: float = -1.0) -> list[f
     """
     stored = meta.get('fusion', {})
     std = stored.get('orientation_std_rad') if isinstance(stored, dict) else None
-    if stddev >= 0 or not (isinstance(std, list) and len(std) == 3):
+    usable = (isinstance(std, list) and len(std) == 3 and all(
+        isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 for v in std))
+    if stddev >= 0 or not usable:
         std = [stddev if stddev >= 0 else DEFAULT_ORIENTATION_STD_RAD] * 3
     return [float(std[i]) ** 2 if i == j else 0.0 for i in range(3) for j in range(3)]

@@ -214,7 +214,7 @@ class GyroDenoiser(Node):
             return
         if out.event in (Event.GAP, Event.TIME_JUMP):
             self.get_logger().warning(
-                f'{"stamp gap" if out.event == Event.GAP else "backward time jump"} before '
+                f'{"stamp gap" if out.event == Event.GAP else "time jump"} before '
                 f'{out.stamp_ns} ns: network history restarted'
                 + (', attitude re-initialised' if out.event == Event.TIME_JUMP else
                    ', attitude held (not published for this sample)'),
@@ -301,7 +301,7 @@ class GyroDenoiser(Node):
 
 USAGE = """usage: gyro_denoiser [--ros-args -p NAME:=VALUE ... --params-file FILE ...]
 
-Corrects imu/data_raw into imu/corrected and imu/attitude with a learned gyro model.
+Corrects imu/data_raw into imu/corrected, imu/data and imu/attitude with a learned gyro model.
 Parameters (see config/gyro_denoiser.yaml): """ + ', '.join(
     name for name, _, _ in PARAMETERS) + """.
 Later --params-file and -p arguments override earlier ones: put -p after --params-file.

@@ -70,7 +70,7 @@ class Event(str, Enum):
 
     START = 'start'          # first sample: network warm-up, attitude from gravity
     GAP = 'gap'              # stamps too far apart: network warm-up, attitude held
-    TIME_JUMP = 'time_jump'  # stamps went back in time: everything reset
+    TIME_JUMP = 'time_jump'  # stamps jumped back, or a minute ahead: everything reset
 
 
 DROP_CAUSES = tuple(d.value for d in Drop)
@@ -87,6 +87,7 @@ class Output(NamedTuple):
     attitude: np.ndarray    # (4,) xyzw, IMU frame to the fixed frame (open loop)
     event: Event | None     # set when the state was reset at this sample
     orientation: np.ndarray | None = None  # (4,) xyzw, gravity-aided (with a filter)
+    rate_suspect: bool = False  # the stream is off the model's period (see rate_suspect)
 
 
 @dataclass
@@ -191,6 +192,9 @@ class OnlineDenoiser:
 
         if event is not None:
             self.engine.reset()
+        if event in (Event.START, Event.TIME_JUMP):  # another stream: its rate is new too
+            self._off_rate_run, self._input_period_ns = 0, 0.0
+            self._intervals.clear()
         if event in (Event.START, Event.TIME_JUMP) or self._pending_reset:
             self._attitude = rotation.from_gravity(*map(float, accel))
             if self.fusion is not None:
@@ -205,4 +209,4 @@ class OnlineDenoiser:
         self.counts['accepted'] += 1
         orientation = None if self.fusion is None else self.fusion.update(corrected, accel)
         return Output(stamp_ns=stamp_ns, gyro=corrected, attitude=np.array(self._attitude),
-                      event=event, orientation=orientation)
+                      event=event, orientation=orientation, rate_suspect=self.rate_suspect)

@@ -33,7 +33,7 @@ from rosbags.rosbag2 import (CompressionFormat, CompressionMode, StoragePlugin, 
                              WriterError)
 
 from .fusion import orientation_covariance, settings_of
-from .online import Drop, DROP_CAUSES, OnlineDenoiser, Output
+from .online import Drop, DROP_CAUSES, Event, OnlineDenoiser, Output
 from ..core import msgs
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
@@ -116,8 +116,13 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                                                       res.orientation, fused_cov)
                         attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
                         wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
+                        # what the node withholds is not written either (node.py)
+                        if res.rate_suspect:
+                            continue
                         wr.write(fused, stamp, TYPESTORE.serialize_cdr(oriented, IMU_TYPE))
-                        wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
+                        if res.event != Event.GAP:
+                            wr.write(att, stamp,
+                                     TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
         except (*CORRUPT, WriterError, FileExistsError) as err:
             raise DatasetError(f'{src} -> {dst}: {err}') from err
     return {k: v for k, v in den.counts.items() if v or k in DROP_CAUSES}

@@ -166,6 +166,7 @@ class StreamingCorrector:
     def step(self, imu: np.ndarray) -> np.ndarray:
         """Corrected gyro (3,) rad/s for one raw sample (6,): gyro rad/s, accel m/s^2."""
         if not self._hidden:
+            self.samples += 1
             return self._calib @ imu[:3] + self._const
         if self.samples == 0:
             x = imu.astype(np.float32)

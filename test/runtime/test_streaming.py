@@ -93,3 +93,10 @@ def test_the_engine_gelu_is_the_exact_erf_gelu_to_float32_precision():
     assert np.abs(got - exact)[inside].max() < 2e-6 * 20  # float32 rounding of x itself
     assert np.abs(_gelu(x.copy()) - exact)[inside].max() < 3e-7  # the table, in float64
     assert (got[~inside] == 0).all()  # no denormal tail
+
+
+def test_a_calibration_counts_its_samples_so_the_node_reports_it_warm():
+    model = untrained_model(calibration_only=True)
+    engine = StreamingCorrector.from_module(model)
+    engine.step(np.zeros(6))
+    assert engine.samples == 1 and engine.receptive_field == 1
