@@ -97,9 +97,17 @@ def check_gaps(stamps_ns: np.ndarray, rate_hz: float | None, source: object) -> 
                            'split the recording at its holes')
 
 
-GRAVITY_M_S2 = 9.81
+GRAVITY_M_S2 = 9.80665
 ACCEL_NORM_RANGE = (3.0, 30.0)   # mean |accel| of any recording not in free fall, m/s^2
 GYRO_SCALE_LIMIT = 20.0         # gyro spread this many times the model's: not rad/s
+
+
+def accel_units(norm_m_s2: float) -> str | None:
+    """Return what a mean accelerometer norm says of its units (None: m/s^2, as expected)."""
+    if ACCEL_NORM_RANGE[0] <= norm_m_s2 <= ACCEL_NORM_RANGE[1]:
+        return None
+    hint = 'accelerometer in g?' if 0.3 <= norm_m_s2 <= 3.0 else 'accelerometer not in m/s^2?'
+    return f'mean accelerometer norm {norm_m_s2:.3g} m/s^2, gravity is 9.81: {hint}'
 
 
 def check_units(imu: np.ndarray, source: object,
@@ -111,12 +119,9 @@ def check_units(imu: np.ndarray, source: object,
     in free fall: ~1 says g. A gyro whose spread is GYRO_SCALE_LIMIT times the model's
     training data (57 times: deg/s) is not in rad/s.
     """
-    norm = float(np.mean(np.linalg.norm(imu[:, 3:], axis=1)))
-    if not ACCEL_NORM_RANGE[0] <= norm <= ACCEL_NORM_RANGE[1]:
-        hint = ('accelerometer in g?' if 0.3 <= norm <= 3.0 else
-                'accelerometer not in m/s^2?')
-        raise DatasetError(f'{source}: mean accelerometer norm {norm:.3g} m/s^2, gravity is '
-                           f'{GRAVITY_M_S2}: {hint}')
+    problem = accel_units(float(np.mean(np.linalg.norm(imu[:, 3:], axis=1))))
+    if problem:
+        raise DatasetError(f'{source}: {problem}')
     if model_input_std is not None:
         ratio = float(np.max(np.std(imu[:, :3], axis=0) / model_input_std[:3]))
         if ratio > GYRO_SCALE_LIMIT:

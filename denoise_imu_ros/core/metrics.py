@@ -224,6 +224,12 @@ class FusedErrors(NamedTuple):
     start: int                # index of the alignment instant
 
 
+def align_yaw(est: Rotation, gt: Rotation, k: int) -> Rotation:
+    """Return ``est`` with its world-frame yaw error at stamp k removed (tilt untouched)."""
+    yaw = error_components(est[k:k + 1], gt[k:k + 1])[2][0]
+    return Rotation.from_rotvec([0.0, 0.0, -np.radians(yaw)]) * est
+
+
 def fused_errors(est: Rotation, gt: Rotation, valid: np.ndarray, t_s: np.ndarray,
                  align_at_s: float = ALIGN_AT_S) -> FusedErrors:
     """
@@ -236,8 +242,7 @@ def fused_errors(est: Rotation, gt: Rotation, valid: np.ndarray, t_s: np.ndarray
     later = np.flatnonzero((t_s - t_s[0] >= align_at_s) & valid)
     trusted = np.flatnonzero(valid)
     k = int(later[0]) if len(later) else int(trusted[0]) if len(trusted) else 0
-    yaw0 = error_components(est[k:k + 1], gt[k:k + 1])[2][0]
-    aligned = Rotation.from_rotvec([0.0, 0.0, -np.radians(yaw0)]) * est[k:]
+    aligned = align_yaw(est[k:], gt[k:], 0)
     angle, tilt, yaw = error_components(aligned, gt[k:])
     ok = valid[k:]
     if not ok.any():

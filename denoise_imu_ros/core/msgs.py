@@ -27,6 +27,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 NO_ORIENTATION = np.array([-1.0] + [0.0] * 8)  # REP-145: orientation not provided
+UNKNOWN_COVARIANCE = np.zeros(9)  # REP-145: covariance unknown
+UNKNOWN_COVARIANCE.flags.writeable = False
 
 
 class MsgTypes(NamedTuple):
@@ -97,16 +99,18 @@ def imu(types: MsgTypes, head: Any, gyro: Any, accel: Any,
 def finite_covariance(cov: Any) -> np.ndarray:
     """Return a covariance as it is, or all zeros ('unknown', REP-145) if not finite."""
     cov = np.asarray(cov, np.float64)
-    return cov if np.isfinite(cov).all() else np.zeros(9)
+    return cov if np.isfinite(cov).all() else UNKNOWN_COVARIANCE
 
 
 def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
-                  attitude: np.ndarray | None = None, orientation_cov: Any = None) -> Any:
+                  attitude: np.ndarray | None = None, orientation_cov: Any = None,
+                  accel_cov: Any = None) -> Any:
     """
     Build the imu/corrected message of a raw one: header copied, never re-stamped.
 
-    The accelerometer and its covariance pass through (a non-finite covariance becomes
-    zeros, 'unknown', never NaN on the wire); the orientation is the attitude
+    The accelerometer and its covariance pass through (``accel_cov`` when the caller has
+    already checked it; a non-finite one becomes zeros, 'unknown', never NaN on the
+    wire); the orientation is the attitude
     with ``orientation_cov`` when given, else absent (covariance[0] = -1, REP-145).
     """
     a = raw.linear_acceleration
@@ -114,7 +118,8 @@ def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
     return imu(types, raw.header, gyro, (a.x, a.y, a.z),
                orientation=attitude if embed else (0.0, 0.0, 0.0, 1.0),
                orientation_cov=orientation_cov if embed else NO_ORIENTATION,
-               gyro_cov=gyro_cov, accel_cov=finite_covariance(raw.linear_acceleration_covariance))
+               gyro_cov=gyro_cov, accel_cov=finite_covariance(
+                   raw.linear_acceleration_covariance) if accel_cov is None else accel_cov)
 
 
 def reorient(msg: Any, quat: np.ndarray, orientation_cov: Any) -> Any:

@@ -43,7 +43,7 @@ from scipy.spatial.transform import Rotation
 from .pose_alignment import estimate_pose_alignment, MAX_OFFSET_S
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
-from ..core.limits import ACCEL_NORM_RANGE, GRAVITY_M_S2, imu_holes, MAX_GAP_FACTOR
+from ..core.limits import accel_units, imu_holes, MAX_GAP_FACTOR
 from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residuals, integrate,
                             sequence_errors)
 from ..core.records import Recording, Sequence
@@ -260,11 +260,9 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
 def _units(report: dict[str, Any]) -> list[str]:
     """Return what the accelerometer's norm and the gyro's scale say of the units."""
     reasons = []
-    norm = report['accel_norm_mean_m_s2']
-    if not ACCEL_NORM_RANGE[0] <= norm <= ACCEL_NORM_RANGE[1]:
-        reasons.append(f'mean accelerometer norm {norm:.3g} m/s^2, gravity is {GRAVITY_M_S2}: '
-                       + ('accelerometer in g?' if 0.3 <= norm <= 3.0 else
-                          'accelerometer not in m/s^2?'))
+    accel = accel_units(report['accel_norm_mean_m_s2'])
+    if accel:
+        reasons.append(accel)
     scale = [1 + v / 100 for v in report['gyro_scale_error_percent'] if v is not None]
     if scale and min(scale) > DEG_PER_RAD_LOW:
         reasons.append(f"the gyro reads {np.median(scale):.1f} times the poses' rate "

@@ -21,26 +21,24 @@ recording (torch imported only then).
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
 from ..core.limits import check_gaps, check_rate, check_units
-from ..core.modelfile import read_model_file
+from ..core.modelfile import ModelFile, read_model_file
 from ..data.load import load_imu
 from ..runtime.streaming import StreamingCorrector
 
 
-def corrected_gyro(model_spec: str | Path, imu: np.ndarray, engine: str = 'batch') -> np.ndarray:
+def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch') -> np.ndarray:
     """Corrected gyro (N, 3) rad/s of raw samples (N, 6) by either engine."""
     if engine == 'streaming':
-        mf = read_model_file(model_spec)
         return StreamingCorrector(mf.config, mf.arrays).process(imu)
     from ..learn.checkpoint import load_model  # torch: the batch engine only
     from ..learn.model import correct_gyro
-    return correct_gyro(load_model(model_spec).model, imu)
+    return correct_gyro(load_model(mf.path).model, imu)
 
 
 def correct_to_csv(model_spec: str, source: str, output: str,
@@ -60,7 +58,7 @@ def correct_to_csv(model_spec: str, source: str, output: str,
     check_rate(rec.imu_stamp_ns, loaded.meta.get('sample_rate_hz'), source)
     check_units(rec.imu, source, loaded.arrays['input_std'])
     check_gaps(rec.imu_stamp_ns, loaded.meta.get('sample_rate_hz'), source)
-    omega = corrected_gyro(loaded.path, rec.imu, engine)
+    omega = corrected_gyro(loaded, rec.imu, engine)
     with atomic_output(output, overwrite=True) as tmp, open(tmp, 'w') as f:
         f.write('timestamp_ns,wx,wy,wz\n')
         for t, w in zip(rec.imu_stamp_ns, omega):

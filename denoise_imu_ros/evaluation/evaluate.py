@@ -33,9 +33,9 @@ from .reports import crossval_table, eval_table, fused_table, growth_table
 from ..core import jsonio
 from ..core.errors import OptionError, OutputError
 from ..core.limits import check_gaps, check_rate, check_units
-from ..core.metrics import error_components, sequence_errors, tilt_growth_deg_min
+from ..core.metrics import (align_yaw, error_components, sequence_errors,
+                            tilt_growth_deg_min)
 from ..core.modelfile import shipped_models
-from ..core.records import Sequence
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..learn.model import correct_gyro
@@ -110,7 +110,8 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
             fused[name][method] = {
                 'filter': flt.label, 'aoe_deg': err.aoe, 'tilt_deg': err.tilt,
                 'aoe_yaw_deg': err.aoe_yaw, 'tilt_growth_deg_min': err.tilt_growth_deg_min}
-            estimates[method] = _yaw_aligned(Rotation.from_quat(quat), seq, err.start)
+            estimates[method] = align_yaw(Rotation.from_quat(quat),
+                                          Rotation.from_quat(seq.gt_quat), err.start)
         if seq.pose_alignment is not None:
             results[name]['pose_alignment'] = seq.pose_alignment
         if plots:
@@ -146,9 +147,3 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         plot_roe(out_dir / 'roe.png', roe_all)
     sys.stdout.write(table)
     return report
-
-
-def _yaw_aligned(est: Rotation, seq: Sequence, k: int) -> Rotation:
-    """Return a fused orientation with its yaw aligned to the ground truth at stamp k."""
-    yaw = error_components(est[k:k + 1], Rotation.from_quat(seq.gt_quat[k:k + 1]))[2][0]
-    return Rotation.from_rotvec([0.0, 0.0, -np.radians(yaw)]) * est

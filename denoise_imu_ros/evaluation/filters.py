@@ -35,15 +35,16 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..core.errors import DatasetError
+from ..core.limits import GRAVITY_M_S2
 from ..core.metrics import fused_errors, FusedErrors
 from ..core.modelfile import read_model_file
 from ..core.records import Sequence
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..learn.model import correct_gyro
-from ..runtime.fusion import fuse, FusionSettings
+from ..runtime.fusion import fuse, FusionSettings, settings_of
+from ..runtime.rotation import from_gravity
 
-GRAVITY_M_S2 = 9.80665
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
 MADGWICK_GAINS = (0.001, 0.003, 0.01, 0.033, 0.1, 0.3)     # ahrs's default: 0.033
@@ -111,18 +112,12 @@ def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float) -> np.
         deg, g = np.degrees(shifted), accel / GRAVITY_M_S2  # its units: deg/s and g
         for k in range(len(gyro)):
             if k == 0:
-                fusion.set_quaternion(_tilt_wxyz(accel[0]))
+                x, y, z, w = from_gravity(*accel[0])
+                fusion.set_quaternion(np.array([w, x, y, z]))
             else:
                 fusion.update_no_magnetometer(deg[k], g[k])
             wxyz[k] = fusion.get_quaternion()
     return np.asarray(wxyz)[:, [1, 2, 3, 0]]
-
-
-def _tilt_wxyz(accel: np.ndarray) -> np.ndarray:
-    """Roll and pitch from one accelerometer sample, yaw 0, as a wxyz quaternion."""
-    ax, ay, az = accel
-    roll, pitch = np.arctan2(ay, az), np.arctan2(-ax, np.hypot(ay, az))
-    return Rotation.from_euler('ZYX', [0.0, pitch, roll]).as_quat()[[3, 0, 1, 2]]
 
 
 def score(seq: Sequence, quat: np.ndarray) -> FusedErrors:
@@ -246,12 +241,14 @@ def eval_filters(net_meta: dict[str, Any], calib_meta: dict[str, Any] | None
             return Filter.from_dict(stored[f'{source} {kind}'])
         return DEFAULTS.get(kind, Filter('vqf'))
 
+    def own(meta: dict[str, Any]) -> Filter:  # a model file's settings for its own gyro
+        settings = settings_of(meta)
+        return Filter('vqf', settings.tau_acc_s, settings.bias_estimation)
+
     rows = {'raw + VQF': ('raw', chosen('raw', 'vqf'))}
     if calib_meta is not None:
-        rows['calibrated + VQF'] = ('calibrated', Filter.from_dict(
-            {'settings': (calib_meta.get('fusion') or {}).get('settings') or {}}))
+        rows['calibrated + VQF'] = ('calibrated', own(calib_meta))
         rows.update({f'calibrated + {LABELS[k]}': ('calibrated', chosen('calibrated', k))
                      for k in ('imufusion', 'madgwick')})
-    rows['network + VQF'] = ('network', Filter.from_dict(
-        {'settings': (net_meta.get('fusion') or {}).get('settings') or {}}))
+    rows['network + VQF'] = ('network', own(net_meta))
     return rows

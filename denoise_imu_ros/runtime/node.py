@@ -223,10 +223,10 @@ class GyroDenoiser(Node):
 
         embed = out.attitude if self._embed else None
         corrected = msgs.corrected_imu(self._types, msg, out.gyro, self._gyro_cov, embed,
-                                       self._orientation_cov)
+                                       self._orientation_cov, out.accel_cov)
         self._pub_imu.publish(corrected)
         # a filter run at a rate it was not set up for is not published as if it were valid
-        off_rate = self._rate_error or self._denoiser.rate_suspect
+        off_rate = self._rate_error or out.rate_suspect
         if self._pub_fused is not None and not off_rate:
             self._pub_fused.publish(msgs.reorient(corrected, out.orientation, self._fused_cov))
         elif self._pub_fused is not None:

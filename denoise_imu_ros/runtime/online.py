@@ -52,7 +52,7 @@ from .fusion import FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
 from ..core.limits import in_range, MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import ModelFile, sample_rate
-from ..core.msgs import imu_fields
+from ..core.msgs import finite_covariance, imu_fields, UNKNOWN_COVARIANCE
 
 
 class Drop(str, Enum):
@@ -88,6 +88,7 @@ class Output(NamedTuple):
     event: Event | None     # set when the state was reset at this sample
     orientation: np.ndarray | None = None  # (4,) xyzw, gravity-aided (with a filter)
     rate_suspect: bool = False  # the stream is off the model's period (see rate_suspect)
+    accel_cov: np.ndarray | None = None  # the input's, finite (process_imu sets it)
 
 
 @dataclass
@@ -150,12 +151,15 @@ class OnlineDenoiser:
         """
         Correct one sensor_msgs/Imu (rclpy or rosbags message); see :meth:`process`.
 
-        A non-finite accelerometer covariance is counted (``non_finite_covariance``): the
-        messages built from it carry zeros instead (``msgs.finite_covariance``).
+        The output carries the accelerometer covariance to publish, checked once here: a
+        non-finite one is replaced by zeros ('unknown') and counted
+        (``non_finite_covariance``).
         """
-        if not np.isfinite(msg.linear_acceleration_covariance).all():
+        cov = finite_covariance(msg.linear_acceleration_covariance)
+        if cov is UNKNOWN_COVARIANCE:
             self.counts['non_finite_covariance'] += 1
-        return self.process(*imu_fields(msg))
+        out = self.process(*imu_fields(msg))
+        return out if isinstance(out, Drop) else out._replace(accel_cov=cov)
 
     def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray) -> Output | Drop:
         """Correct one sample; returns an :class:`Output` or the cause of a drop."""

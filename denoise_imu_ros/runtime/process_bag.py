@@ -86,7 +86,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
         try:
             with open_bag(_ros2_source(src, Path(tmp))) as rd:
                 imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
-                results = _run_in_stamp_order(rd, imu_conns, den, src)
+                imu, results = _run_in_stamp_order(rd, imu_conns, den, src)
                 compressed = any(getattr(r, 'compression_mode', None) for r in rd.readers)
                 wr = Writer(partial, version=9, storage_plugin=plugin)
                 if compressed if compress is None else compress:
@@ -110,10 +110,11 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                         res = results[k]
                         if isinstance(res, Drop):
                             continue
-                        msg = rd.deserialize(raw, conn.msgtype)
-                        corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov)
+                        msg = imu[k]  # deserialised once, by the first pass
+                        corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov,
+                                                       accel_cov=res.accel_cov)
                         oriented = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov,
-                                                      res.orientation, fused_cov)
+                                                      res.orientation, fused_cov, res.accel_cov)
                         attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
                         wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
                         # what the node withholds is not written either (node.py)
@@ -129,12 +130,12 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
 
 
 def _run_in_stamp_order(rd: Any, imu_conns: list, den: OnlineDenoiser,
-                        src: Path) -> list[Output | Drop]:
-    """Return the pipeline's result for every IMU message (receive order), run by stamp."""
+                        src: Path) -> tuple[list[Any], list[Output | Drop]]:
+    """Return every IMU message and its pipeline result (receive order), run by stamp."""
     imu = [rd.deserialize(raw, c.msgtype) for c, _, raw in rd.messages(connections=imu_conns)]
     stamps = np.array([stamp_ns(m.header) for m in imu], dtype=np.int64)
     check_rate(np.sort(stamps), den.rate_hz, src)
     results: list[Output | Drop | None] = [None] * len(imu)
     for k in np.argsort(stamps, kind='stable'):
         results[k] = den.process_imu(imu[k])
-    return results
+    return imu, results
