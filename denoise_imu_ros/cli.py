@@ -48,8 +48,12 @@ def _train(args: argparse.Namespace) -> None:
     try:
         result.save(args.out, args.candidates_dir)
     except OutputError as err:  # a full disk, say: the finished training is not lost
-        kept = Path(tempfile.mkdtemp(prefix='denoise-imu-')) / Path(args.out).name
-        result.save(kept)
+        try:
+            kept = Path(tempfile.mkdtemp(prefix='denoise-imu-')) / Path(args.out).name
+            result.save(kept)
+        except (OSError, OutputError) as again:
+            raise OutputError(f'{err}; keeping it in the temporary folder failed too '
+                              f'({again}): the trained model is lost') from err
         raise OutputError(f'{err}; the trained model was kept at {kept}') from err
     val = result.meta['validation']
     print(f'saved {args.out}: {result.meta["selected"]} weights (step {val["step"]}), '
@@ -359,6 +363,10 @@ def main(argv: list[str] | None = None) -> int:
         args.func(args)
     except DenoiseError as err:
         print(f'denoise-imu {args.command}: error: {err}', file=sys.stderr)
+        return 1
+    except OSError as err:  # an I/O error no area translated: still one line, path and cause
+        where = f'{err.filename}: ' if err.filename else ''
+        print(f'denoise-imu {args.command}: error: {where}{err.strerror or err}', file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print(f'denoise-imu {args.command}: interrupted', file=sys.stderr)

@@ -26,6 +26,7 @@ import os
 from pathlib import Path
 import shutil
 import tempfile
+from typing import Any
 
 from .errors import OutputError
 
@@ -50,5 +51,21 @@ def atomic_output(path: str | Path, overwrite: bool = False) -> Iterator[Path]:
     try:
         yield scratch / path.name
         os.replace(scratch / path.name, path)
+    except OSError as err:  # a full disk: name the output, not the scratch copy
+        if err.filename and Path(err.filename).resolve() != (scratch / path.name).resolve():
+            raise OutputError(f'{err.filename}: {err.strerror or err}') from err
+        raise OutputError(f'{path}: cannot write ({err.strerror or err})') from err
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+
+
+def write_text(path: str | Path, text: str) -> None:
+    """Write a text file complete or not at all (a report beside earlier ones)."""
+    with atomic_output(path, overwrite=True) as tmp:
+        tmp.write_text(text)
+
+
+def save_figure(fig: Any, path: str | Path) -> None:
+    """Save a matplotlib figure complete or not at all (never a truncated PNG)."""
+    with atomic_output(path, overwrite=True) as tmp:
+        fig.savefig(tmp, dpi=90)

@@ -129,9 +129,8 @@ def write_model_file(path: str | Path, config: ModelConfig, arrays: dict[str, np
             save_file({k: np.asarray(v, order='C') for k, v in arrays.items()}, str(tmp),
                       metadata=header)
             tmp.chmod(0o644)  # a shared artefact, not a secret
-    except OSError as err:  # a full disk, a read-only folder
-        raise OutputError(f'{path}: cannot write the model file ({err.strerror or err})'
-                          ) from err
+    except SafetensorError as err:  # its own I/O error: a full disk, a read-only folder
+        raise OutputError(f'{path}: cannot write the model file ({err})') from err
 
 
 def add_metadata(path: str | Path, **meta: Any) -> None:

@@ -104,6 +104,23 @@ def open_bag(path: str | Path) -> Iterator[AnyReader]:
         reader.close()
 
 
+def is_compressed(reader: AnyReader) -> bool:
+    """
+    Whether a bag's messages are compressed, per message, per file or inside MCAP chunks.
+
+    ``ros2 bag record --storage-preset-profile zstd_fast`` and rosbags' storage mode
+    compress the MCAP chunks and leave ``compression_mode`` empty in ``metadata.yaml``;
+    only the chunk records say it (rosbags' MCAP reader keeps them).
+    """
+    for bag in reader.readers:
+        if getattr(bag, 'compression_mode', None):
+            return True
+        for storage in getattr(getattr(bag, 'storage', None), 'storages', ()):
+            if any(chunk.compression for chunk in getattr(storage, 'chunks', ())):
+                return True
+    return False
+
+
 def read_bag(path: str | Path, imu_topic: str | None = None,
              pose_topic: str | None = None, with_pose: bool = True) -> Recording:
     """

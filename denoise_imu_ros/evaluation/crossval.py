@@ -32,6 +32,7 @@ import numpy as np
 
 from .reports import CROSSVAL_METHODS
 from ..core import jsonio
+from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..data.load import load_sequence
@@ -82,7 +83,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     report.update(recipe=str(config), folds=fold_list, seed=recipe.seed, steps=recipe.steps)
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
-        (out / 'crossval.json').write_text(jsonio.dumps(report, indent=2))
+        write_text(out / 'crossval.json', jsonio.dumps(report, indent=2))
     return report
 
 

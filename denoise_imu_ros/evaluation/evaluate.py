@@ -31,6 +31,7 @@ from .filters import eval_filters, run, score
 from .plots import plot_roe, plot_sequence
 from .reports import crossval_table, eval_table, fused_table, growth_table
 from ..core import jsonio
+from ..core.atomic import write_text
 from ..core.errors import OptionError, OutputError
 from ..core.limits import check_gaps, check_rate, check_units
 from ..core.metrics import (align_yaw, error_components, sequence_errors,
@@ -136,13 +137,13 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     crossval = loaded.meta.get('crossval')
     if isinstance(crossval, dict) and 'verdict' in crossval:
         report['crossval'] = crossval
-    (out_dir / 'results.json').write_text(jsonio.dumps(report, indent=2))
+    write_text(out_dir / 'results.json', jsonio.dumps(report, indent=2))
     table = (eval_table(results, average) + fused_table(fused, fused_average)
              + growth_table(results, fused))
     if 'crossval' in report:
         table += '\nThe recipe on recordings it never saw (stored in the model file):\n\n'
         table += crossval_table(crossval)
-    (out_dir / 'results.md').write_text(table)
+    write_text(out_dir / 'results.md', table)
     if plots:
         plot_roe(out_dir / 'roe.png', roe_all)
     sys.stdout.write(table)

@@ -44,6 +44,7 @@ from scipy.optimize import nnls
 from scipy.spatial.transform import Rotation
 
 from ..core import jsonio
+from ..core.atomic import save_figure, write_text
 from ..core.errors import OutputError
 from ..core.records import Sequence
 
@@ -116,7 +117,7 @@ def plot(path: Path, curves: dict[str, dict[str, Any]]) -> None:
     ax.grid(True, which='both', alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path)
     plt.close(fig)
 
 
@@ -126,8 +127,8 @@ def write(out: Path, report: dict[str, Any]) -> None:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise OutputError(f'{out}: cannot create the output folder ({err.strerror})') from err
-    (out / 'noise.json').write_text(jsonio.dumps(report, indent=2))
-    (out / 'noise.yaml').write_text('\n'.join(
+    write_text(out / 'noise.json', jsonio.dumps(report, indent=2))
+    write_text(out / 'noise.yaml', '\n'.join(
         yaml_snippet(g, f, ', '.join(report['recordings']))
         for g, f in report['pooled'].items()))
     for name, curves in report['recordings'].items():

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..core.atomic import save_figure
 from ..core.metrics import error_components, ROE_DISTANCES_M
 from ..core.records import Sequence
 
@@ -79,7 +80,7 @@ def plot_errors(path: Path, title: str, t: np.ndarray, valid: np.ndarray,
     axes[0].legend(loc='upper left', fontsize=8)
     axes[0].set_title(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path)
     plt.close(fig)
 
 
@@ -108,5 +109,5 @@ def plot_roe(path: Path, roe_all: dict[str, list[dict[float, np.ndarray]]]) -> N
         ax.set_yscale('log')
         ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path)
     plt.close(fig)

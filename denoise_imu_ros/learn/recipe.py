@@ -42,7 +42,7 @@ import numpy as np
 import yaml
 
 from .config import TrainConfig
-from ..core.atomic import atomic_output
+from ..core.atomic import write_text
 from ..core.errors import DatasetError
 from ..core.limits import common_rate
 from ..data.check import check, paper_increments
@@ -117,5 +117,4 @@ def write_recipe(path: str | Path, recipe: dict[str, Any], why: list[str]) -> No
     text = ('# Written by denoise-imu init-recipe; see denoise_imu_ros/learn/config.py for '
             'every key.\n' + ''.join(f'# {line}\n' for line in why)
             + yaml.safe_dump(recipe, sort_keys=False))
-    with atomic_output(path, overwrite=True) as tmp:
-        tmp.write_text(text)
+    write_text(path, text)

@@ -40,7 +40,8 @@ from ..core.errors import DatasetError
 from ..core.limits import check_rate
 from ..core.modelfile import gyro_covariance, read_model_file
 from ..core.msgs import stamp_ns
-from ..data.bags import BAG_TYPES, CORRUPT, IMU_TYPE, open_bag, pick_connections, TYPESTORE
+from ..data.bags import (BAG_TYPES, CORRUPT, IMU_TYPE, is_compressed, open_bag,
+                         pick_connections, TYPESTORE)
 
 CORRECTED_TOPIC = '/imu/corrected'
 FUSED_TOPIC = '/imu/data'
@@ -87,9 +88,8 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
             with open_bag(_ros2_source(src, Path(tmp))) as rd:
                 imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
                 imu, results = _run_in_stamp_order(rd, imu_conns, den, src)
-                compressed = any(getattr(r, 'compression_mode', None) for r in rd.readers)
                 wr = Writer(partial, version=9, storage_plugin=plugin)
-                if compressed if compress is None else compress:
+                if is_compressed(rd) if compress is None else compress:
                     wr.set_compression(CompressionMode.STORAGE if plugin == StoragePlugin.MCAP
                                        else CompressionMode.MESSAGE, CompressionFormat.ZSTD)
                 with wr:

@@ -88,3 +88,17 @@ def test_convert_writes_the_topic_names_asked_for(tmp_path):
         read_bag(tmp_path / 'b', imu_topic='/imu0')
     rec = read_bag(tmp_path / 'b', imu_topic='/imu/data_raw', pose_topic='/mocap/pose')
     assert len(rec.imu) == 600
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_a_bag_compressed_inside_its_mcap_chunks_is_seen_as_compressed(tmp_path, storage):
+    """Issue 20, case 4: MCAP storage compression leaves metadata.yaml's mode empty."""
+    from denoise_imu_ros.data.bags import is_compressed, open_bag
+    from helpers import write_asl
+    rec = write_asl(tmp_path / 'rec', n_imu=400)
+    for compress in (True, False):
+        out = tmp_path / f'{storage}_{compress}'
+        argv = ['convert', str(rec), str(out), '--storage', storage]
+        assert main(argv + ['--compress'] * compress) == 0
+        with open_bag(out) as reader:
+            assert is_compressed(reader) == compress

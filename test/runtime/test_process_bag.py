@@ -183,3 +183,12 @@ def test_receive_order_jitter_drops_nothing_and_qos_and_compression_are_kept(
     assert cli(['process-bag', str(tmp_path / 'jittered'), str(plain), '--model',
                 str(model_file)]) == 0
     assert size < 0.7 * sum(f.stat().st_size for f in plain.iterdir())
+    # an input compressed inside its MCAP chunks (metadata.yaml says nothing) stays so
+    from denoise_imu_ros.data.bags import is_compressed, open_bag
+    from helpers import write_asl
+    assert cli(['convert', str(write_asl(tmp_path / 'asl', n_imu=1200)), str(tmp_path / 'zstd'),
+                '--compress']) == 0
+    assert cli(['process-bag', str(tmp_path / 'zstd'), str(tmp_path / 'kept'),
+                '--model', str(model_file)]) == 0
+    with open_bag(tmp_path / 'kept') as reader:
+        assert is_compressed(reader)
