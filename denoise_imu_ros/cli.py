@@ -21,6 +21,7 @@ turns the package's exceptions into a one-line message and exit code 1.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 from pathlib import Path
 import sys
@@ -131,8 +132,6 @@ def _check_data(args: argparse.Namespace) -> None:
     from .core import jsonio
     from .data.check import check, markdown
     from .data.load import load_recording
-    if not 0 < args.max_offset <= 60:
-        raise OptionError(f'--max-offset {args.max_offset:g}: must be above 0 and at most 60 s')
     rec = load_recording(args.input, args.imu_topic, args.pose_topic)
     report = check(rec, args.max_offset)
     sys.stdout.write(markdown(report))
@@ -352,6 +351,29 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# Every numeric option's range, (low, high, low allowed); a value must also be finite.
+OPTION_RANGES = {
+    'start': (0.0, math.inf, True),  # s
+    'duration': (0.0, math.inf, False),  # s
+    'rate': (0.0, math.inf, False),  # playback speed factor
+    'wait': (0.0, 3600.0, True),  # s
+    'max_offset': (0.0, 60.0, False),  # s
+    'seed': (0, 2**32 - 1, True),  # numpy's and torch's seed range
+}
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    for name, (low, high, low_allowed) in OPTION_RANGES.items():
+        value = getattr(args, name, None)
+        if value is None or (math.isfinite(value) and value <= high
+                             and (low < value or low_allowed and value == low)):
+            continue
+        bound = f'{low:g} or more' if low_allowed else f'above {low:g}'
+        limit = '' if high == math.inf else f' and at most {high:g}'
+        raise OptionError(f'--{name.replace("_", "-")} {value:g}: must be a number {bound}'
+                          f'{limit}')
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``denoise-imu`` console script."""
     args = build_parser().parse_args(argv)
@@ -360,6 +382,7 @@ def main(argv: list[str] | None = None) -> int:
         # Denormal floats in the network's activations slow its CPU convolutions tenfold.
         torch.set_flush_denormal(True)
     try:
+        _check_options(args)
         args.func(args)
     except DenoiseError as err:
         print(f'denoise-imu {args.command}: error: {err}', file=sys.stderr)

@@ -125,6 +125,16 @@ def test_garbage_inputs_and_bad_options_are_one_line_errors(model_file, tmp_path
         (['process-bag', str(SAMPLE), str(tmp_path / 'file' / 'p')] + model,
          'cannot write here'),
     ]
+    # every numeric option: finite and in range, named before any work
+    asl = write_asl(tmp_path / 'asl', n_imu=600)
+    for option, value in (('--start', 'nan'), ('--start', '-1'), ('--duration', 'inf'),
+                          ('--duration', '0')):
+        cases.append((['convert', str(asl), str(tmp_path / 'c'), option, value],
+                      f'{option} {value}: must be a number'))
+    for option, value in (('--rate', 'nan'), ('--rate', '0'), ('--wait', '-1'),
+                          ('--wait', 'nan')):
+        cases.append((['play', str(SAMPLE), option, value], f'{option} {value}: must be'))
+    cases.append((['train', '--config', 'x.yaml', '--seed', '-1'], '--seed -1: must be'))
     for argv, message in cases:
         assert main(argv) == 1, argv
         err = _error(capsys)

@@ -20,6 +20,7 @@ Messages go out at their recorded pace (scaled by ``rate``), stamped as recorded
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 import time
 from typing import Any, Iterator
@@ -56,8 +57,8 @@ class Player(Node):
     def __init__(self, messages: list[Imu], topic: str = 'imu/data_raw', rate: float = 1.0,
                  clock: bool = False, **kwargs: Any) -> None:
         super().__init__('imu_player', **kwargs)
-        if rate <= 0:
-            raise OptionError(f'playback rate must be positive, got {rate}')
+        if not (math.isfinite(rate) and rate > 0):
+            raise OptionError(f'--rate {rate:g}: playback rate must be a positive number')
         self._messages, self._rate = messages, rate
         # Reliable: reaches best-effort and reliable subscribers alike.
         self._pub = self.create_publisher(Imu, topic, QoSProfile(
@@ -86,6 +87,8 @@ class Player(Node):
             delay = due - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
+            if not self.context.ok():  # SIGTERM or SIGINT shut rclpy down: stop quietly
+                return
             if self._clock is not None:
                 self._clock.publish(Clock(clock=msg.header.stamp))
             self._pub.publish(msg)
@@ -112,7 +115,9 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,
             player.get_logger().warning(f'no subscriber on {player.resolve_topic_name(topic)} '
                                         f'after {wait_s:g} s; playing anyway')
         count = sum(1 for _ in player.play())
-        print(f'published {count} IMU messages from {bag} on {player.resolve_topic_name(topic)}')
+        stopped = '' if count == len(messages) else f' (stopped: {count} of {len(messages)})'
+        print(f'published {count} IMU messages from {bag} on '
+              f'{player.resolve_topic_name(topic)}{stopped}')
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

@@ -37,3 +37,21 @@ def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, eur
     assert result == [0]
     h.spin_until(lambda: len(h.corrected) == 400)
     assert 'published 400 IMU messages' in capsys.readouterr().out
+
+
+def test_sigterm_stops_play_quietly_and_says_how_far_it_got():
+    """A supervisor's SIGTERM (or a timeout) shut rclpy down: no traceback, exit 0."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    env = {**os.environ, 'ROS_DOMAIN_ID': str(DOMAIN)}
+    play = subprocess.Popen([sys.executable, '-m', 'denoise_imu_ros.cli', 'play', str(SAMPLE),
+                             '--wait', '0'], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(4)  # imports, then a second or two of the 90 s bag
+    play.send_signal(signal.SIGTERM)
+    out, err = play.communicate(timeout=30)
+    assert play.returncode == 0 and 'Traceback' not in err, err
+    assert '(stopped: ' in out and ' of 18000)' in out, out
