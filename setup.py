@@ -1,6 +1,6 @@
 from glob import glob
 
-from setuptools import find_packages, setup
+from setuptools import Extension, find_packages, setup
 
 package_name = 'denoise_imu_ros'
 
@@ -8,6 +8,12 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=find_packages(exclude=['test']),
+    # the streaming network's per-sample step in C (loaded with ctypes, no Python API);
+    # optional: without a compiler the numpy step runs instead
+    ext_modules=[Extension(package_name + '.runtime._step',
+                           sources=['denoise_imu_ros/runtime/_step.c'],
+                           extra_compile_args=['-O3', '-fopenmp-simd'], libraries=['m'],
+                           optional=True)],
     package_data={package_name: ['models/*.safetensors', 'sample/*/*']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),

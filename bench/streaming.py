@@ -15,13 +15,13 @@
 Streaming engine vs recomputing the window, side by side, on a real EuRoC test sequence.
 
 Prints, for the same model and samples: the median and p99 per-sample cost of the
-numpy streaming engine, of the batch torch network recomputing the last 511 samples for
-every new sample, their ratio, the largest difference between the streaming output
-over the whole sequence and the batch output, and the engine's floor: the same
-matrix-vector products alone, back to back on preallocated vectors, and the ratio of
-the engine's cost to it. With --members K, the same for an
-ensemble of K networks (the model's weights K times over: the cost does not depend on
-the weights), timed in the same run, and the ensemble/single cost ratio.
+streaming engine's two steps (the compiled one, ``_step.c``, and numpy's), of the batch
+torch network recomputing the last 511 samples for every new sample, the speed-up, the
+largest difference between each step's output over the whole sequence and the batch
+output, and the engine's floor: the same matrix-vector products alone (numpy's BLAS,
+back to back on preallocated vectors), with each step's cost over it. With --members K,
+the same for an ensemble of K networks (the model's weights K times over: the cost does
+not depend on the weights), timed in the same run.
 Run: .venv/bin/python bench/streaming.py [--model euroc] [--sequence V1_01_easy]
      [--members 5]
 """
@@ -54,9 +54,7 @@ def main():
     torch.set_flush_denormal(True)  # as the denoise-imu command does
     model = load_model(args.model).model
     imu = load_imu(DATA / args.sequence).imu
-    costs, out = stream(model, imu)
-    batch = correct_gyro(model, imu)
-
+    print(f'sequence {args.sequence}: {len(imu)} samples, model {args.model}')
     rf = model.receptive_field
     u = torch.tensor(imu, dtype=torch.float32)
     window_costs = []
@@ -65,31 +63,27 @@ def main():
             t = time.perf_counter()
             model(u[None, n - rf + 1:n + 1])[0, -1]
             window_costs.append(time.perf_counter() - t)
-    window_costs = np.array(window_costs)
-
-    print(f'sequence {args.sequence}: {len(imu)} samples, model {args.model}')
-    print(f'streaming engine : median {np.median(costs) * 1e6:7.1f} us  '
-          f'p99 {np.percentile(costs, 99) * 1e6:7.1f} us per sample')
-    print(f'its floor        : median {np.median(floor(model)) * 1e6:7.1f} us (the products '
-          f'alone); engine / floor {np.median(costs) / np.median(floor(model)):.2f}')
     print(f'window recompute : median {np.median(window_costs) * 1e6:7.1f} us  '
           f'p99 {np.percentile(window_costs, 99) * 1e6:7.1f} us per sample (torch, 1 thread)')
-    print(f'speed-up (median): {np.median(window_costs) / np.median(costs):.1f}x')
-    print(f'max |streaming - batch| over the sequence: {np.abs(out - batch).max():.2e} rad/s')
+    nets = [('one network', model)]
     if args.members > 1:
-        ensemble = merge([model] * args.members)
-        ens_costs, ens_out = stream(ensemble, imu)
-        print(f'ensemble of {args.members}   : median {np.median(ens_costs) * 1e6:7.1f} us  '
-              f'p99 {np.percentile(ens_costs, 99) * 1e6:7.1f} us per sample, '
-              f'{np.median(ens_costs) / np.median(costs):.2f}x the single network, '
-              f'{np.median(ens_costs) / np.median(floor(ensemble)):.2f}x its floor; '
-              f'max |streaming - batch| '
-              f'{np.abs(ens_out - correct_gyro(ensemble, imu)).max():.2e} rad/s')
+        nets.append((f'ensemble of {args.members}', merge([model] * args.members)))
+    for name, net in nets:
+        batch = correct_gyro(net, imu)
+        base = np.median(floor(net))
+        print(f'{name}: floor (the products alone) median {base * 1e6:6.1f} us')
+        for compiled in (True, False):
+            costs, out = stream(net, imu, compiled)
+            med = np.median(costs)
+            print(f'  {"compiled" if compiled else "numpy":8s} step: median {med * 1e6:6.1f} us  '
+                  f'p99 {np.percentile(costs, 99) * 1e6:6.1f} us per sample; '
+                  f'{med / base:.2f}x the floor; {np.median(window_costs) / med:.0f}x faster '
+                  f'than the window; max |streaming - batch| {np.abs(out - batch).max():.1e}')
 
 
 def floor(model, repeats: int = 5000) -> np.ndarray:
     """Per-sample cost (s) of the engine's matrix-vector products alone, back to back."""
-    engine = StreamingCorrector.from_module(model)
+    engine = StreamingCorrector.from_module(model, compiled=False)
     products = [(buf.weight[0], buf.col[0, :, 0], buf.out) if buf.layer.groups == 1 else
                 (buf.weight, buf.col, buf.out.reshape(buf.layer.groups, -1, 1))
                 for buf in engine._hidden]
@@ -103,9 +97,9 @@ def floor(model, repeats: int = 5000) -> np.ndarray:
     return costs
 
 
-def stream(model, imu):
+def stream(model, imu, compiled):
     """Per-sample cost (s) and output of the streaming engine over ``imu``."""
-    engine = StreamingCorrector.from_module(model)
+    engine = StreamingCorrector.from_module(model, compiled)
     costs = np.empty(len(imu))
     out = np.empty((len(imu), 3))
     for n, row in enumerate(imu):

@@ -162,7 +162,9 @@ class GyroDenoiser(Node):
         self._apply_parameters()
         self.get_logger().info(
             f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field '
-            f'{loaded.config.receptive_field} samples); imu/data_raw -> imu/corrected'
+            f'{loaded.config.receptive_field} samples, '
+            f'{"compiled" if self._denoiser.engine.compiled else "numpy"} step); '
+            'imu/data_raw -> imu/corrected'
             + ('' if fusion is None else
                f', imu/data (VQF: tau_acc {fusion.tau_acc_s:g} s, bias estimation '
                f'{"on" if fusion.bias_estimation else "off"})'))

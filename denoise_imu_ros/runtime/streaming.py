@@ -19,7 +19,9 @@ costs one column of every layer (~76 k multiply-adds) instead of recomputing the
 511-sample window. BatchNorm (eval mode), the input normalisation and the output scale
 sigma_g (with an ensemble's averaging) are folded into the convolutions, and each bias
 into its matrix (an input that is always 1), so a hidden layer is four numpy calls on
-preallocated buffers: gather the taps, one matrix-vector product, GELU (two calls).
+preallocated buffers: gather the taps, one matrix-vector product, GELU (two calls). The
+same step over the same buffers is compiled in ``_step.c`` when the package is built; it
+does the arithmetic without a Python call per layer, and is used wherever it was built.
 Before the first sample every buffer is filled with the activations a constant input
 equal to that sample produces, which reproduces the batch model's left replication
 padding: the output equals :class:`~denoise_imu_ros.learn.model.GyroNet` in eval mode
@@ -28,6 +30,8 @@ from the very first sample.
 
 from __future__ import annotations
 
+import ctypes
+import importlib.util
 import math
 from typing import Any, NamedTuple
 
@@ -37,6 +41,39 @@ from ..core.architecture import BLOCK, BN_EPS, ModelConfig
 
 
 TINY_WEIGHT = 1e-15  # folded weights below this are 0 (see _layers)
+
+
+class _CLayer(ctypes.Structure):
+    """_step.c's layer_t: one hidden layer's sizes and buffers."""
+
+    _fields_ = [(name, ctypes.c_int64) for name in
+                ('groups', 'c_in', 'c_out', 'kernel', 'dilation', 'span', 'rows')] + [
+                (name, ctypes.c_void_p) for name in ('pos', 'hist', 'col', 'weight', 'out')]
+
+
+class _CNet(ctypes.Structure):
+    """_step.c's net_t: the hidden layers, the output layer and the calibration."""
+
+    _fields_ = [('n_layers', ctypes.c_int64), ('layers', ctypes.c_void_p),
+                ('imu', ctypes.c_void_p), ('x0', ctypes.c_void_p), ('calib', ctypes.c_void_p),
+                ('out_weight', ctypes.c_void_p), ('out_cols', ctypes.c_int64),
+                ('out_in', ctypes.c_void_p), ('gyro', ctypes.c_void_p)]
+
+
+def _load_compiled() -> Any:
+    """Return _step.c's net_step, or None where the package was built without it."""
+    spec = importlib.util.find_spec(f'{__package__}._step')
+    if spec is None or not spec.origin:
+        return None
+    try:
+        fn = ctypes.CDLL(spec.origin).net_step
+    except (OSError, AttributeError):
+        return None
+    fn.argtypes, fn.restype = [ctypes.c_void_p], None
+    return fn
+
+
+_NET_STEP = _load_compiled()
 
 
 class _Layer(NamedTuple):
@@ -133,13 +170,17 @@ class StreamingCorrector:
     torch), or from an eval-mode GyroNet with :meth:`from_module`.
     """
 
-    def __init__(self, config: ModelConfig, arrays: dict[str, np.ndarray]) -> None:
+    def __init__(self, config: ModelConfig, arrays: dict[str, np.ndarray],
+                 compiled: bool | None = None) -> None:
+        if compiled and _NET_STEP is None:
+            raise RuntimeError('the compiled step (_step.c) was not built with this package')
         state = {k: np.asarray(v, dtype=np.float64) for k, v in arrays.items()}
         self.receptive_field = config.receptive_field
         self._calib = np.eye(3) + state['delta']
         self.samples = 0
         self._const = np.zeros(3)
         self._hidden: list[_Buffers] = []
+        self._net: _CNet | None = None
         if config.calibration_only:
             self._const = state['gyro_std'] * state['bias']
             return
@@ -150,14 +191,38 @@ class StreamingCorrector:
         self._out_in = np.ones(last.in_channels + 1, np.float32)
         self._hidden[-1].out = self._out_in[:-1]
         self._out = np.hstack([_dense(last), last.bias_total[:, None]]).astype(np.float32)
+        if compiled is not False and _NET_STEP is not None:
+            self._bind()
+
+    @property
+    def compiled(self) -> bool:
+        """Whether :meth:`step` runs _step.c (else numpy)."""
+        return self._net is not None
+
+    def _bind(self) -> None:
+        """Point _step.c's structures at this engine's buffers (kept alive by self)."""
+        def addr(a: np.ndarray) -> int:
+            assert a.flags.c_contiguous
+            return a.ctypes.data
+        self._imu = np.zeros(6)
+        self._x0 = np.zeros(6, np.float32)
+        self._gyro = np.zeros(3)
+        self._c_layers = (_CLayer * len(self._hidden))(*(_CLayer(
+            b.layer.groups, b.hist.shape[2], b.weight.shape[1], b.layer.kernel,
+            b.layer.dilation, b.span, b.hist.shape[1], addr(b.state), addr(b.hist),
+            addr(b.col), addr(b.weight), addr(b.out)) for b in self._hidden))
+        self._net = _CNet(len(self._hidden), ctypes.addressof(self._c_layers), addr(self._imu),
+                          addr(self._x0), addr(self._calib), addr(self._out),
+                          self._out.shape[1], addr(self._out_in), addr(self._gyro))
+        self._net_addr = ctypes.addressof(self._net)
 
     @classmethod
-    def from_module(cls, model: Any) -> StreamingCorrector:
+    def from_module(cls, model: Any, compiled: bool | None = None) -> StreamingCorrector:
         """Build the engine of an eval-mode :class:`~denoise_imu_ros.learn.model.GyroNet`."""
         if model.training:
             raise ValueError('StreamingCorrector needs a model in eval mode')
         return cls(model.config, {k: v.detach().cpu().double().numpy()
-                                  for k, v in model.state_dict().items()})
+                                  for k, v in model.state_dict().items()}, compiled)
 
     def reset(self) -> None:
         """Forget the past: the next sample is treated as the first of a recording."""
@@ -173,6 +238,10 @@ class StreamingCorrector:
             for buf in self._hidden:
                 x = buf.prime(x)
         self.samples += 1
+        if self._net is not None:
+            self._imu[:] = imu
+            _NET_STEP(self._net_addr)
+            return self._gyro.copy()
         x = imu
         for buf in self._hidden:
             x = buf.step(x)
@@ -196,7 +265,7 @@ class _Buffers:
         # the history is written once per sample and compacted every HISTORY_SLACK
         # samples, so that the last `span` rows are always one strided slice
         self.hist = np.zeros((g, self.span + HISTORY_SLACK, c), np.float32)
-        self.pos = self.span - 2
+        self.state = np.array([self.span - 2], np.int64)  # newest row; _step.c's too
         self.col = np.ones((g, ly.kernel * c + 1, 1), np.float32)  # taps, then a 1
         self.taps = self.col[:, :-1, 0].reshape(g, ly.kernel, c)
         self.weight = np.concatenate([ly.weight, ly.bias.reshape(g, -1, 1)], axis=2)
@@ -206,19 +275,21 @@ class _Buffers:
         """Fill the history as if ``x`` had been the input forever; return the output."""
         g = self.layer.groups
         self.hist[:, :self.span - 1] = x.reshape(g, 1, -1)
-        self.pos = self.span - 2
+        self.state[0] = self.span - 2
         self.out[:] = self.layer.summed @ x + self.layer.bias
         return _gelu(self.out)
 
     def step(self, x: np.ndarray) -> np.ndarray:
         """Take the newest input; return this layer's output (a view of its buffer)."""
-        if self.pos + 1 == self.hist.shape[1]:  # full: keep the last span - 1 rows
-            self.hist[:, :self.span - 1] = self.hist[:, self.pos - self.span + 2:]
-            self.pos = self.span - 2
-        self.pos += 1
+        pos = int(self.state[0])
+        if pos + 1 == self.hist.shape[1]:  # full: keep the last span - 1 rows
+            self.hist[:, :self.span - 1] = self.hist[:, pos - self.span + 2:]
+            pos = self.span - 2
+        pos += 1
+        self.state[0] = pos
         g, d = self.layer.groups, self.layer.dilation
-        self.hist[:, self.pos] = x.reshape(g, -1)
-        np.copyto(self.taps, self.hist[:, self.pos - self.span + 1:self.pos + 1:d])
+        self.hist[:, pos] = x.reshape(g, -1)
+        np.copyto(self.taps, self.hist[:, pos - self.span + 1:pos + 1:d])
         if g == 1:  # np.dot: a third of matmul's call overhead on small matrices
             np.dot(self.weight[0], self.col[0, :, 0], out=self.out)
         else:

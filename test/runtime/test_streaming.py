@@ -1,6 +1,6 @@
 # Copyright 2026 denoise_imu_ros authors
 # Licensed under the Apache License, Version 2.0
-"""The numpy streaming engine equals the batch network, from the first sample on."""
+"""The streaming engine (numpy and compiled steps) equals the batch network, from sample 1."""
 
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.learn.model import correct_gyro
@@ -9,6 +9,12 @@ from helpers import SAMPLE, untrained_model
 import numpy as np
 import pytest
 import torch
+
+
+@pytest.fixture(params=[False, True], ids=['numpy', 'compiled'])
+def compiled(request):
+    """Both steps: the compiled one must have been built (a compiler is part of CI)."""
+    return request.param
 
 
 @pytest.fixture(scope='module')
@@ -34,24 +40,26 @@ def _random_model(calibration_only=False):
 
 
 @pytest.mark.parametrize('calibration_only', [False, True])
-def test_streaming_equals_batch_including_the_first_510_samples(imu, calibration_only):
+def test_streaming_equals_batch_including_the_first_510_samples(imu, calibration_only,
+                                                               compiled):
     model = _random_model(calibration_only)
-    batch = correct_gyro(model, imu[:3000])
-    np.testing.assert_allclose(StreamingCorrector.from_module(model).process(imu[:3000]), batch,
-                               rtol=0, atol=1e-6)
+    batch = correct_gyro(model, imu[:3000])  # past every history's compaction
+    stream = StreamingCorrector.from_module(model, compiled)
+    assert stream.compiled == (compiled and not calibration_only)
+    np.testing.assert_allclose(stream.process(imu[:3000]), batch, rtol=0, atol=1e-6)
 
 
-def test_reset_starts_a_new_recording(imu):
+def test_reset_starts_a_new_recording(imu, compiled):
     model = _random_model()
-    stream = StreamingCorrector.from_module(model)
+    stream = StreamingCorrector.from_module(model, compiled)
     stream.process(imu[:1000])
     stream.reset()
     np.testing.assert_allclose(stream.process(imu[2000:2800]), correct_gyro(model, imu[2000:2800]),
                                rtol=0, atol=1e-6)
 
 
-def test_outputs_never_depend_on_future_samples(imu):
-    stream = StreamingCorrector.from_module(_random_model())
+def test_outputs_never_depend_on_future_samples(imu, compiled):
+    stream = StreamingCorrector.from_module(_random_model(), compiled)
     first = stream.process(imu[:700])
     stream.reset()
     changed = imu[:800].copy()
@@ -59,7 +67,7 @@ def test_outputs_never_depend_on_future_samples(imu):
     assert np.array_equal(stream.process(changed)[:700], first)
 
 
-def test_an_ensemble_is_the_mean_of_its_members_in_batch_and_streaming(imu):
+def test_an_ensemble_is_the_mean_of_its_members_in_batch_and_streaming(imu, compiled):
     from denoise_imu_ros.learn.model import merge
     members = []
     for seed in range(3):
@@ -79,8 +87,8 @@ def test_an_ensemble_is_the_mean_of_its_members_in_batch_and_streaming(imu):
     # the members do differ ...
     assert np.abs(np.array([correct_gyro(m, imu[:1500]) for m in members]) - mean).max() > 1e-3
     np.testing.assert_allclose(batch, mean, rtol=0, atol=1e-6)  # ... and average exactly
-    np.testing.assert_allclose(StreamingCorrector.from_module(ensemble).process(imu[:1500]), batch,
-                               rtol=0, atol=1e-6)
+    np.testing.assert_allclose(StreamingCorrector.from_module(ensemble, compiled).process(
+        imu[:1500]), batch, rtol=0, atol=1e-6)
 
 
 def test_the_engine_gelu_is_the_exact_erf_gelu_to_float32_precision():
