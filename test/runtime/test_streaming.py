@@ -40,8 +40,8 @@ def _random_model(calibration_only=False):
 
 
 @pytest.mark.parametrize('calibration_only', [False, True])
-def test_streaming_equals_batch_including_the_first_510_samples(imu, calibration_only,
-                                                               compiled):
+def test_streaming_equals_batch_including_the_first_510_samples(
+        imu, calibration_only, compiled):
     model = _random_model(calibration_only)
     batch = correct_gyro(model, imu[:3000])  # past every history's compaction
     stream = StreamingCorrector.from_module(model, compiled)
