@@ -21,6 +21,7 @@ scalar-last ``(x, y, z, w)`` and rotate body (IMU) vectors into the world frame.
 from __future__ import annotations
 
 from pathlib import Path
+import warnings
 
 import numpy as np
 
@@ -32,28 +33,44 @@ def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
     """
     Read an ASL CSV: int64 ns stamps (column 0) and float64 columns 1..ncols-1.
 
-    Parsed by hand because the stamps (~1.4e18 ns) do not survive a float64 parse, and
-    so that every error names the file and line.
+    The stamps (~1.4e18 ns) do not survive a float64 parse: they are read as integers,
+    by numpy's parser; a file it refuses is parsed again line by line, so that the error
+    names the file and the line.
     """
     if not path.is_file():
         raise DatasetError(f'{path}: file not found')
-    stamps: list[int] = []
-    rows: list[list[float]] = []
     with path.open(encoding='utf-8', errors='strict') as f:
         lines = _lines(f, path)
-        for lineno, line in enumerate(lines, 1):
-            if line.startswith('#') or not line.strip():
-                continue
-            parts = line.split(',')
-            if len(parts) < ncols:
-                raise DatasetError(
-                    f'{path}:{lineno}: expected {ncols} columns, found {len(parts)}')
-            try:
-                stamps.append(int(parts[0]))
-                rows.append([float(x) for x in parts[1:ncols]])
-            except ValueError:
-                raise DatasetError(
-                    f'{path}:{lineno}: unparsable row {line.strip()[:60]!r}') from None
+    try:
+        with warnings.catch_warnings():  # a file without data rows: said below
+            warnings.simplefilter('ignore', UserWarning)
+            stamps = np.loadtxt(lines, delimiter=',', comments='#', dtype=np.int64,
+                                usecols=0, ndmin=1)
+            values = np.loadtxt(lines, delimiter=',', comments='#', dtype=np.float64,
+                                usecols=range(1, ncols), ndmin=2)
+    except ValueError:
+        return _parse_lines(lines, path, ncols)
+    if not len(stamps):
+        raise DatasetError(f'{path}: no data rows')
+    return stamps, values
+
+
+def _parse_lines(lines: list[str], path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
+    """Parse line by line: the first row numpy refused is an error naming its line."""
+    stamps: list[int] = []
+    rows: list[list[float]] = []
+    for lineno, line in enumerate(lines, 1):
+        if line.startswith('#') or not line.strip():
+            continue
+        parts = line.split(',')
+        if len(parts) < ncols:
+            raise DatasetError(f'{path}:{lineno}: expected {ncols} columns, found {len(parts)}')
+        try:
+            stamps.append(int(parts[0]))
+            rows.append([float(x) for x in parts[1:ncols]])
+        except ValueError:
+            raise DatasetError(
+                f'{path}:{lineno}: unparsable row {line.strip()[:60]!r}') from None
     if not stamps:
         raise DatasetError(f'{path}: no data rows')
     return np.array(stamps, dtype=np.int64), np.array(rows, dtype=np.float64)

@@ -24,7 +24,6 @@ import dataclasses
 from pathlib import Path
 
 from .asl import read_asl
-from .bags import read_bag
 from .pose_alignment import apply_pose_alignment, estimate_pose_alignment
 from .timebase import onto_imu_stamps
 from ..core.errors import DatasetError
@@ -40,6 +39,7 @@ def is_bag(path: str | Path) -> bool:
 def load_imu(path: str | Path, imu_topic: str | None = None) -> Recording:
     """IMU stream only (no ground truth needed) from an ASL folder or a bag."""
     if is_bag(path):
+        from .bags import read_bag  # rosbags: a quarter second of import, for bags only
         return read_bag(path, imu_topic=imu_topic, with_pose=False)
     if not Path(path).exists():
         raise DatasetError(f'{path}: no such sequence folder or bag')
@@ -50,6 +50,7 @@ def load_recording(path: str | Path, imu_topic: str | None = None,
                    pose_topic: str | None = None) -> Recording:
     """Read an ASL folder or a bag (IMU and poses); topics are auto-detected when None."""
     if is_bag(path):
+        from .bags import read_bag  # rosbags: a quarter second of import, for bags only
         return read_bag(path, imu_topic=imu_topic, pose_topic=pose_topic)
     if not Path(path).exists():
         raise DatasetError(f'{path}: no such sequence folder or bag')

@@ -37,6 +37,7 @@ from scipy.spatial.transform import Rotation
 
 from .timebase import poses_at
 from ..core.records import Recording
+from ..core.rotation import multiply_arrays
 
 RATE_WINDOW_S = 0.05       # window of the mean rates compared (at least two pose periods)
 GRID_S = 1e-3              # pose-rate grid
@@ -57,9 +58,11 @@ class Rates:
         grid_ns = t0 + np.arange(0, rec.gt_stamp_ns[-1] - t0, int(GRID_S * 1e9))
         quat, _, valid = poses_at(rec, grid_ns)
         w = max(1, int(round(window_s / GRID_S)))
-        rot = Rotation.from_quat(quat)
         self.pose_t = (grid_ns[:-w] - t0) * 1e-9                 # window starts, pose clock
-        self.pose = (rot[:-w].inv() * rot[w:]).as_rotvec() / (w * GRID_S)
+        # q_n^-1 q_n+w (the conjugate inverts a unit quaternion); numpy's products: scipy's
+        # cost about 15 times more (core.rotation)
+        relative = multiply_arrays(quat[:-w] * [-1.0, -1.0, -1.0, 1.0], quat[w:])
+        self.pose = Rotation.from_quat(relative).as_rotvec() / (w * GRID_S)
         self.pose_ok = valid[:-w] & valid[w:]
         # gyro mean rates over windows of the same length, every sample; a sample is the
         # rate at its stamp, so n samples cover from half a period before the first

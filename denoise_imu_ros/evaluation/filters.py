@@ -39,11 +39,11 @@ from ..core.limits import GRAVITY_M_S2
 from ..core.metrics import fused_errors, FusedErrors
 from ..core.modelfile import read_model_file
 from ..core.records import Sequence
+from ..core.rotation import from_gravity
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..learn.model import correct_gyro
 from ..runtime.fusion import fuse, FusionSettings, settings_of
-from ..runtime.rotation import from_gravity
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5

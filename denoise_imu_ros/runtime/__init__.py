@@ -14,9 +14,10 @@
 """
 The robot path, never torch: the streaming engine, the online pipeline and what runs it.
 
-``streaming`` and ``online`` are numpy only; ``process_bag`` adds rosbags; ``node`` and
+``streaming`` (its step compiled from ``_step.c`` where built) and ``online`` are numpy
+only, ``fusion`` adds VQF; ``process_bag`` adds rosbags; ``node`` and
 ``player`` add rclpy. Import the module you need: this package imports none of them, so
 that process-bag never loads rclpy.
 """
 
-__all__ = ['node', 'online', 'player', 'process_bag', 'streaming']
+__all__ = ['fusion', 'node', 'online', 'player', 'process_bag', 'streaming']

@@ -47,9 +47,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import rotation
 from .fusion import FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
+from ..core import rotation
 from ..core.limits import in_range, MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import ModelFile, sample_rate
 from ..core.msgs import finite_covariance, imu_fields, UNKNOWN_COVARIANCE

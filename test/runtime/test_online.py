@@ -3,10 +3,10 @@
 """The ROS-free online pipeline: equals offline integration, handles bad stamps."""
 
 from denoise_imu_ros.core.metrics import integrate
+from denoise_imu_ros.core.rotation import from_gravity
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn.model import correct_gyro
 from denoise_imu_ros.runtime.online import DROP_CAUSES, Event, OnlineDenoiser, Output
-from denoise_imu_ros.runtime.rotation import from_gravity
 from denoise_imu_ros.runtime.streaming import StreamingCorrector
 from helpers import SAMPLE, untrained_model
 from hypothesis import given, HealthCheck, settings, strategies as st

@@ -1,8 +1,8 @@
 # Copyright 2026 denoise_imu_ros authors
 # Licensed under the Apache License, Version 2.0
-"""The robot path's own rotation arithmetic equals scipy's."""
+"""The hand-written quaternion arithmetic (robot path, offline integration) equals scipy's."""
 
-from denoise_imu_ros.runtime import rotation
+from denoise_imu_ros.core import rotation
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -30,6 +30,16 @@ def test_multiply_equals_scipy_composition_and_stays_unit():
     for w in rng.normal(0, 0.01, (5000, 3)):
         q, ref = rotation.multiply(q, rotation.exp(*w)), ref * Rotation.from_rotvec(w)
     assert _same(q, ref) < 1e-9
+
+
+def test_multiply_arrays_equals_scipy_composition_with_broadcasting():
+    p, q = Rotation.random(300, random_state=5), Rotation.random(300, random_state=6)
+    got = rotation.multiply_arrays(p.as_quat(), q.as_quat())
+    assert (Rotation.from_quat(got).inv() * (p * q)).magnitude().max() < 1e-12
+    assert np.abs(np.linalg.norm(got, axis=1) - 1).max() < 1e-15
+    one = rotation.multiply_arrays(p.as_quat()[0], q.as_quat().reshape(3, 100, 4))
+    assert one.shape == (3, 100, 4)
+    assert (Rotation.from_quat(one.reshape(-1, 4)).inv() * (p[0] * q)).magnitude().max() < 1e-12
 
 
 def test_from_gravity_equals_scipy_euler():
