@@ -46,6 +46,8 @@ def _train(args: argparse.Namespace) -> None:
     for folder in (Path(args.out).parent, args.candidates_dir):
         _check_writable(folder)
     result = train(cfg, progress=not args.quiet)
+    if result is None:  # one of torchrun's processes other than the first
+        return
     try:
         result.save(args.out, args.candidates_dir)
     except OutputError as err:  # a full disk, say: the finished training is not lost

@@ -23,6 +23,9 @@ module keeps the split exact, so that it changes speed only:
     and gradients are summed (``all_reduce_grads``), giving the whole batch's gradient;
   - every process then takes the same optimiser step, so the weights stay identical.
 Only dropout masks differ from a one-process run (they are random either way).
+The processes are started here (``--workers``), or by ``torchrun``, PyTorch's own
+launcher, whose standard environment (``RANK``, ``WORLD_SIZE``, ``MASTER_ADDR``, ...)
+makes them one group across machines.
 """
 
 from __future__ import annotations
@@ -55,6 +58,19 @@ def join(rank: int, world: int, store: dist.TCPStore | int) -> None:
         store = dist.TCPStore(HOST, store, world, is_master=False, timeout=TIMEOUT)
     dist.init_process_group('gloo', store=store, rank=rank, world_size=world,
                             timeout=TIMEOUT)
+
+
+def torchrun_rank() -> int | None:
+    """This process's rank when torchrun started it, else None."""
+    if 'TORCHELASTIC_RUN_ID' not in os.environ and 'WORLD_SIZE' not in os.environ:
+        return None
+    return int(os.environ.get('RANK', '0'))
+
+
+def join_torchrun() -> tuple[int, int]:
+    """Join torchrun's group through its environment (env:// rendezvous); rank, world."""
+    dist.init_process_group('gloo', init_method='env://', timeout=TIMEOUT)
+    return dist.get_rank(), dist.get_world_size()
 
 
 def spawn(target: Callable[..., None], args: tuple[Any, ...]) -> multiprocessing.Process:

@@ -291,14 +291,18 @@ def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[s
 # ----------------------------------------------------------------------------------
 # The run: processes, then one loop
 
-def train(cfg: TrainConfig, progress: bool = True) -> TrainResult:
+def train(cfg: TrainConfig, progress: bool = True) -> TrainResult | None:
     """
     Train per ``cfg``; return the selected model, its metadata and the candidates.
 
     With ``cfg.workers`` > 1 the batch is shared by that many processes (see parallel.py);
     this process is the first of them and the only one that validates and reports.
+    Started by torchrun, this process is one of torchrun's (their number replaces
+    ``workers``): the first returns the result, the others None.
     """
     cfg = dataclasses.replace(cfg, device=resolve_device(cfg.device))
+    if parallel.torchrun_rank() is not None:
+        return _run_torchrun(cfg, progress)
     if cfg.device != 'cpu':
         cfg.workers = 1  # one GPU process holds the whole batch
     seqs = load_sequences(cfg)  # here, so that bad input fails before any process starts
@@ -329,6 +333,19 @@ def train(cfg: TrainConfig, progress: bool = True) -> TrainResult:
             proc.join(timeout=10)
             if proc.is_alive():  # this process failed: nobody will talk to it any more
                 proc.terminate()
+
+
+def _run_torchrun(cfg: TrainConfig, progress: bool) -> TrainResult | None:
+    """Train as one of torchrun's processes: CPU, the batch shared by all of them."""
+    if cfg.device != 'cpu':
+        raise TrainingError('under torchrun, training runs on CPU processes (--device cpu)')
+    seqs = load_sequences(cfg)
+    rank, world = parallel.join_torchrun()
+    try:
+        return _run(dataclasses.replace(cfg, workers=world), rank, seqs,
+                    progress and rank == 0)
+    finally:
+        dist.destroy_process_group()
 
 
 def _worker(cfg: TrainConfig, rank: int, port: int) -> None:

@@ -94,3 +94,34 @@ def test_two_workers_train_on_synthetic_recordings_without_the_real_data(tmp_pat
     assert [h['step'] for h in result.meta['history']] == [0, 3, 6]
     assert all(np.isfinite(h['val_loss']) for h in result.meta['history'])
     assert not dist.is_initialized()
+
+
+def test_torchrun_trains_the_same_model_as_the_built_in_workers(tmp_path):
+    """Issue 18: PyTorch's own launcher (env:// rendezvous) gives the --workers 2 model."""
+    import os
+    import subprocess
+    import sys
+    import yaml
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from helpers import write_asl
+    for i in range(2):
+        write_asl(tmp_path / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=0.01)
+    recipe = yaml.safe_load(CONFIG.read_text())
+    recipe.update(data=str(tmp_path), sequences=['rec0', 'rec1'], window=1024, steps=4,
+                  val_every=2, restart_period=4, swa_start=2, workers=2, threads=2)
+    (tmp_path / 'recipe.yaml').write_text(yaml.safe_dump(recipe))
+    train_args = ['-m', 'denoise_imu_ros.cli', 'train', '--config',
+                  str(tmp_path / 'recipe.yaml'), '--quiet', '--out']
+    env = {k: v for k, v in os.environ.items() if k not in ('RANK', 'WORLD_SIZE')}
+    subprocess.run([sys.executable, '-m', 'torch.distributed.run', '--standalone',
+                    '--nproc-per-node', '2', *train_args, str(tmp_path / 'torchrun.safetensors')],
+                   check=True, env=env, cwd=tmp_path, timeout=300)
+    subprocess.run([sys.executable, *train_args, str(tmp_path / 'workers.safetensors')],
+                   check=True, env=env, cwd=tmp_path, timeout=300)
+    launched = read_model_file(tmp_path / 'torchrun.safetensors')
+    built_in = read_model_file(tmp_path / 'workers.safetensors')
+    assert launched.meta['run']['workers'] == 2
+    assert [h['val_loss'] for h in launched.meta['history']] == [
+        h['val_loss'] for h in built_in.meta['history']]
+    for name, array in built_in.arrays.items():
+        np.testing.assert_array_equal(launched.arrays[name], array, err_msg=name)
