@@ -61,7 +61,7 @@ def join(rank: int, world: int, store: dist.TCPStore | int) -> None:
 
 
 def torchrun_rank() -> int | None:
-    """This process's rank when torchrun started it, else None."""
+    """Return this process's rank when torchrun started it, else None."""
     if 'TORCHELASTIC_RUN_ID' not in os.environ and 'WORLD_SIZE' not in os.environ:
         return None
     return int(os.environ.get('RANK', '0'))
