@@ -71,14 +71,25 @@ def _guard_output(output: str | Path, inputs: list[str | Path], overwrite: bool)
     An output that is an input, or lies inside an input folder (an ASL recording's CSV,
     a bag's inner file), is refused whatever ``--overwrite`` says.
     """
+    _not_an_input(output, inputs)
+    if Path(output).exists() and not overwrite:
+        raise OutputError(f'{output}: exists already (pass --overwrite to replace it)')
+
+
+def _not_an_input(output: str | Path, inputs: list[str | Path]) -> None:
     out = Path(output).resolve()
     for given in inputs:
         inp = Path(given).resolve()
         if out == inp or inp in out.parents:
             raise OutputError(f'{output}: is an input of this command ({given}); refusing to '
                               'write over it')
-    if out.exists() and not overwrite:
-        raise OutputError(f'{output}: exists already (pass --overwrite to replace it)')
+
+
+def _report_inputs(args: argparse.Namespace) -> list[Path]:
+    """The recordings and model files of eval and noise, which their --out must spare."""
+    from .core.modelfile import read_model_file
+    models = [read_model_file(m).path for m in (args.model, args.baseline) if m]
+    return [*(Path(args.data) / s for s in args.sequences), *models]
 
 
 def _check_writable(folder: str | Path | None) -> None:
@@ -146,6 +157,7 @@ def _check_data(args: argparse.Namespace) -> None:
 
 def _eval(args: argparse.Namespace) -> None:
     from .evaluation.evaluate import evaluate
+    _not_an_input(args.out, _report_inputs(args))  # its reports beside a recording's files
     evaluate(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
              imu_topic=args.imu_topic, pose_topic=args.pose_topic, plots=not args.no_plots,
              start_sample=args.start_sample, align_poses=args.align)
@@ -153,6 +165,7 @@ def _eval(args: argparse.Namespace) -> None:
 
 def _noise(args: argparse.Namespace) -> None:
     from .evaluation.noise import markdown, noise
+    _not_an_input(args.out, _report_inputs(args))
     report = noise(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
                    imu_topic=args.imu_topic, pose_topic=args.pose_topic)
     sys.stdout.write(markdown(report))

@@ -167,6 +167,13 @@ def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_p
     assert main(['init-recipe', '--data', str(tmp_path), '--sequences', 'asl', '--out',
                  str(csv)]) == 1
     assert 'is an input of this command' in _error(capsys) and csv.read_bytes() == raw
+    for command in ('eval', 'noise'):  # reports never land inside a recording
+        for out in (asl, asl / 'mav0'):
+            assert main([command, '--model', str(model_file), '--data', str(tmp_path),
+                         '--sequences', 'asl', '--out', str(out)]) == 1
+            assert 'is an input of this command' in _error(capsys)
+    assert sorted(p.name for p in asl.rglob('*')) == ['data.csv', 'data.csv', 'imu0', 'mav0',
+                                                      'state_groundtruth_estimate0']
     assert all(p.read_bytes() == data for p, data in before.items())
     # an existing output is replaced only when asked
     out = tmp_path / 'c.csv'

@@ -67,10 +67,19 @@ def allan(err: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def fit_noise_model(taus: np.ndarray, adev: np.ndarray) -> dict[str, float]:
-    """Q, N, B, K of the noise model (module docstring) fitted to one Allan curve."""
+    """
+    Q, N, B, K of the noise model (module docstring) fitted to one Allan curve.
+
+    Points of zero deviation (an axis whose error is exactly zero, as in a synthetic
+    recording) carry no relative error to fit: without any other point, every term is 0.
+    """
+    use = np.isfinite(adev) & (adev > 0)
+    taus, var = taus[use], adev[use] ** 2
+    if not len(var):
+        return dict.fromkeys(('angle_noise_rad', 'noise_density', 'bias_instability',
+                              'random_walk'), 0.0)
     basis = np.stack([3 / taus ** 2, 1 / taus, np.full_like(taus, 2 * math.log(2) / math.pi),
                       taus / 3], axis=1)
-    var = adev ** 2
     coef, _ = nnls(basis / var[:, None], np.ones_like(var))  # relative error at every tau
     q2, n2, b2, k2 = coef
     return {'angle_noise_rad': math.sqrt(q2), 'noise_density': math.sqrt(n2),

@@ -26,3 +26,17 @@ def test_the_covariance_check_counts_samples_inside_one_two_three_sigma():
     check = covariance_check(err, np.array([0.01, 0.02, 0.03]))
     np.testing.assert_allclose(check['within_sigma'], [0.6827, 0.9545, 0.9973], atol=0.005)
     assert covariance_check(err, np.array([0.005, 0.01, 0.015]))['within_sigma'][0] < 0.4
+
+
+def test_an_error_free_axis_has_zero_figures_not_a_traceback(tmp_path):
+    """A synthetic recording whose gyro equals its poses' rate on an axis (noise, issue 20)."""
+    from denoise_imu_ros.cli import main
+    from helpers import write_asl, write_untrained_model
+    err = np.zeros((4000, 3))
+    err[:, 0] = np.random.default_rng(0).normal(0, 0.01, 4000)
+    f = figures(err, 200.0)
+    assert f['per_axis'][1]['noise_density'] == 0.0 and f['per_axis'][0]['noise_density'] > 0
+    write_asl(tmp_path / 'rec', n_imu=3000)
+    model = write_untrained_model(tmp_path / 'm.safetensors', {'sample_rate_hz': 200.0})
+    assert main(['noise', '--model', str(model), '--data', str(tmp_path), '--sequences', 'rec',
+                 '--out', str(tmp_path / 'noise')]) == 0
