@@ -86,7 +86,7 @@ def _not_an_input(output: str | Path, inputs: list[str | Path]) -> None:
 
 
 def _report_inputs(args: argparse.Namespace) -> list[Path]:
-    """The recordings and model files of eval and noise, which their --out must spare."""
+    """Return the recordings and model files of eval and noise (their --out spares them)."""
     from .core.modelfile import read_model_file
     models = [read_model_file(m).path for m in (args.model, args.baseline) if m]
     return [*(Path(args.data) / s for s in args.sequences), *models]
