@@ -127,6 +127,9 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
     Read IMU and ground-truth pose from a ROS 1 or ROS 2 (sqlite3/mcap) bag.
 
     With ``with_pose=False`` only the IMU is read (the ground-truth arrays are empty).
+    Samples are taken in header-stamp order: a recorder's transport latency reorders
+    the receive order by a few milliseconds, and the stamps, not the arrival, are the
+    measurement times (process-bag runs its pipeline in the same order).
     """
     path = Path(path)
     try:
@@ -149,12 +152,14 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
         raise DatasetError(f'{path}: cannot read bag: {" ".join(str(err).split())}') from err
     if not imu or (with_pose and not gt):
         raise DatasetError(f'{path}: {len(imu)} IMU and {len(gt)} pose messages, need both')
-    gt_arr = np.array(gt, dtype=np.float64).reshape(-1, 7)
+    imu_order = np.argsort(np.array(imu_t, dtype=np.int64), kind='stable')
+    gt_order = np.argsort(np.array(gt_t, dtype=np.int64), kind='stable')
+    gt_arr = np.array(gt, dtype=np.float64).reshape(-1, 7)[gt_order]
     name = path.stem if path.is_file() else path.name
     rec = Recording(name=name, source=str(path),
-                    imu_stamp_ns=np.array(imu_t, dtype=np.int64),
-                    imu=np.array(imu, dtype=np.float64),
-                    gt_stamp_ns=np.array(gt_t, dtype=np.int64),
+                    imu_stamp_ns=np.array(imu_t, dtype=np.int64)[imu_order],
+                    imu=np.array(imu, dtype=np.float64)[imu_order],
+                    gt_stamp_ns=np.array(gt_t, dtype=np.int64)[gt_order],
                     gt_quat=gt_arr[:, :4], gt_pos=gt_arr[:, 4:])
     check_recording(rec)
     return rec

@@ -102,3 +102,38 @@ def test_a_bag_compressed_inside_its_mcap_chunks_is_seen_as_compressed(tmp_path,
         assert main(argv + ['--compress'] * compress) == 0
         with open_bag(out) as reader:
             assert is_compressed(reader) == compress
+
+
+def test_every_reader_takes_a_bag_in_header_stamp_order(tmp_path):
+    """Issue 20, case 2: 1-15 ms of transport latency reorders the receive order."""
+    from denoise_imu_ros.core import msgs
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import (BAG_TYPES, imu_message, IMU_TYPE, POSE_TYPES,
+                                           read_bag, TYPESTORE)
+    from helpers import write_asl
+    rec = read_asl(write_asl(tmp_path / 'asl', n_imu=1200))
+    rng = np.random.default_rng(0)
+    t = TYPESTORE.types
+    items = []
+    with Writer2(tmp_path / 'jittered', version=9) as w:
+        imu = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        pose = w.add_connection('/pose', POSE_TYPES[0], typestore=TYPESTORE)
+        for stamp, row in zip(rec.imu_stamp_ns, rec.imu):
+            items.append((int(stamp) + int(rng.uniform(1e6, 15e6)), int(stamp), imu,
+                          TYPESTORE.serialize_cdr(imu_message(int(stamp), row[:3], row[3:]),
+                                                  IMU_TYPE)))
+        for stamp, q, p in zip(rec.gt_stamp_ns, rec.gt_quat, rec.gt_pos):
+            msg = t[POSE_TYPES[0]](header=msgs.header(BAG_TYPES, int(stamp), 'world'), pose=t[
+                'geometry_msgs/msg/Pose'](position=t['geometry_msgs/msg/Point'](*p),
+                                          orientation=t['geometry_msgs/msg/Quaternion'](*q)))
+            items.append((int(stamp) + int(rng.uniform(1e6, 15e6)), int(stamp), pose,
+                          TYPESTORE.serialize_cdr(msg, POSE_TYPES[0])))
+        items.sort(key=lambda item: item[0])
+        for receive, _, conn, raw in items:
+            w.write(conn, receive, raw)
+    got = read_bag(tmp_path / 'jittered')
+    received = [stamp for _, stamp, conn, _ in items if conn is imu]
+    assert (np.diff(received) < 0).sum() > 100  # the receive order is not the stamps'
+    for field in ('imu_stamp_ns', 'imu', 'gt_stamp_ns', 'gt_quat', 'gt_pos'):
+        np.testing.assert_array_equal(getattr(got, field), getattr(rec, field), err_msg=field)
+    assert main(['check-data', str(tmp_path / 'jittered')]) in (0, 1)  # judged, not refused
