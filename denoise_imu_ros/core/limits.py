@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import DatasetError
+from .rotation import multiply_arrays
 
 RATE_TOLERANCE = 0.05     # relative rate mismatch refused offline, an ERROR online
 MAX_GYRO_RAD_S = 100.0    # ~5,700 deg/s
@@ -127,6 +128,27 @@ def check_units(imu: np.ndarray, source: object,
         if ratio > GYRO_SCALE_LIMIT:
             raise DatasetError(f'{source}: the gyro varies {ratio:.0f} times as much as the '
                                "model's training data: gyro in deg/s? (rad/s expected)")
+
+
+def check_gyro_against_poses(gyro: np.ndarray, gt_quat: np.ndarray, gt_valid: np.ndarray,
+                             dt: np.ndarray, source: object) -> None:
+    """
+    Refuse a gyro that turns GYRO_SCALE_LIMIT times faster than its poses (deg/s: 57).
+
+    Before a training, with no model to compare with: the RMS angular rate of the gyro
+    against the poses' own, over trusted samples (the norm: any frame, any clock offset;
+    the poses' noise only raises theirs).
+    """
+    ok = gt_valid[:-1] & gt_valid[1:]
+    if ok.sum() < 2:
+        return
+    step = multiply_arrays(gt_quat[:-1] * [-1.0, -1.0, -1.0, 1.0], gt_quat[1:])[ok]
+    angle = 2 * np.arctan2(np.linalg.norm(step[:, :3], axis=1), np.abs(step[:, 3]))
+    pose_rms = float(np.sqrt(np.mean((angle / dt[ok]) ** 2)))
+    gyro_rms = float(np.sqrt(np.mean(np.sum(gyro[:-1][ok] ** 2, axis=1))))
+    if pose_rms > 0 and gyro_rms / pose_rms > GYRO_SCALE_LIMIT:
+        raise DatasetError(f'{source}: the gyro turns {gyro_rms / pose_rms:.0f} times as fast '
+                           'as the poses: gyro in deg/s? (rad/s expected)')
 
 
 def check_rate(stamps_ns: np.ndarray, model_rate_hz: float | None, source: object) -> None:

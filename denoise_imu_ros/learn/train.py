@@ -46,7 +46,7 @@ from .config import LossConfig, TrainConfig
 from .loss import increment_loss
 from .model import GyroNet
 from ..core.errors import TrainingError
-from ..core.limits import check_gaps, common_rate
+from ..core.limits import check_gaps, check_gyro_against_poses, check_units, common_rate
 from ..core.metrics import increment_residuals, sequence_errors, trusted_blocks
 from ..core.modelfile import code_version
 from ..core.records import Sequence
@@ -110,6 +110,9 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
                     f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
                     'IMU stamps have trusted ground truth): nothing to supervise the loss')
         check_gaps(seq.stamp_ns, None, Path(cfg.data) / name)
+        check_units(seq.imu, Path(cfg.data) / name)
+        check_gyro_against_poses(seq.imu[:, :3], seq.gt_quat, seq.gt_valid, seq.dt,
+                                 Path(cfg.data) / name)
         seqs.append(seq)
     common_rate({s.name: s.rate_hz for s in seqs}, cfg.data)
     return seqs
