@@ -33,6 +33,7 @@ if TYPE_CHECKING:
 
 ROE_DISTANCES_M = (7.0, 21.0, 35.0)
 SCAN_BLOCK = 16  # steps composed per block by integrate (4x faster than one scan)
+RESIDUAL_BLOCK = 16  # samples per increment of the gyro residual estimate (training, noise)
 ALIGN_AT_S = 1.5  # a fused orientation's arbitrary yaw is aligned to the ground truth here
 
 

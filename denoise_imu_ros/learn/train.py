@@ -47,12 +47,12 @@ from .loss import increment_loss
 from .model import GyroNet
 from ..core.errors import TrainingError
 from ..core.limits import check_gaps, check_gyro_against_poses, check_units, common_rate
-from ..core.metrics import increment_residuals, sequence_errors, trusted_blocks
+from ..core.metrics import (increment_residuals, RESIDUAL_BLOCK, sequence_errors,
+                            trusted_blocks)
 from ..core.modelfile import code_version
 from ..core.records import Sequence
 from ..data.load import load_sequence
 
-RESIDUAL_BLOCK = 16  # samples per block of the gyro residual estimate (validation)
 RANK_SEED_STRIDE = 7919  # data-parallel process r draws its batches from seed + r * this
 
 

@@ -40,3 +40,15 @@ def test_an_error_free_axis_has_zero_figures_not_a_traceback(tmp_path):
     model = write_untrained_model(tmp_path / 'm.safetensors', {'sample_rate_hz': 200.0})
     assert main(['noise', '--model', str(model), '--data', str(tmp_path), '--sequences', 'rec',
                  '--out', str(tmp_path / 'noise')]) == 0
+
+
+def test_the_block_check_sees_white_noise_of_the_published_sigma_as_gaussian():
+    """Mean rate errors over 16-sample increments of white noise: sigma / 4, 68/95/99.7 %."""
+    rng = np.random.default_rng(3)
+    std = np.array([0.01, 0.02, 0.03])
+    per_sample = rng.normal(0, std, (64000, 3))
+    blocks = per_sample.reshape(-1, 16, 3).mean(axis=1)
+    check = covariance_check(per_sample, std, blocks)
+    np.testing.assert_allclose(check['block_within_sigma'], [0.6827, 0.9545, 0.9973], atol=0.02)
+    np.testing.assert_allclose(check['block_rms_over_sigma'], 1.0, atol=0.03)
+    assert covariance_check(per_sample, 2 * std, blocks)['block_rms_over_sigma'][0] < 0.55
