@@ -61,6 +61,11 @@ def multiply(p: Quat, q: Quat) -> Quat:
     return x / n, y / n, z / n, w / n
 
 
+def conjugate_arrays(q: np.ndarray) -> np.ndarray:
+    """Inverses of (..., 4) xyzw unit quaternions."""
+    return q * [-1.0, -1.0, -1.0, 1.0]
+
+
 def multiply_arrays(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Products p q of (..., 4) xyzw quaternion arrays (broadcast), renormalised."""
     out = np.stack(_hamilton(np.moveaxis(p, -1, 0), np.moveaxis(q, -1, 0)), axis=-1)

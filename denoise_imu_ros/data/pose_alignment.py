@@ -37,7 +37,7 @@ from scipy.spatial.transform import Rotation
 
 from .timebase import poses_at
 from ..core.records import Recording
-from ..core.rotation import multiply_arrays
+from ..core.rotation import conjugate_arrays, multiply_arrays
 
 RATE_WINDOW_S = 0.05       # window of the mean rates compared (at least two pose periods)
 GRID_S = 1e-3              # pose-rate grid
@@ -59,9 +59,8 @@ class Rates:
         quat, _, valid = poses_at(rec, grid_ns)
         w = max(1, int(round(window_s / GRID_S)))
         self.pose_t = (grid_ns[:-w] - t0) * 1e-9                 # window starts, pose clock
-        # q_n^-1 q_n+w (the conjugate inverts a unit quaternion); numpy's products: scipy's
-        # cost about 15 times more (core.rotation)
-        relative = multiply_arrays(quat[:-w] * [-1.0, -1.0, -1.0, 1.0], quat[w:])
+        # q_n^-1 q_n+w by numpy's products: scipy's cost about 15 times more (core.rotation)
+        relative = multiply_arrays(conjugate_arrays(quat[:-w]), quat[w:])
         self.pose = Rotation.from_quat(relative).as_rotvec() / (w * GRID_S)
         self.pose_ok = valid[:-w] & valid[w:]
         # gyro mean rates over windows of the same length, every sample; a sample is the

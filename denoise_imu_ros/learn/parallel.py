@@ -61,10 +61,12 @@ def join(rank: int, world: int, store: dist.TCPStore | int) -> None:
 
 
 def torchrun_rank() -> int | None:
-    """Return this process's rank when torchrun started it, else None."""
-    if 'TORCHELASTIC_RUN_ID' not in os.environ and 'WORLD_SIZE' not in os.environ:
-        return None
-    return int(os.environ.get('RANK', '0'))
+    """Return this process's rank when torchrun (or its env:// protocol) started it."""
+    env = os.environ
+    if 'TORCHELASTIC_RUN_ID' in env or all(k in env for k in ('RANK', 'WORLD_SIZE',
+                                                              'MASTER_ADDR')):
+        return int(env.get('RANK', '0'))
+    return None
 
 
 def join_torchrun() -> tuple[int, int]:

@@ -37,6 +37,8 @@ def test_multiply_arrays_equals_scipy_composition_with_broadcasting():
     got = rotation.multiply_arrays(p.as_quat(), q.as_quat())
     assert (Rotation.from_quat(got).inv() * (p * q)).magnitude().max() < 1e-12
     assert np.abs(np.linalg.norm(got, axis=1) - 1).max() < 1e-15
+    inverse = rotation.conjugate_arrays(p.as_quat())
+    assert (Rotation.from_quat(inverse) * p).magnitude().max() < 1e-12
     one = rotation.multiply_arrays(p.as_quat()[0], q.as_quat().reshape(3, 100, 4))
     assert one.shape == (3, 100, 4)
     assert (Rotation.from_quat(one.reshape(-1, 4)).inv() * (p[0] * q)).magnitude().max() < 1e-12
