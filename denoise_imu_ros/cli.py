@@ -108,8 +108,12 @@ def _crossval(args: argparse.Namespace) -> None:
     from .evaluation.crossval import crossval
     from .evaluation.reports import crossval_table
     report = crossval(args.config, args.folds, args.out, progress=not args.quiet,
-                      seed=args.seed, data=args.data, steps=args.steps, workers=args.workers,
-                      device=args.device)
+                      only_fold=args.fold, seed=args.seed, data=args.data, steps=args.steps,
+                      workers=args.workers, device=args.device)
+    if report is None:
+        print(f'trained fold {args.fold} into {args.out}/fold{args.fold}/; crossval without '
+              '--fold scores every fold (training the missing ones)')
+        return
     sys.stdout.write(crossval_table(report))
     for path in args.attach or []:
         add_metadata(path, crossval=report)
@@ -258,7 +262,10 @@ def build_parser() -> argparse.ArgumentParser:
                        'score the held-out recordings: network vs calibrated IMU vs raw')
     p.add_argument('--config', required=True, help='training recipe (its recordings are split)')
     p.add_argument('--folds', type=int, help='number of folds (default: one per recording)')
-    p.add_argument('--out', type=Path, help='write the fold models and crossval.json here')
+    p.add_argument('--out', type=Path, help='write the fold models and crossval.json here '
+                   '(folds trained there already are scored, not trained again)')
+    p.add_argument('--fold', type=int, help='train this fold alone (0-based) into --out, '
+                   'e.g. one per process')
     p.add_argument('--seed', type=int, help='overrides the recipe seed')
     p.add_argument('--data', help='overrides the recipe data folder')
     p.add_argument('--steps', type=int, help='overrides the recipe step count')

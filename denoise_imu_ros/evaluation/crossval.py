@@ -24,6 +24,7 @@ of the input gyro too. The verdict says which of the three to deploy.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 import sys
 from typing import Any
@@ -36,6 +37,7 @@ from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..data.load import load_sequence
+from ..learn.checkpoint import load_model
 from ..learn.config import load_config
 from ..learn.model import correct_gyro
 from ..learn.train import train
@@ -51,33 +53,50 @@ def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:
 
 
 def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
-             progress: bool = True, **overrides: Any) -> dict[str, Any]:
+             progress: bool = True, only_fold: int | None = None,
+             **overrides: Any) -> dict[str, Any] | None:
     """
     Train and score every fold of the recipe at ``config``; return the report.
 
     ``overrides`` are recipe keys (seed, steps, workers, data). With ``out``, each fold's
-    two models are written to ``out/fold<i>/`` and the report to ``out/crossval.json``.
+    two models are written to ``out/fold<i>/`` and the report to ``out/crossval.json``;
+    a fold whose two models are there already, trained by this recipe, is scored without
+    training again, so a stopped run resumes. ``only_fold`` trains that fold alone and
+    returns None (separate processes can share the folds of one ``out``).
     """
     recipe = load_config(config, **overrides)
     per_recording: dict[str, dict[str, dict[str, float]]] = {}
     fold_list = folds(recipe.sequences, k)
+    if only_fold is not None and not (out is not None and 0 <= only_fold < len(fold_list)):
+        raise TrainingError(f'--fold {only_fold}: needs --out and a fold from 0 to '
+                            f'{len(fold_list) - 1}')
     for i, held_out in enumerate(fold_list):
+        if only_fold is not None and i != only_fold:
+            continue
         train_on = [s for s in recipe.sequences if s not in held_out]
-        print(f'fold {i + 1}/{len(fold_list)}: training on {", ".join(train_on)}',
-              file=sys.stderr)
         cfg = load_config(config, **overrides, sequences=train_on)
-        net = train(cfg, progress=progress)
-        calib = train(load_config(config, **overrides, sequences=train_on,
-                                  calibration_only=True), progress=False)
-        if out is not None:
-            net.save(out / f'fold{i}' / 'network.safetensors')
-            calib.save(out / f'fold{i}' / 'calibrated.safetensors')
+        calib_cfg = load_config(config, **overrides, sequences=train_on, calibration_only=True)
+        kept = _trained_fold(out / f'fold{i}', cfg, calib_cfg) if out is not None else None
+        if kept is not None:
+            print(f'fold {i + 1}/{len(fold_list)}: its models are in {out / f"fold{i}"}',
+                  file=sys.stderr)
+            net_model, calib_model = kept
+        else:
+            print(f'fold {i + 1}/{len(fold_list)}: training on {", ".join(train_on)}',
+                  file=sys.stderr)
+            net, calib = train(cfg, progress=progress), train(calib_cfg, progress=False)
+            if out is not None:
+                net.save(out / f'fold{i}' / 'network.safetensors')
+                calib.save(out / f'fold{i}' / 'calibrated.safetensors')
+            net_model, calib_model = net.model, calib.model
+        if only_fold is not None:
+            return None
         for name in held_out:
             seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
-                                cfg.max_gt_gap_s, min_samples=net.model.receptive_field,
+                                cfg.max_gt_gap_s, min_samples=net_model.receptive_field,
                                 align_poses=cfg.align)
-            gyros = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib.model, seq.imu),
-                     'network': correct_gyro(net.model, seq.imu)}
+            gyros = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib_model, seq.imu),
+                     'network': correct_gyro(net_model, seq.imu)}
             per_recording[name] = {m: score(seq, g) for m, g in gyros.items()}
     report = summarize(per_recording)
     report.update(recipe=str(config), folds=fold_list, seed=recipe.seed, steps=recipe.steps)
@@ -85,6 +104,26 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
         out.mkdir(parents=True, exist_ok=True)
         write_text(out / 'crossval.json', jsonio.dumps(report, indent=2))
     return report
+
+
+def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any) -> tuple[Any, Any] | None:
+    """
+    Return a fold's network and calibration from ``folder`` if this recipe trained them.
+
+    A model of another recipe (another seed, step count, increment...) is an error, not
+    silently scored: the report would describe a recipe that was not run.
+    """
+    paths = (folder / 'network.safetensors', folder / 'calibrated.safetensors')
+    if not all(p.is_file() for p in paths):
+        return None
+    models = []
+    for path, want in zip(paths, (cfg, calib_cfg)):
+        loaded = load_model(path)
+        if loaded.meta.get('train_config') != json.loads(jsonio.dumps(want.recipe())):
+            raise TrainingError(f'{path}: trained by another recipe than this fold uses '
+                                '(remove it, or use another --out)')
+        models.append(loaded.model)
+    return models[0], models[1]
 
 
 def summarize(per_recording: dict[str, dict[str, dict[str, float]]]) -> dict[str, Any]:

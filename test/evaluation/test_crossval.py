@@ -70,6 +70,22 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
                  'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0
     assert json.loads((tmp_path / 'ev' / 'results.json').read_text())['crossval'] == report
     assert report['verdict'] in (tmp_path / 'ev' / 'results.md').read_text()
+    # a stopped run resumes: the folds already in --out are scored, not trained again;
+    # one fold can be trained alone (a process per fold), and the report is the same
+    import shutil
+    shutil.rmtree(out / 'fold1')
+    kept = (out / 'fold0' / 'network.safetensors').stat().st_mtime_ns
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+                 '--quiet', '--fold', '1']) == 0
+    assert (out / 'fold1' / 'calibrated.safetensors').is_file()
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+                 '--quiet']) == 0
+    assert (out / 'fold0' / 'network.safetensors').stat().st_mtime_ns == kept
+    assert json.loads((out / 'crossval.json').read_text())['recordings'] == report['recordings']
+    # models of another recipe are refused, not scored as if this one had made them
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+                 '--quiet', '--seed', '7']) == 1
+    assert 'trained by another recipe' in capsys.readouterr().err
 
 
 def test_held_out_recordings_are_aligned_like_the_training_ones(tmp_path):
