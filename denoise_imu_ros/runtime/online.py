@@ -88,7 +88,7 @@ class Output(NamedTuple):
     event: Event | None     # set when the state was reset at this sample
     orientation: np.ndarray | None = None  # (4,) xyzw, gravity-aided (with a filter)
     rate_suspect: bool = False  # the stream is off the model's period (see rate_suspect)
-    accel_cov: np.ndarray | None = None  # the input's, finite (process_imu sets it)
+    accel_cov: np.ndarray | None = None  # the input's, finite (from process_imu)
 
 
 @dataclass
@@ -158,10 +158,10 @@ class OnlineDenoiser:
         cov = finite_covariance(msg.linear_acceleration_covariance)
         if cov is UNKNOWN_COVARIANCE:
             self.counts['non_finite_covariance'] += 1
-        out = self.process(*imu_fields(msg))
-        return out if isinstance(out, Drop) else out._replace(accel_cov=cov)
+        return self.process(*imu_fields(msg), accel_cov=cov)
 
-    def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray) -> Output | Drop:
+    def process(self, stamp_ns: int, gyro: np.ndarray, accel: np.ndarray,
+                accel_cov: np.ndarray | None = None) -> Output | Drop:
         """Correct one sample; returns an :class:`Output` or the cause of a drop."""
         if not (np.isfinite(gyro).all() and np.isfinite(accel).all()):
             return self._drop(Drop.NON_FINITE)
@@ -183,15 +183,15 @@ class OnlineDenoiser:
             event = Event.TIME_JUMP
             self.counts['time_jump_resets'] += 1
         else:
+            periods = (stamp_ns - self._last_ns) * 1e-9 * self.rate_hz  # model periods
             # nominal periods with no sample: lost upstream or in a queue (or a slow stream)
-            periods = round((stamp_ns - self._last_ns) * 1e-9 * self.rate_hz)
-            self.counts['skipped_periods'] += max(periods - 1, 0)
-            if (stamp_ns - self._last_ns) * 1e-9 > self.max_gap_factor / self.rate_hz:
+            self.counts['skipped_periods'] += max(round(periods) - 1, 0)
+            if periods > self.max_gap_factor:
                 event = Event.GAP
                 self.counts['gap_resets'] += 1
             else:
-                off = abs((stamp_ns - self._last_ns) * 1e-9 * self.rate_hz - 1)
-                self._off_rate_run = self._off_rate_run + 1 if off > self.rate_tolerance else 0
+                off = abs(periods - 1) > self.rate_tolerance
+                self._off_rate_run = self._off_rate_run + 1 if off else 0
             self._count_input_periods(stamp_ns - self._last_ns)
 
         if event is not None:
@@ -213,4 +213,5 @@ class OnlineDenoiser:
         self.counts['accepted'] += 1
         orientation = None if self.fusion is None else self.fusion.update(corrected, accel)
         return Output(stamp_ns=stamp_ns, gyro=corrected, attitude=np.array(self._attitude),
-                      event=event, orientation=orientation, rate_suspect=self.rate_suspect)
+                      event=event, orientation=orientation, rate_suspect=self.rate_suspect,
+                      accel_cov=accel_cov)

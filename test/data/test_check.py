@@ -12,7 +12,7 @@ from denoise_imu_ros.data.asl import read_asl
 from denoise_imu_ros.data.check import check, ESTIMATES, label_noise, paper_increments, supervision
 from denoise_imu_ros.data.pose_alignment import estimate_pose_alignment
 from denoise_imu_ros.data.timebase import onto_imu_stamps
-from helpers import write_asl
+from helpers import ROOT, write_asl
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -185,9 +185,10 @@ def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_p
 @pytest.mark.parametrize('column, factor, cause', [
     (slice(4, 7), 1 / 9.81, 'accelerometer in g?'),
     (slice(1, 4), 180 / math.pi, 'gyro in deg/s?')])
-def test_wrong_units_are_named_by_check_data_correct_and_eval(
+def test_wrong_units_are_named_by_check_data_correct_eval_and_train(
         euroc, tmp_path, capsys, model_file, column, factor, cause):
     """Issue 20, case 7: a 45 s crop of MH_01 with one sensor in other units."""
+    import yaml
     from denoise_imu_ros.data.asl import read_asl
     from denoise_imu_ros.data.bags import write_bag
     from denoise_imu_ros.data.timebase import crop
@@ -205,6 +206,14 @@ def test_wrong_units_are_named_by_check_data_correct_and_eval(
                  '--out', str(tmp_path / 'ev'), '--no-plots']):
         assert main(cmd) == 1
         assert cause in capsys.readouterr().err
+    # train has no model to compare the gyro with: the poses' own rate says deg/s
+    recipe = yaml.safe_load((ROOT / 'config' / 'train_euroc.yaml').read_text())
+    recipe.update(data=str(tmp_path), sequences=['bag'], window=1024, steps=2, val_every=1,
+                  restart_period=2, swa_start=1, workers=1)
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
+    assert main(['train', '--config', str(tmp_path / 'r.yaml'), '--out',
+                 str(tmp_path / 'm.safetensors')]) == 1
+    assert cause in capsys.readouterr().err and not (tmp_path / 'm.safetensors').exists()
 
 
 def test_an_imu_hole_is_named_offline_as_the_node_treats_it(euroc, tmp_path, capsys):

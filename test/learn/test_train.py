@@ -245,21 +245,3 @@ def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path, capsys, monkeypa
     assert main(['train', '--config', str(CONFIG), '--out', str(tmp_path / 'm.safetensors')]) \
         == 130
     assert capsys.readouterr().err.strip() == 'denoise-imu train: interrupted'
-
-
-def test_train_refuses_an_accelerometer_in_g_and_a_gyro_in_deg_per_s(tmp_path):
-    """Issue 20, case 7, for train: named before a training spends minutes on it."""
-    from helpers import write_asl
-    for name, columns, factor, cause in (('g', (4, 5, 6), 1 / 9.81, 'accelerometer in g?'),
-                                         ('deg', (1, 2, 3), 180 / np.pi, 'gyro in deg/s?')):
-        csv = write_asl(tmp_path / name, n_imu=2400) / 'mav0' / 'imu0' / 'data.csv'
-        lines = csv.read_text().splitlines()
-        rows = [line.split(',') for line in lines[1:]]
-        for row in rows:
-            for c in columns:
-                row[c] = repr(float(row[c]) * factor)
-        csv.write_text('\n'.join([lines[0]] + [','.join(r) for r in rows]) + '\n')
-        cfg = load_config(CONFIG, data=str(tmp_path), sequences=[name], window=1024, steps=2,
-                          val_every=1, restart_period=2, swa_start=1, workers=1)
-        with pytest.raises(DatasetError, match=cause.replace('?', r'\?')):
-            train(cfg, progress=False)
