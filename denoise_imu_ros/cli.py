@@ -108,11 +108,13 @@ def _crossval(args: argparse.Namespace) -> None:
     from .evaluation.crossval import crossval
     from .evaluation.reports import crossval_table
     report = crossval(args.config, args.folds, args.out, progress=not args.quiet,
-                      only_fold=args.fold, seed=args.seed, data=args.data, steps=args.steps,
-                      workers=args.workers, device=args.device)
+                      only_fold=args.fold, seeds=args.seeds, seed=args.seed, data=args.data,
+                      steps=args.steps, workers=args.workers, device=args.device)
     if report is None:
-        print(f'trained fold {args.fold} into {args.out}/fold{args.fold}/; crossval without '
-              '--fold scores every fold (training the missing ones)')
+        where = (f'{args.out}/fold{args.fold}/' if args.seeds is None else ', '.join(
+            f'{args.out}/seed{s}/fold{args.fold}/' for s in args.seeds))
+        print(f'trained fold {args.fold} into {where}; crossval without --fold scores every '
+              'fold (training the missing ones)')
         return
     sys.stdout.write(crossval_table(report))
     for path in args.attach or []:
@@ -266,7 +268,11 @@ def build_parser() -> argparse.ArgumentParser:
                    '(folds trained there already are scored, not trained again)')
     p.add_argument('--fold', type=int, help='train this fold alone (0-based) into --out, '
                    'e.g. one per process')
-    p.add_argument('--seed', type=int, help='overrides the recipe seed')
+    seed = p.add_mutually_exclusive_group()
+    seed.add_argument('--seed', type=int, help='overrides the recipe seed')
+    seed.add_argument('--seeds', type=int, nargs='+', metavar='SEED',
+                      help='train every fold once per seed (into OUT/seed<s>/) and score '
+                      'the mean of their corrected gyros: the verdict of the ensemble')
     p.add_argument('--data', help='overrides the recipe data folder')
     p.add_argument('--steps', type=int, help='overrides the recipe step count')
     p.add_argument('--workers', type=int, help='overrides the recipe worker count')
@@ -381,19 +387,21 @@ OPTION_RANGES = {
     'wait': (0.0, 3600.0, True),  # s
     'max_offset': (0.0, 60.0, False),  # s
     'seed': (0, 2**32 - 1, True),  # numpy's and torch's seed range
+    'seeds': (0, 2**32 - 1, True),
 }
 
 
 def _check_options(args: argparse.Namespace) -> None:
     for name, (low, high, low_allowed) in OPTION_RANGES.items():
-        value = getattr(args, name, None)
-        if value is None or (math.isfinite(value) and value <= high
-                             and (low < value or low_allowed and value == low)):
-            continue
-        bound = f'{low:g} or more' if low_allowed else f'above {low:g}'
-        limit = '' if high == math.inf else f' and at most {high:g}'
-        raise OptionError(f'--{name.replace("_", "-")} {value:g}: must be a number {bound}'
-                          f'{limit}')
+        given = getattr(args, name, None)
+        for value in given if isinstance(given, list) else [given]:
+            if value is None or (math.isfinite(value) and value <= high
+                                 and (low < value or low_allowed and value == low)):
+                continue
+            bound = f'{low:g} or more' if low_allowed else f'above {low:g}'
+            limit = '' if high == math.inf else f' and at most {high:g}'
+            raise OptionError(f'--{name.replace("_", "-")} {value:g}: must be a number '
+                              f'{bound}{limit}')
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -54,7 +54,7 @@ def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:
 
 def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
              progress: bool = True, only_fold: int | None = None,
-             **overrides: Any) -> dict[str, Any] | None:
+             seeds: list[int] | None = None, **overrides: Any) -> dict[str, Any] | None:
     """
     Train and score every fold of the recipe at ``config``; return the report.
 
@@ -63,9 +63,18 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     a fold whose two models are there already, trained by this recipe, is scored without
     training again, so a stopped run resumes. ``only_fold`` trains that fold alone and
     returns None (separate processes can share the folds of one ``out``).
+
+    ``seeds`` trains every fold once per seed (into ``out/seed<s>/fold<i>/``) and scores
+    each held-out recording with the mean of the seeds' corrected gyros: the verdict of
+    the ensemble ``denoise-imu ensemble`` would ship, with each seed's own figures beside
+    it (``per_seed``) for the spread.
     """
+    if seeds is not None and (not seeds or len(set(seeds)) != len(seeds)):
+        raise TrainingError(f'--seeds must list distinct seeds, got {seeds}')
     recipe = load_config(config, **overrides)
+    runs = [None] if seeds is None else list(seeds)
     per_recording: dict[str, dict[str, dict[str, float]]] = {}
+    per_seed: dict[int, dict[str, dict[str, dict[str, float]]]] = {s: {} for s in runs}
     fold_list = folds(recipe.sequences, k)
     if only_fold is not None and not (out is not None and 0 <= only_fold < len(fold_list)):
         raise TrainingError(f'--fold {only_fold}: needs --out and a fold from 0 to '
@@ -74,36 +83,55 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
         if only_fold is not None and i != only_fold:
             continue
         train_on = [s for s in recipe.sequences if s not in held_out]
-        cfg = load_config(config, **overrides, sequences=train_on)
-        calib_cfg = load_config(config, **overrides, sequences=train_on, calibration_only=True)
-        kept = _trained_fold(out / f'fold{i}', cfg, calib_cfg) if out is not None else None
-        if kept is not None:
-            print(f'fold {i + 1}/{len(fold_list)}: its models are in {out / f"fold{i}"}',
-                  file=sys.stderr)
-            net_model, calib_model = kept
-        else:
-            print(f'fold {i + 1}/{len(fold_list)}: training on {", ".join(train_on)}',
-                  file=sys.stderr)
-            net, calib = train(cfg, progress=progress), train(calib_cfg, progress=False)
-            if out is not None:
-                net.save(out / f'fold{i}' / 'network.safetensors')
-                calib.save(out / f'fold{i}' / 'calibrated.safetensors')
-            net_model, calib_model = net.model, calib.model
+        models = []
+        for seed in runs:
+            keys = dict(overrides, sequences=train_on, **({} if seed is None else {'seed': seed}))
+            folder = None if out is None else (
+                out / f'fold{i}' if seed is None else out / f'seed{seed}' / f'fold{i}')
+            models.append(_fold_models(folder, load_config(config, **keys),
+                                       load_config(config, **keys, calibration_only=True),
+                                       f'fold {i + 1}/{len(fold_list)}'
+                                       + ('' if seed is None else f', seed {seed}'), progress))
         if only_fold is not None:
             return None
+        cfg = load_config(config, **overrides, sequences=train_on)
         for name in held_out:
             seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
-                                cfg.max_gt_gap_s, min_samples=net_model.receptive_field,
+                                cfg.max_gt_gap_s, min_samples=models[0][0].receptive_field,
                                 align_poses=cfg.align)
-            gyros = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib_model, seq.imu),
-                     'network': correct_gyro(net_model, seq.imu)}
-            per_recording[name] = {m: score(seq, g) for m, g in gyros.items()}
+            raw = score(seq, seq.imu[:, :3])
+            gyros = [{'calibrated': correct_gyro(calib, seq.imu),
+                      'network': correct_gyro(net, seq.imu)} for net, calib in models]
+            per_recording[name] = {'raw': raw, **{
+                m: score(seq, np.mean([g[m] for g in gyros], axis=0))
+                for m in ('calibrated', 'network')}}
+            if seeds is not None:
+                for seed, g in zip(runs, gyros):
+                    per_seed[seed][name] = {'raw': raw, **{m: score(seq, g[m]) for m in g}}
     report = summarize(per_recording)
-    report.update(recipe=str(config), folds=fold_list, seed=recipe.seed, steps=recipe.steps)
+    report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
+                  **({'seed': recipe.seed} if seeds is None else {
+                      'seeds': runs, 'per_seed': {str(s): summarize(r)
+                                                  for s, r in per_seed.items()}}))
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
         write_text(out / 'crossval.json', jsonio.dumps(report, indent=2))
     return report
+
+
+def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
+                 progress: bool) -> tuple[Any, Any]:
+    """Return a fold's network and calibration: from ``folder`` if there, else trained."""
+    kept = _trained_fold(folder, cfg, calib_cfg) if folder is not None else None
+    if kept is not None:
+        print(f'{label}: its models are in {folder}', file=sys.stderr)
+        return kept
+    print(f'{label}: training on {", ".join(cfg.sequences)}', file=sys.stderr)
+    net, calib = train(cfg, progress=progress), train(calib_cfg, progress=False)
+    if folder is not None:
+        net.save(folder / 'network.safetensors')
+        calib.save(folder / 'calibrated.safetensors')
+    return net.model, calib.model
 
 
 def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any) -> tuple[Any, Any] | None:

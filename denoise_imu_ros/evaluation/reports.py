@@ -54,6 +54,12 @@ def crossval_table(report: dict[str, Any]) -> str:
                      + f' | **{avg["aoe_deg"]:.2f}/{avg["aoe_yaw_deg"]:.2f}** |\n')
     lines.append(f'\nUnseen recordings (leave-out folds), AOE 3-D / yaw in degrees. '
                  f'Verdict: {report["verdict"]}.\n')
+    if 'per_seed' in report:
+        alone = [f'seed {s} {r["mean"]["network"]["aoe_deg"]:.2f}'
+                 for s, r in report['per_seed'].items()]
+        lines.append(f'\nThe network rows average the corrected gyros of seeds '
+                     f'{", ".join(map(str, report["seeds"]))} (the ensemble); each seed '
+                     f'alone, mean AOE: {", ".join(alone)}.\n')
     return ''.join(lines)
 
 

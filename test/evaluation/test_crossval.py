@@ -115,3 +115,40 @@ def test_held_out_recordings_are_aligned_like_the_training_ones(tmp_path):
         for method, scores in figures.items():
             assert reports['marker'][name][method]['aoe_deg'] == pytest.approx(
                 scores['aoe_deg'], rel=1e-3, abs=1e-4)
+
+
+def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
+    from denoise_imu_ros.core.metrics import score
+    from denoise_imu_ros.data.load import load_sequence
+    from denoise_imu_ros.learn.model import correct_gyro, merge
+    data = tmp_path / 'data'
+    for i, bias in enumerate((0.010, 0.012)):
+        write_asl(data / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=bias)
+    recipe = {'dataset': 'synthetic', 'data': str(data), 'sequences': ['rec0', 'rec1'],
+              'window': 1024, 'steps': 10, 'val_every': 10, 'restart_period': 10,
+              'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1}
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
+    out, args = tmp_path / 'cv', ['crossval', '--config', str(tmp_path / 'r.yaml'), '--quiet']
+    # one process per fold trains that fold for every seed listed
+    assert main(args + ['--out', str(out), '--fold', '1', '--seeds', '3', '5']) == 0
+    assert {p.parent.parent.name for p in out.glob('seed*/fold1/network.safetensors')} == {
+        'seed3', 'seed5'}
+    assert main(args + ['--out', str(out), '--seeds', '3', '5']) == 0
+    report = json.loads((out / 'crossval.json').read_text())
+    assert report['seeds'] == [3, 5] and set(report['per_seed']) == {'3', '5'}
+    assert 'seed 3 ' in capsys.readouterr().out
+    seq = load_sequence(data / 'rec0')
+    nets = [load_model(out / f'seed{s}' / 'fold0' / 'network.safetensors') for s in (3, 5)]
+    assert [n.meta['train_config']['seed'] for n in nets] == [3, 5]
+    assert nets[0].meta['train_sequences'] == ['rec1']
+    # the ensemble row is what `denoise-imu ensemble` of the fold's two seeds would score
+    ensemble = score(seq, correct_gyro(merge([n.model for n in nets]), seq.imu))
+    assert report['recordings']['rec0']['network']['aoe_deg'] == pytest.approx(
+        ensemble['aoe_deg'], rel=1e-4)
+    for s, net in zip(('3', '5'), nets):
+        assert report['per_seed'][s]['recordings']['rec0']['network']['aoe_deg'] == (
+            pytest.approx(score(seq, correct_gyro(net.model, seq.imu))['aoe_deg'], rel=1e-6))
+    assert report['recordings']['rec0']['network'] != report['per_seed']['3']['recordings'][
+        'rec0']['network']
+    assert main(args + ['--seeds', '3', '3']) == 1
+    assert '--seeds must list distinct seeds' in capsys.readouterr().err
