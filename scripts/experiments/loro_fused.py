@@ -15,7 +15,9 @@
 Open-loop and fused scores of cross-validation folds on the recordings they never saw.
 
 For each fold that ``denoise-imu crossval --out DIR`` wrote (``DIR/fold<i>/network`` and
-``calibrated``), the filters' settings are chosen on that fold's own training
+``calibrated``; with ``--seeds``, the ensemble of the fold's networks of every seed,
+written to ``DIR/ensemble/fold<i>/``, and the first seed's calibration), the filters'
+settings are chosen on that fold's own training
 recordings' validation tails (``tune-fusion --attach``, never on the held-out one), then
 ``eval`` scores the held-out recordings. Prints one Markdown table: open loop (raw,
 calibrated, network) and fused (raw, calibrated and network + VQF, calibrated +
@@ -47,6 +49,16 @@ def main() -> None:
     for i, held_out in enumerate(report['folds']):
         fold = args.crossval_dir / f'fold{i}'
         net, calib = fold / 'network.safetensors', fold / 'calibrated.safetensors'
+        if 'seeds' in report:
+            seeds = [args.crossval_dir / f'seed{s}' / f'fold{i}' for s in report['seeds']]
+            fold = args.crossval_dir / 'ensemble' / f'fold{i}'
+            net, calib = fold / 'network.safetensors', fold / 'calibrated.safetensors'
+            if not net.exists():
+                fold.mkdir(parents=True, exist_ok=True)
+                subprocess.run(cli + ['ensemble', '--out', str(net)] + [
+                    str(d / 'network.safetensors') for d in seeds], check=True,
+                    stdout=subprocess.DEVNULL)
+                calib.write_bytes((seeds[0] / 'calibrated.safetensors').read_bytes())
         if not (fold / 'tuned').exists():
             subprocess.run(cli + ['tune-fusion', '--model', str(net), '--baseline', str(calib),
                                   '--data', args.data, '--attach', '--quiet'], check=True,
