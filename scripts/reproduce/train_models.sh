@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Train the shipped models and their seed repeats (the figures in the README), the EuRoC
-# ensemble of the seeds, and the cross-recording reports of both recipes.
+# and TUM-VI ensembles of the seeds, the cross-recording reports of the recipes and the
+# filter settings.
 #   scripts/reproduce/train_models.sh OUT_DIR [SEEDS...]    (EuRoC seeds, default: 0 1 2 3 4)
-#   TUMVI_SEEDS="0 1" scripts/reproduce/train_models.sh ... (TUM-VI seeds, default: 0)
+#   TUMVI_SEEDS="0 1" scripts/reproduce/train_models.sh ... (TUM-VI seeds, default: 0 1 2 3 7)
+#   TUMVI_CV_SEEDS="0 1" ...                                (its crossval seeds, default: 0 1)
 # Each run writes OUT_DIR/<name>.safetensors and OUT_DIR/<name>.log. Runs one after the
 # other: a run uses both cores (or the GPU: train picks cuda when torch sees one).
 set -euo pipefail
@@ -24,23 +26,31 @@ run euroc_calibrated --config config/train_euroc.yaml --calibration-only
 run tumvi_calibrated --config config/train_tumvi.yaml --calibration-only
 first=${seeds[0]%% *}
 run "euroc_s$first" --config config/train_euroc.yaml --seed "$first"
-for seed in ${TUMVI_SEEDS:-0}; do
-  run "tumvi_s$seed" --config config/train_tumvi.yaml --seed "$seed"
+for seed in ${TUMVI_SEEDS:-0 1 2 3 7}; do
+  run "tumvi_s$seed" --config config/train_tumvi_family.yaml --seed "$seed"
 done
 for seed in ${seeds[@]}; do
   run "euroc_s$seed" --config config/train_euroc.yaml --seed "$seed"
 done
 [ -f "$out/euroc_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble \
   "$out"/euroc_s[0-9].safetensors --out "$out/euroc_ensemble.safetensors"
-crossval() {  # name, recipe, folds, models to attach the report to...
-  local name=$1 recipe=$2 folds=$3; shift 3
+[ -f "$out/tumvi_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble \
+  "$out"/tumvi_s[0-9].safetensors --out "$out/tumvi_ensemble.safetensors"
+crossval() {  # name, recipe, folds, seeds ("" for the recipe's), models to attach to...
+  local name=$1 recipe=$2 folds=$3 seeds=$4; shift 4
   [ -f "$out/$name/crossval.json" ] && { echo "skip $name (exists)"; return; }
   echo "$(date -u +%H:%M:%S) $name"
   "$bin/denoise-imu" crossval --config "$recipe" --folds "$folds" --out "$out/$name" \
-    --quiet --attach "$@" > "$out/$name.log" 2>&1
+    ${seeds:+--seeds $seeds} --quiet --attach "$@" > "$out/$name.log" 2>&1
   tail -n 1 "$out/$name.log"
 }
-crossval crossval_euroc config/train_euroc.yaml 6 "$out/euroc_ensemble.safetensors" \
+crossval crossval_euroc config/train_euroc.yaml 6 "" "$out/euroc_ensemble.safetensors" \
   "$out/euroc_calibrated.safetensors"
-crossval crossval_tumvi config/train_tumvi.yaml 3 "$out"/tumvi_s*.safetensors \
-  "$out/tumvi_calibrated.safetensors"
+# tumvi_calibrated is the reference recipe's calibration: its report is that recipe's
+crossval crossval_tumvi config/train_tumvi.yaml 3 "" "$out/tumvi_calibrated.safetensors"
+crossval crossval_tumvi_family config/train_tumvi_family.yaml 3 "${TUMVI_CV_SEEDS:-0 1}" \
+  "$out/tumvi_ensemble.safetensors"
+for ds in euroc tumvi; do  # the filter settings, chosen on the training recordings' tails
+  "$bin/denoise-imu" tune-fusion --model "$out/${ds}_ensemble.safetensors" \
+    --baseline "$out/${ds}_calibrated.safetensors" --attach --quiet > "$out/tune_$ds.log"
+done

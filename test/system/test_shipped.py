@@ -43,12 +43,13 @@ def test_shipped_euroc_model_beats_raw_and_calibrated_on_the_shipped_test_sample
         'tilt_growth_deg_min']
 
 
-def test_shipped_euroc_files_store_filter_settings_chosen_on_training_recordings():
-    for name in ('euroc', 'euroc_calibrated'):
-        fusion = read_model_file(name).meta['fusion']
-        assert fusion['chosen_on'].startswith('validation tails of MH_01_easy')
-        assert fusion['settings']['bias_estimation'] is False
-        assert len(fusion['orientation_std_rad']) == 3
+@pytest.mark.parametrize('name', ['euroc', 'tumvi', 'euroc_calibrated', 'tumvi_calibrated'])
+def test_shipped_files_store_filter_settings_chosen_on_training_recordings(name):
+    meta = read_model_file(name).meta
+    fusion = meta['fusion']
+    assert fusion['chosen_on'].startswith(f'validation tails of {meta["train_sequences"][0]}')
+    assert fusion['settings']['bias_estimation'] is False
+    assert len(fusion['orientation_std_rad']) == 3
 
 
 def test_shipped_model_streams_the_whole_sample_exactly():
@@ -77,3 +78,13 @@ def test_shipped_euroc_is_the_ensemble_of_five_trainings():
     loaded = load_model('euroc')
     assert loaded.model.config.members == 5
     assert sorted(m['seed'] for m in loaded.meta['members']) == [0, 1, 2, 3, 4]
+
+
+def test_shipped_tumvi_is_the_ensemble_of_five_family_trainings_and_its_folds_verdict():
+    loaded = load_model('tumvi')
+    assert loaded.model.config.members == 5
+    assert sorted(m['seed'] for m in loaded.meta['members']) == [0, 1, 2, 3, 7]
+    assert loaded.meta['train_config']['increments'] == [16, 32, 64, 128]
+    report = loaded.meta['crossval']  # the folds' ensembles of seeds, as what ships
+    assert report['recipe'].endswith('train_tumvi_family.yaml')
+    assert report['seeds'] == [0, 1] and set(report['per_seed']) == {'0', '1'}
