@@ -21,7 +21,8 @@ largest difference between each step's output over the whole sequence and the ba
 output, and the engine's floor: the same matrix-vector products alone (numpy's BLAS,
 back to back on preallocated vectors), with each step's cost over it. With --members K,
 the same for an ensemble of K networks (the model's weights K times over: the cost does
-not depend on the weights), timed in the same run.
+not depend on the weights), timed in the same run; an ensemble file (the shipped
+``euroc``, ``tumvi``) is timed as it is.
 Run: .venv/bin/python bench/streaming.py [--model euroc] [--sequence V1_01_easy]
      [--members 5]
 """
@@ -65,7 +66,10 @@ def main():
             window_costs.append(time.perf_counter() - t)
     print(f'window recompute : median {np.median(window_costs) * 1e6:7.1f} us  '
           f'p99 {np.percentile(window_costs, 99) * 1e6:7.1f} us per sample (torch, 1 thread)')
-    nets = [('one network', model)]
+    given = model.config.members
+    nets = [('one network' if given == 1 else f'the model ({given} networks)', model)]
+    if args.members > 1 and given > 1:
+        parser.error(f'--members: {args.model} is an ensemble already; pass one network')
     if args.members > 1:
         nets.append((f'ensemble of {args.members}', merge([model] * args.members)))
     for name, net in nets:
