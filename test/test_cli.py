@@ -136,6 +136,7 @@ def test_garbage_inputs_and_bad_options_are_one_line_errors(model_file, tmp_path
                           ('--wait', 'nan')):
         cases.append((['play', str(SAMPLE), option, value], f'{option} {value}: must be'))
     cases.append((['train', '--config', 'x.yaml', '--seed', '-1'], '--seed -1: must be'))
+    cases.append((['crossval', '--config', 'x.yaml', '--seeds', '0', '-1'], '--seeds -1: must be'))
     for argv, message in cases:
         assert main(argv) == 1, argv
         err = _error(capsys)
