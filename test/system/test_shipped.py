@@ -87,4 +87,4 @@ def test_shipped_tumvi_is_the_ensemble_of_five_family_trainings_and_its_folds_ve
     assert loaded.meta['train_config']['increments'] == [16, 32, 64, 128]
     report = loaded.meta['crossval']  # the folds' ensembles of seeds, as what ships
     assert report['recipe'].endswith('train_tumvi_family.yaml')
-    assert report['seeds'] == [0, 1] and set(report['per_seed']) == {'0', '1'}
+    assert report['seeds'] == [0, 1, 2] and set(report['per_seed']) == {'0', '1', '2'}
