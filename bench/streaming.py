@@ -24,7 +24,7 @@ the same for an ensemble of K networks (the model's weights K times over: the co
 not depend on the weights), timed in the same run; an ensemble file (the shipped
 ``euroc``, ``tumvi``) is timed as it is.
 Run: .venv/bin/python bench/streaming.py [--model euroc] [--sequence V1_01_easy]
-     [--members 5]
+     or, for one network and an ensemble of it: --model <one training's file> --members 5
 """
 
 import argparse
@@ -54,6 +54,9 @@ def main():
     torch.set_num_threads(1)
     torch.set_flush_denormal(True)  # as the denoise-imu command does
     model = load_model(args.model).model
+    given = model.config.members
+    if args.members > 1 and given > 1:
+        parser.error(f'--members: {args.model} is an ensemble already; pass one network')
     imu = load_imu(DATA / args.sequence).imu
     print(f'sequence {args.sequence}: {len(imu)} samples, model {args.model}')
     rf = model.receptive_field
@@ -66,10 +69,7 @@ def main():
             window_costs.append(time.perf_counter() - t)
     print(f'window recompute : median {np.median(window_costs) * 1e6:7.1f} us  '
           f'p99 {np.percentile(window_costs, 99) * 1e6:7.1f} us per sample (torch, 1 thread)')
-    given = model.config.members
     nets = [('one network' if given == 1 else f'the model ({given} networks)', model)]
-    if args.members > 1 and given > 1:
-        parser.error(f'--members: {args.model} is an ensemble already; pass one network')
     if args.members > 1:
         nets.append((f'ensemble of {args.members}', merge([model] * args.members)))
     for name, net in nets:

@@ -67,14 +67,17 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     ``seeds`` trains every fold once per seed (into ``out/seed<s>/fold<i>/``) and scores
     each held-out recording with the mean of the seeds' corrected gyros: the verdict of
     the ensemble ``denoise-imu ensemble`` would ship, with each seed's own figures beside
-    it (``per_seed``) for the spread.
+    it (``per_seed``) for the spread. The calibration row is likewise the mean of the
+    seeds' calibrations.
     """
-    if seeds is not None and (not seeds or len(set(seeds)) != len(seeds)):
-        raise TrainingError(f'--seeds must list distinct seeds, got {seeds}')
+    if seeds is not None and (not seeds or len(set(seeds)) != len(seeds)
+                              or not all(isinstance(s, int) for s in seeds)
+                              or overrides.get('seed') is not None):
+        raise TrainingError(f'--seeds must list distinct seeds (and no --seed), got {seeds}')
     recipe = load_config(config, **overrides)
-    runs = [None] if seeds is None else list(seeds)
+    runs: list[int | None] = [None] if seeds is None else list(seeds)
     per_recording: dict[str, dict[str, dict[str, float]]] = {}
-    per_seed: dict[int, dict[str, dict[str, dict[str, float]]]] = {s: {} for s in runs}
+    per_seed: dict[int, dict[str, dict[str, dict[str, float]]]] = {s: {} for s in seeds or []}
     fold_list = folds(recipe.sequences, k)
     if only_fold is not None and not (out is not None and 0 <= only_fold < len(fold_list)):
         raise TrainingError(f'--fold {only_fold}: needs --out and a fold from 0 to '

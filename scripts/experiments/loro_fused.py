@@ -55,10 +55,13 @@ def main() -> None:
             net, calib = fold / 'network.safetensors', fold / 'calibrated.safetensors'
             if not net.exists():
                 fold.mkdir(parents=True, exist_ok=True)
-                subprocess.run(cli + ['ensemble', '--out', str(net)] + [
-                    str(d / 'network.safetensors') for d in seeds], check=True,
-                    stdout=subprocess.DEVNULL)
                 calib.write_bytes((seeds[0] / 'calibrated.safetensors').read_bytes())
+                if len(seeds) == 1:
+                    net.write_bytes((seeds[0] / 'network.safetensors').read_bytes())
+                else:
+                    subprocess.run(cli + ['ensemble', '--out', str(net)] + [
+                        str(d / 'network.safetensors') for d in seeds], check=True,
+                        stdout=subprocess.DEVNULL)
         if not (fold / 'tuned').exists():
             subprocess.run(cli + ['tune-fusion', '--model', str(net), '--baseline', str(calib),
                                   '--data', args.data, '--attach', '--quiet'], check=True,

@@ -18,12 +18,12 @@ for m in "$runs"/euroc_s*.safetensors "$runs"/euroc_s*.candidates/*.safetensors;
   ev "$m" "${m%.safetensors}.eval" --baseline euroc_calibrated \
     --data "$data/euroc" --sequences "${euroc_test[@]}" --no-plots
 done
-for m in "$runs"/tumvi_s*.safetensors "$runs"/tumvi_s*.candidates/*.safetensors; do
+for m in "$runs"/tumvi_family_s*.safetensors "$runs"/tumvi_family_s*.candidates/*.safetensors; do
   [ -f "$m" ] || continue
   ev "$m" "${m%.safetensors}.eval" --baseline tumvi_calibrated \
     --data "$data/tumvi" --sequences "${tumvi_rooms[@]}" --start-sample 16032 --no-plots
 done
-for ds in euroc tumvi; do
+for ds in euroc tumvi_family; do
   for kind in "" ".candidates/best_checkpoint" ".candidates/swa"; do
     dirs=("$runs"/${ds}_s[0-9]${kind}.eval)
     [ -d "${dirs[0]}" ] || continue

@@ -5,6 +5,7 @@
 #   scripts/reproduce/train_models.sh OUT_DIR [SEEDS...]    (EuRoC seeds, default: 0 1 2 3 4)
 #   TUMVI_SEEDS="0 1" scripts/reproduce/train_models.sh ... (TUM-VI seeds, default: 0 1 2 3 7)
 #   TUMVI_CV_SEEDS="0 1" ...                                (its crossval seeds, default: 0 1 2)
+#   DATA=DIR ...                                            (the data, default ../shared/data)
 # Each run writes OUT_DIR/<name>.safetensors and OUT_DIR/<name>.log. Runs one after the
 # other: a run uses both cores (or the GPU: train picks cuda when torch sees one).
 set -euo pipefail
@@ -26,22 +27,24 @@ run euroc_calibrated --config config/train_euroc.yaml --calibration-only
 run tumvi_calibrated --config config/train_tumvi.yaml --calibration-only
 first=${seeds[0]%% *}
 run "euroc_s$first" --config config/train_euroc.yaml --seed "$first"
+family=()
 for seed in ${TUMVI_SEEDS:-0 1 2 3 7}; do
-  run "tumvi_s$seed" --config config/train_tumvi_family.yaml --seed "$seed"
+  run "tumvi_family_s$seed" --config config/train_tumvi_family.yaml --seed "$seed"
+  family+=("$out/tumvi_family_s$seed.safetensors")
 done
 for seed in ${seeds[@]}; do
   run "euroc_s$seed" --config config/train_euroc.yaml --seed "$seed"
 done
 [ -f "$out/euroc_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble \
   "$out"/euroc_s[0-9].safetensors --out "$out/euroc_ensemble.safetensors"
-[ -f "$out/tumvi_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble \
-  "$out"/tumvi_s[0-9].safetensors --out "$out/tumvi_ensemble.safetensors"
+[ -f "$out/tumvi_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble "${family[@]}" \
+  --out "$out/tumvi_ensemble.safetensors"  # two seeds at least
 crossval() {  # name, recipe, folds, seeds ("" for the recipe's), models to attach to...
-  local name=$1 recipe=$2 folds=$3 seeds=$4; shift 4
+  local name=$1 recipe=$2 folds=$3 cv_seeds=$4; shift 4
   [ -f "$out/$name/crossval.json" ] && { echo "skip $name (exists)"; return; }
   echo "$(date -u +%H:%M:%S) $name"
   "$bin/denoise-imu" crossval --config "$recipe" --folds "$folds" --out "$out/$name" \
-    ${seeds:+--seeds $seeds} --quiet --attach "$@" > "$out/$name.log" 2>&1
+    ${cv_seeds:+--seeds $cv_seeds} --quiet --attach "$@" > "$out/$name.log" 2>&1
   tail -n 1 "$out/$name.log"
 }
 crossval crossval_euroc config/train_euroc.yaml 6 "" "$out/euroc_ensemble.safetensors" \
@@ -51,6 +54,9 @@ crossval crossval_tumvi config/train_tumvi.yaml 3 "" "$out/tumvi_calibrated.safe
 crossval crossval_tumvi_family config/train_tumvi_family.yaml 3 "${TUMVI_CV_SEEDS:-0 1 2}" \
   "$out/tumvi_ensemble.safetensors"
 for ds in euroc tumvi; do  # the filter settings, chosen on the training recordings' tails
+  [ -f "$out/tune_$ds.log" ] && { echo "skip tune_$ds (exists)"; continue; }
   "$bin/denoise-imu" tune-fusion --model "$out/${ds}_ensemble.safetensors" \
-    --baseline "$out/${ds}_calibrated.safetensors" --attach --quiet > "$out/tune_$ds.log"
+    --baseline "$out/${ds}_calibrated.safetensors" --data "${DATA:-../shared/data}/$ds" \
+    --attach --quiet > "$out/tune_$ds.log.part" 2>&1
+  mv "$out/tune_$ds.log.part" "$out/tune_$ds.log"
 done

@@ -133,10 +133,13 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     assert main(args + ['--out', str(out), '--fold', '1', '--seeds', '3', '5']) == 0
     assert {p.parent.parent.name for p in out.glob('seed*/fold1/network.safetensors')} == {
         'seed3', 'seed5'}
+    assert 'seed3/fold1/, ' in capsys.readouterr().out
     assert main(args + ['--out', str(out), '--seeds', '3', '5']) == 0
     report = json.loads((out / 'crossval.json').read_text())
     assert report['seeds'] == [3, 5] and set(report['per_seed']) == {'3', '5'}
-    assert 'seed 3 ' in capsys.readouterr().out
+    printed = capsys.readouterr()
+    assert 'seed 3 ' in printed.out
+    assert 'fold 2/2, seed 5: its models are in' in printed.err  # resumed, not retrained
     seq = load_sequence(data / 'rec0')
     nets = [load_model(out / f'seed{s}' / 'fold0' / 'network.safetensors') for s in (3, 5)]
     assert [n.meta['train_config']['seed'] for n in nets] == [3, 5]
