@@ -139,11 +139,12 @@ def check_gyro_against_poses(gyro: np.ndarray, gt_quat: np.ndarray, gt_valid: np
     against the poses' own, over trusted samples (the norm: any frame, any clock offset;
     the poses' noise only raises theirs).
     """
+    from scipy.spatial.transform import Rotation  # offline only: the node imports limits
     ok = gt_valid[:-1] & gt_valid[1:]
     if ok.sum() < 2:
         return
     step = multiply_arrays(conjugate_arrays(gt_quat[:-1]), gt_quat[1:])[ok]
-    angle = 2 * np.arctan2(np.linalg.norm(step[:, :3], axis=1), np.abs(step[:, 3]))
+    angle = Rotation.from_quat(step).magnitude()
     pose_rms = float(np.sqrt(np.mean((angle / dt[ok]) ** 2)))
     gyro_rms = float(np.sqrt(np.mean(np.sum(gyro[:-1][ok] ** 2, axis=1))))
     if pose_rms > 0 and gyro_rms / pose_rms > GYRO_SCALE_LIMIT:

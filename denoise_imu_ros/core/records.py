@@ -67,11 +67,11 @@ class Sequence:
         """(N - 1,) s: sample k drives the attitude from stamp k to stamp k + 1."""
         return np.diff(self.stamp_ns).astype(np.float64) * 1e-9
 
-    def tail(self, start: int) -> Sequence:
-        """Return the samples from index ``start`` on."""
-        return Sequence(self.name, self.stamp_ns[start:], self.imu[start:],
-                        self.gt_quat[start:], self.gt_pos[start:], self.gt_valid[start:],
-                        self.pose_alignment)
+    def tail(self, start: int, length: int | None = None) -> Sequence:
+        """Return the samples from index ``start`` on (``length`` of them when given)."""
+        part = slice(start, None if length is None else start + length)
+        return Sequence(self.name, self.stamp_ns[part], self.imu[part], self.gt_quat[part],
+                        self.gt_pos[part], self.gt_valid[part], self.pose_alignment)
 
     @property
     def rate_hz(self) -> float:

@@ -97,11 +97,10 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                        + ('' if seed is None else f', seed {seed}'), progress))
         if only_fold is not None:
             return None
-        cfg = load_config(config, **overrides, sequences=train_on)
-        for name in held_out:
-            seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
-                                cfg.max_gt_gap_s, min_samples=models[0][0].receptive_field,
-                                align_poses=cfg.align)
+        for name in held_out:  # read as the recipe reads its recordings
+            seq = load_sequence(Path(recipe.data) / name, recipe.imu_topic, recipe.pose_topic,
+                                recipe.max_gt_gap_s, min_samples=models[0][0].receptive_field,
+                                align_poses=recipe.align)
             raw = score(seq, seq.imu[:, :3])
             gyros = [{'calibrated': correct_gyro(calib, seq.imu),
                       'network': correct_gyro(net, seq.imu)} for net, calib in models]

@@ -41,9 +41,7 @@ def segment_aoe(seq, gyro: np.ndarray, start: int, length: int) -> float:
     """Mean AOE (deg) of the integrals over consecutive ``length``-sample segments."""
     scores = []
     for a in range(start, len(seq) - length + 1, length):
-        part = seq.tail(a)
-        part = type(seq)(seq.name, part.stamp_ns[:length], part.imu[:length],
-                         part.gt_quat[:length], part.gt_pos[:length], part.gt_valid[:length])
+        part = seq.tail(a, length)
         if part.gt_valid.mean() < MIN_TRUSTED or not part.gt_valid[0]:
             continue
         scores.append(sequence_errors(part, gyro[a:a + length], distances=())[1].aoe)
