@@ -43,11 +43,12 @@ from ..core.rotation import from_gravity
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..learn.model import correct_gyro
-from ..runtime.fusion import fuse, FusionSettings, settings_of
+from ..runtime.fusion import fuse, FusionSettings, MAX_ACCEL_BIAS_M_S2, settings_of
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
 MADGWICK_GAINS = (0.001, 0.003, 0.01, 0.033, 0.1, 0.3)     # ahrs's default: 0.033
+NO_BIAS = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -58,43 +59,56 @@ class Filter:
     tau_acc_s: float = 3.0
     bias_estimation: bool = False
     gain: float = 0.0
+    accel_bias_m_s2: tuple[float, float, float] = NO_BIAS  # removed before the filter
 
     @property
     def label(self) -> str:
         """Name in tables and model files."""
+        removed = ', accel bias removed' if any(self.accel_bias_m_s2) else ''
         if self.kind == 'vqf':
             return (f'vqf tau_acc {self.tau_acc_s:g} s, bias estimation '
-                    f'{"on" if self.bias_estimation else "off"}')
-        return f'{self.kind} gain {self.gain:g}'
+                    f'{"on" if self.bias_estimation else "off"}{removed}')
+        return f'{self.kind} gain {self.gain:g}{removed}'
+
+    @property
+    def settings(self) -> FusionSettings:
+        """Return the filter's VQF settings, checked (model files are user input)."""
+        return FusionSettings(self.tau_acc_s, self.bias_estimation, self.accel_bias_m_s2)
 
     def as_dict(self) -> dict[str, Any]:
         """Return what a model file stores of it."""
         if self.kind == 'vqf':
-            return {'filter': 'vqf', 'settings': FusionSettings(
-                self.tau_acc_s, self.bias_estimation).as_dict()}
-        return {'filter': self.kind, 'gain': self.gain}
+            return {'filter': 'vqf', 'settings': self.settings.as_dict()}
+        return {'filter': self.kind, 'gain': self.gain,
+                'accel_bias_m_s2': list(self.accel_bias_m_s2)}
 
     @classmethod
     def from_dict(cls, stored: dict[str, Any]) -> Filter:
         """Rebuild a filter from :meth:`as_dict`'s mapping."""
         if stored.get('filter', 'vqf') == 'vqf':
             settings = FusionSettings(**stored.get('settings', {}))
-            return cls('vqf', settings.tau_acc_s, settings.bias_estimation)
-        return cls(stored['filter'], gain=float(stored['gain']))
+            return cls('vqf', settings.tau_acc_s, settings.bias_estimation,
+                       accel_bias_m_s2=settings.accel_bias_m_s2)
+        bias = FusionSettings(accel_bias_m_s2=stored.get('accel_bias_m_s2', NO_BIAS))
+        return cls(stored['filter'], gain=float(stored['gain']),
+                   accel_bias_m_s2=bias.accel_bias_m_s2)
 
 
-def grid(kind: str) -> list[Filter]:
-    """Every setting tried for a filter."""
+def grid(kind: str, accel_bias: tuple[float, float, float] | None = None) -> list[Filter]:
+    """Every setting tried for a filter, each with and without a fitted accelerometer bias."""
+    biases = [NO_BIAS] + ([tuple(accel_bias)] if accel_bias is not None else [])
     if kind == 'vqf':
-        return [Filter('vqf', tau, bias) for bias in (False, True) for tau in TAU_ACC_GRID_S]
+        return [Filter('vqf', tau, est, accel_bias_m_s2=b)
+                for b in biases for est in (False, True) for tau in TAU_ACC_GRID_S]
     gains = IMUFUSION_GAINS if kind == 'imufusion' else MADGWICK_GAINS
-    return [Filter(kind, gain=g) for g in gains]
+    return [Filter(kind, gain=g, accel_bias_m_s2=b) for b in biases for g in gains]
 
 
 def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float) -> np.ndarray:
     """Orientation (N, 4) xyzw at every stamp; sample k - 1's gyro drives the step to k."""
     if flt.kind == 'vqf':
-        return fuse(gyro, accel, rate_hz, FusionSettings(flt.tau_acc_s, flt.bias_estimation))
+        return fuse(gyro, accel, rate_hz, flt.settings)
+    accel = accel - np.array(flt.accel_bias_m_s2)  # as fuse does
     shifted = np.zeros((len(gyro), 3))
     shifted[1:] = gyro[:-1]
     if flt.kind == 'madgwick':
@@ -127,20 +141,57 @@ def score(seq: Sequence, quat: np.ndarray) -> FusedErrors:
                         seq.gt_valid, t)
 
 
+SMOOTHING_S = 0.2  # the poses' second derivative: a cubic fitted over this long
+
+
+def fit_accel_bias(seqs: list[Sequence], end: int) -> tuple[np.ndarray, int] | None:
+    """
+    Fit the accelerometer's constant bias (m/s^2, body frame) to the poses; its sample count.
+
+    What the accelerometer should read is the specific force R^T (p'' + g e_z), with p''
+    the poses' acceleration (a smoothed second derivative, Savitzky-Golay); the bias is
+    the median of the reading minus it over the samples before ``end`` of every sequence
+    whose smoothing window holds no ground-truth hole. Positions are taken as the IMU's
+    (a lever arm of centimetres adds only w^2 r). None when nothing is usable, or when the
+    fit is out of any IMU's range: poses whose world z does not point up, or wrong units.
+    """
+    from scipy.ndimage import binary_erosion
+    from scipy.signal import savgol_filter
+    residuals = []
+    for seq in seqs:
+        part = seq.tail(0, end)
+        window = 2 * int(SMOOTHING_S * part.rate_hz / 2) + 1
+        if len(part) <= window:
+            continue
+        acc = savgol_filter(part.gt_pos, window, 3, deriv=2, delta=1.0 / part.rate_hz, axis=0)
+        force = Rotation.from_quat(part.gt_quat).inv().apply(acc + [0.0, 0.0, GRAVITY_M_S2])
+        usable = binary_erosion(part.gt_valid, np.ones(window, bool), border_value=False)
+        residuals.append((part.imu[:, 3:] - force)[usable])
+    pooled = np.vstack(residuals) if residuals else np.empty((0, 3))
+    if not len(pooled):
+        return None
+    bias = np.median(pooled, axis=0)
+    if np.abs(bias).max() > MAX_ACCEL_BIAS_M_S2:
+        return None
+    return bias, len(pooled)
+
+
 def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: float,
-         kinds: dict[str, tuple[str, ...]]) -> dict[str, Any]:
+         kinds: dict[str, tuple[str, ...]],
+         accel_bias: tuple[float, float, float] | None = None) -> dict[str, Any]:
     """
     Choose every filter's settings for every gyro on the tails: the lowest mean 3-D AOE.
 
     ``gyros`` maps a source (raw, calibrated, network) to its gyro on each tail;
-    ``kinds`` the filters to tune for it. Returns, per source and filter, the chosen
+    ``kinds`` the filters to tune for it; with ``accel_bias`` every setting is tried with
+    it removed from the accelerometer too. Returns, per source and filter, the chosen
     filter, its figures (3-D, tilt, yaw; the per-axis error std) and every candidate's.
     """
     report: dict[str, Any] = {}
     for source, per_tail in gyros.items():
         for kind in kinds[source]:
             figures = {}
-            for flt in grid(kind):
+            for flt in grid(kind, accel_bias):
                 errs = [score(seq, run(flt, g, seq.imu[:, 3:], rate_hz))
                         for seq, g in zip(tails, per_tail)]
                 figures[flt] = errs
@@ -179,7 +230,7 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
         raise DatasetError(f'{net.path}: the model file does not name its training '
                            'recordings, their folder and its window (pass --data)')
     start = int(cfg['window']) + int(cfg.get('max_offset', 0))
-    tails, gyros = [], {source: [] for source in KINDS}
+    tails, seqs, gyros = [], [], {source: [] for source in KINDS}
     for name in names:
         seq = load_sequence(f'{folder}/{name}', cfg.get('imu_topic'), cfg.get('pose_topic'),
                             cfg.get('max_gt_gap_s'), align_poses=cfg.get('align', 'none'))
@@ -188,14 +239,24 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
         whole = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib.model, seq.imu),
                  'network': correct_gyro(net.model, seq.imu)}  # the tail's causal context
         tails.append(seq.tail(start))
+        seqs.append(seq)
         for source, gyro in whole.items():
             gyros[source].append(gyro[start:])
         if progress:
             print(f'tail of {name}: {len(seq) - start} samples', flush=True)
     if not tails:
         raise DatasetError(f'{net.path}: no training recording has a validation tail')
-    report = tune(tails, gyros, float(net.meta['sample_rate_hz']), KINDS)
+    fitted = fit_accel_bias(seqs, start)
+    bias = None if fitted is None else tuple(float(b) for b in fitted[0])
+    if progress:
+        print('accelerometer bias from the poses before the tails: ' + (
+            'none usable' if fitted is None else
+            f'{np.round(fitted[0], 4).tolist()} m/s^2 ({fitted[1]} samples)'), flush=True)
+    report = tune(tails, gyros, float(net.meta['sample_rate_hz']), KINDS, bias)
     return {'chosen_on': f'validation tails of {", ".join(names)} (from sample {start} on)',
+            'accel_bias': None if fitted is None else {
+                'm_s2': list(bias), 'samples': fitted[1],
+                'fitted_on': f'poses of {", ".join(names)} before sample {start}'},
             'scored': 'yaw aligned once 1.5 s into each tail, tilt never; mean over tails',
             'filters': report}
 
@@ -208,6 +269,7 @@ def attach(model_spec: str, baseline_spec: str, report: dict[str, Any]) -> None:
         add_metadata(read_model_file(spec).path, fusion=dict(
             settings=chosen['settings'], orientation_std_rad=chosen['orientation_std_rad'],
             chosen_on=report['chosen_on'], scored=report['scored'],
+            accel_bias=report.get('accel_bias'),
             **({'filters': report['filters']} if source == 'network' else {})))
 
 
@@ -219,6 +281,11 @@ def table(report: dict[str, Any]) -> str:
         lines.append(f'| {source} | {kind} | {Filter.from_dict(r).label} | {r["aoe_deg"]:.2f} '
                      f'| {r["tilt_deg"]:.2f} | {r["aoe_yaw_deg"]:.2f} |\n')
     lines.append(f'\nChosen on the {report["chosen_on"]}; {report["scored"]}; degrees.\n')
+    fitted = report.get('accel_bias')
+    lines.append('Accelerometer bias tried: ' + (
+        'none (no usable poses)' if fitted is None else
+        f'{[round(b, 4) for b in fitted["m_s2"]]} m/s^2, fitted on the {fitted["fitted_on"]} '
+        f'({fitted["samples"]} samples)') + '.\n')
     return ''.join(lines)
 
 
@@ -243,7 +310,8 @@ def eval_filters(net_meta: dict[str, Any], calib_meta: dict[str, Any] | None
 
     def own(meta: dict[str, Any]) -> Filter:  # a model file's settings for its own gyro
         settings = settings_of(meta)
-        return Filter('vqf', settings.tau_acc_s, settings.bias_estimation)
+        return Filter('vqf', settings.tau_acc_s, settings.bias_estimation,
+                      accel_bias_m_s2=settings.accel_bias_m_s2)
 
     rows = {'raw + VQF': ('raw', chosen('raw', 'vqf'))}
     if calib_meta is not None:

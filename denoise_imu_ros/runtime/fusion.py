@@ -18,7 +18,10 @@ VQF (Laidig & Seel 2023, the ``vqf`` package, C++ core) is a standard 6-D filter
 gyro carries the orientation, the low-passed accelerometer pulls its tilt back towards
 gravity with the time constant ``tau_acc_s``. Its own gyro-bias estimators are off by
 default: the network has already removed the bias it can see, and a second estimator
-chasing the same error makes the result worse (docs/results.md).
+chasing the same error makes the result worse (docs/results.md). The accelerometer's own
+constant bias, fitted on the training recordings' poses (``tune-fusion``), is removed
+before the filter sees it: a bias b tilts the estimated vertical by about |b| / g, which
+the filter cannot average away (0.7 deg for EuRoC's ADIS16448).
 
 Time convention, the package's one: gyro sample k drives the orientation from stamp k
 to stamp k + 1. So at sample k the filter first integrates sample k - 1's gyro, then
@@ -42,12 +45,16 @@ from vqf import VQF
 from ..core.errors import ModelFileError
 
 
+MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
+
+
 @dataclass(frozen=True)
 class FusionSettings:
-    """The filter's two choices; defaults are VQF's own time constant, bias estimation off."""
+    """The filter's choices; defaults are VQF's own time constant, no bias removed or estimated."""
 
     tau_acc_s: float = 3.0         # accelerometer time constant: longer trusts the gyro more
     bias_estimation: bool = False  # VQF's rest and motion gyro-bias estimators
+    accel_bias_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)  # removed before the filter
 
     def __post_init__(self) -> None:
         """Refuse settings the filter cannot run with (model files are user input)."""
@@ -57,10 +64,17 @@ class FusionSettings:
         if not isinstance(self.bias_estimation, bool):
             raise ValueError(f'bias_estimation must be true or false, not '
                              f'{self.bias_estimation!r}')
+        bias = self.accel_bias_m_s2
+        if not (isinstance(bias, (list, tuple)) and len(bias) == 3 and all(
+                isinstance(b, (int, float)) and not isinstance(b, bool) and math.isfinite(b)
+                and abs(b) <= MAX_ACCEL_BIAS_M_S2 for b in bias)):
+            raise ValueError(f'accel_bias_m_s2 must be three numbers within '
+                             f'±{MAX_ACCEL_BIAS_M_S2:g} m/s^2, not {bias!r}')
+        object.__setattr__(self, 'accel_bias_m_s2', tuple(float(b) for b in bias))
 
     def as_dict(self) -> dict[str, Any]:
         """Return the settings as stored in a model file."""
-        return asdict(self)
+        return dict(asdict(self), accel_bias_m_s2=list(self.accel_bias_m_s2))
 
 
 def settings_of(meta: dict[str, Any], path: object = 'model file') -> FusionSettings:
@@ -91,6 +105,7 @@ class GravityFilter:
     def __init__(self, rate_hz: float, settings: FusionSettings = FusionSettings()) -> None:
         self.settings = settings
         self._vqf = _vqf(rate_hz, settings)
+        self._accel_bias = np.array(settings.accel_bias_m_s2)
         self._last_gyro: np.ndarray | None = None
 
     def reset(self) -> None:
@@ -101,7 +116,7 @@ class GravityFilter:
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
         """Orientation (4,) xyzw at this sample's stamp; ``gyro`` drives the next step."""
         self._vqf.update(np.zeros(3) if self._last_gyro is None else self._last_gyro,
-                         np.ascontiguousarray(accel, dtype=np.float64))
+                         np.asarray(accel, dtype=np.float64) - self._accel_bias)
         self._last_gyro = np.array(gyro, dtype=np.float64)
         return _xyzw(self._vqf.getQuat6D())
 
@@ -112,7 +127,8 @@ def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
     shifted = np.zeros((len(gyro), 3))
     shifted[1:] = gyro[:-1]  # sample k - 1 drives the step to stamp k
     out = _vqf(rate_hz, settings).updateBatch(
-        np.ascontiguousarray(shifted), np.ascontiguousarray(accel, dtype=np.float64))
+        np.ascontiguousarray(shifted),
+        np.asarray(accel, dtype=np.float64) - np.array(settings.accel_bias_m_s2))
     return _xyzw(out['quat6D'])
 
 

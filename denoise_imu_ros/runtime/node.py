@@ -56,8 +56,9 @@ from ..core.modelfile import deployment_warning, gyro_covariance, ModelFile, rea
 
 
 def _param(description: str, read_only: bool = False, floats: tuple | None = None,
-           ints: tuple | None = None) -> ParameterDescriptor:
-    d = ParameterDescriptor(description=description, read_only=read_only)
+           ints: tuple | None = None, dynamic: bool = False) -> ParameterDescriptor:
+    d = ParameterDescriptor(description=description, read_only=read_only,
+                            dynamic_typing=dynamic)
     if floats:
         d.floating_point_range = [FloatingPointRange(from_value=floats[0], to_value=floats[1])]
     if ints:
@@ -105,8 +106,13 @@ PARAMETERS = [
         'the value the model file stores, chosen on its training recordings.',
         read_only=True, floats=(-1.0, 1000.0))),
     ('fusion_bias_estimation', 'model', _param(
-        "The filter's own gyro-bias estimation: 'model' (the model file's choice), 'on' or "
-        "'off'. On stacks a second estimator on the network's correction.", read_only=True)),
+        "The filter's own gyro-bias estimation: 'model' (the model file's choice), on or "
+        "off. On stacks a second estimator on the network's correction.", read_only=True,
+        dynamic=True)),
+    ('fusion_accel_bias', 'model', _param(
+        "The accelerometer bias removed before the filter: 'model' (the one the model file "
+        'fitted on its training poses, if it chose to) or off (none).', read_only=True,
+        dynamic=True)),
     ('fused_orientation_stddev', -1.0, _param(
         'rad; imu/data orientation covariance diagonal; < 0: the fused errors the model '
         'file stores (0.05 rad without them).', floats=(-1.0, math.pi))),
@@ -170,7 +176,8 @@ class GyroDenoiser(Node):
             'imu/data_raw -> imu/corrected'
             + ('' if fusion is None else
                f', imu/data (VQF: tau_acc {fusion.tau_acc_s:g} s, bias estimation '
-               f'{"on" if fusion.bias_estimation else "off"})'))
+               f'{"on" if fusion.bias_estimation else "off"}, accelerometer bias removed '
+               f'{[round(b, 4) for b in fusion.accel_bias_m_s2]} m/s^2)'))
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)
 
@@ -197,14 +204,26 @@ class GyroDenoiser(Node):
         """Return the model file's filter settings with the node's overrides applied."""
         p = self.get_parameter
         settings = settings_of(loaded.meta, loaded.path)
-        bias = p('fusion_bias_estimation').value
-        if bias not in ('model', 'on', 'off'):
-            raise DenoiseError(f"bad parameter: fusion_bias_estimation must be 'model', 'on' "
-                               f"or 'off', not {bias!r}")
+        bias = self._model_or_switch('fusion_bias_estimation', (True, False))
+        accel = self._model_or_switch('fusion_accel_bias', (False,))
         return FusionSettings(
             tau_acc_s=p('fusion_tau_acc').value if p('fusion_tau_acc').value > 0
             else settings.tau_acc_s,
-            bias_estimation=settings.bias_estimation if bias == 'model' else bias == 'on')
+            bias_estimation=settings.bias_estimation if bias is None else bias,
+            accel_bias_m_s2=settings.accel_bias_m_s2 if accel is None else (0.0, 0.0, 0.0))
+
+    def _model_or_switch(self, name: str, switches: tuple[bool, ...]) -> bool | None:
+        """None for 'model', else the switch: YAML and ``-p`` read on/off as booleans."""
+        value = self.get_parameter(name).value
+        words = {'on': True, 'true': True, 'off': False, 'false': False}
+        switch = words.get(value.lower()) if isinstance(value, str) else value
+        if value == 'model':
+            return None
+        if isinstance(switch, bool) and switch in switches:
+            return switch
+        options = ["'model'"] + ['on' if s else 'off' for s in switches]
+        allowed = ', '.join(options[:-1]) + ' or ' + options[-1]
+        raise DenoiseError(f'bad parameter: {name} must be {allowed}, not {value!r}')
 
     # -- data ---------------------------------------------------------------------
     def _on_imu(self, msg: Imu) -> None:

@@ -3,6 +3,7 @@
 """The gravity-aided filters offline: one convention for all three, scores, tuning."""
 
 from denoise_imu_ros.core.metrics import fused_errors
+from denoise_imu_ros.core.records import Sequence
 from denoise_imu_ros.evaluation import filters
 from denoise_imu_ros.evaluation.filters import eval_filters, Filter, run
 import numpy as np
@@ -58,7 +59,6 @@ def test_eval_uses_the_settings_the_model_files_store():
 
 
 def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):
-    from denoise_imu_ros.core.records import Sequence
     t = np.arange(3000) * 0.005
     gt = Rotation.from_rotvec(np.outer(np.sin(t), [0.3, 0.2, 1.0]))
     omega = (gt[:-1].inv() * gt[1:]).as_rotvec() / 0.005
@@ -72,3 +72,51 @@ def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):
     chosen = report['raw vqf']
     assert chosen['settings']['tau_acc_s'] == 0.5 and len(chosen['candidates']) == 4
     assert chosen['aoe_deg'] == min(chosen['candidates'].values())
+    # a bias the accelerometer does not have is tried, and loses
+    offered = filters.tune([seq], {'raw': [biased]}, 200.0, {'raw': ('vqf',)}, (0.0, 0.3, 0.0))
+    assert len(offered['raw vqf']['candidates']) == 8
+    assert offered['raw vqf']['settings'] == chosen['settings']
+
+
+def _moving_sequence(bias: np.ndarray, n: int = 6000) -> Sequence:
+    """Return a body moving and turning, its accelerometer the specific force plus ``bias``."""
+    t = np.arange(n) * 0.005
+    gt = Rotation.from_rotvec(np.stack([0.2 * np.sin(0.9 * t), 0.15 * np.cos(0.6 * t),
+                                        1.5 * np.sin(0.3 * t)], axis=1))
+    pos = np.stack([np.sin(t), np.cos(0.7 * t), 0.2 * np.sin(1.3 * t)], axis=1)
+    acc = np.stack([-np.sin(t), -0.49 * np.cos(0.7 * t), -0.338 * np.sin(1.3 * t)], axis=1)
+    force = gt.inv().apply(acc + [0.0, 0.0, 9.80665])
+    noise = np.random.default_rng(3).normal(0.0, 0.3, (n, 3))
+    gyro = np.zeros((n, 3))
+    return Sequence('s', (1e9 + t * 1e9).astype(np.int64),
+                    np.hstack([gyro, force + bias + noise]), gt.as_quat(), pos,
+                    np.ones(n, bool))
+
+
+def test_the_accelerometer_bias_is_fitted_from_the_poses_before_the_tails():
+    bias = np.array([-0.02, 0.12, 0.06])
+    seq = _moving_sequence(bias)
+    seq.imu[4000:, 3:] += 1.0          # the tail: not looked at
+    seq.gt_pos[1000:1200] = 5.0        # a hole, its positions invented: masked
+    seq.gt_valid[1000:1200] = False
+    fitted, samples = filters.fit_accel_bias([seq], 4000)
+    np.testing.assert_allclose(fitted, bias, atol=0.01)
+    assert 3500 < samples < 3800       # the hole and the smoothing window around it left out
+    upside_down = _moving_sequence(bias)
+    upside_down.imu[:, 3:] *= -1       # poses whose world z points down: no fit, not a wrong one
+    assert filters.fit_accel_bias([upside_down], 4000) is None
+
+
+@pytest.mark.parametrize('flt', KINDS, ids=lambda f: f.kind)
+def test_every_filter_removes_the_stored_accelerometer_bias(flt):
+    from dataclasses import replace
+    seq = _moving_sequence(np.zeros(3), 1000)
+    gyro = (Rotation.from_quat(seq.gt_quat[:-1]).inv() * Rotation.from_quat(
+        seq.gt_quat[1:])).as_rotvec() / 0.005
+    gyro = np.vstack([gyro, gyro[-1:]])
+    bias = (0.05, -0.1, 0.2)
+    with_bias = replace(flt, accel_bias_m_s2=bias)
+    assert Filter.from_dict(with_bias.as_dict()) == with_bias
+    assert 'accel bias removed' in with_bias.label and 'accel' not in flt.label
+    np.testing.assert_allclose(run(with_bias, gyro, seq.imu[:, 3:] + bias, 200.0),
+                               run(flt, gyro, seq.imu[:, 3:], 200.0), atol=1e-9)

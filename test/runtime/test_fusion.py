@@ -19,7 +19,8 @@ def imu():
     return load_imu(SAMPLE).imu[:3000]
 
 
-@pytest.mark.parametrize('settings', [FusionSettings(), FusionSettings(10.0, True)])
+@pytest.mark.parametrize('settings', [FusionSettings(), FusionSettings(10.0, True),
+                                      FusionSettings(5.0, False, (-0.01, 0.12, 0.06))])
 def test_online_equals_offline_bit_for_bit(imu, settings):
     online = GravityFilter(200.0, settings)
     one_by_one = np.array([online.update(row[:3], row[3:]) for row in imu])
@@ -55,6 +56,25 @@ def test_gravity_pulls_the_tilt_back_and_yaw_starts_at_zero():
     assert abs(tilt_error_deg(quat[-1]) - tilt_error_deg(quat[-400])) < 0.01
 
 
+def test_the_accelerometer_bias_is_removed_before_the_filter_sees_it():
+    """A bias b tilts the vertical by about |b| / g; removing it gives the true tilt back."""
+    tilt = Rotation.from_euler('ZYX', [0.0, 0.2, -0.4])
+    up = tilt.inv().apply([0.0, 0.0, 1.0])
+    bias = np.array([0.0, 0.15, -0.05])
+    accel = np.tile(9.81 * up + bias, (1000, 1))
+    gyro = np.zeros((1000, 3))
+
+    def tilt_error_deg(settings: FusionSettings) -> float:
+        seen = Rotation.from_quat(fuse(gyro, accel, 200.0, settings)[-1]).inv().apply(
+            [0.0, 0.0, 1.0])
+        return float(np.degrees(np.arccos(np.clip(seen @ up, -1.0, 1.0))))
+    assert tilt_error_deg(FusionSettings(1.0)) == pytest.approx(
+        np.degrees(np.linalg.norm(np.cross(up, bias)) / 9.81), rel=0.05)
+    assert tilt_error_deg(FusionSettings(1.0, False, tuple(bias))) < 1e-6
+    np.testing.assert_array_equal(fuse(gyro, accel, 200.0, FusionSettings(1.0, False, tuple(
+        bias))), fuse(gyro, accel - bias, 200.0, FusionSettings(1.0)))
+
+
 def test_the_online_pipeline_fuses_its_own_corrected_gyro(model_file, imu):
     mf = read_model_file(model_file)
     den = OnlineDenoiser.from_model_file(mf, FusionSettings(2.0, False))
@@ -75,10 +95,15 @@ def test_settings_and_covariance_come_from_the_model_file_or_defaults():
     meta = {'fusion': {'settings': {'tau_acc_s': 12.0, 'bias_estimation': False},
                        'orientation_std_rad': [0.01, 0.02, 0.03]}}
     assert settings_of(meta) == FusionSettings(12.0, False)
+    stored = FusionSettings(4.0, False, [0.1, -0.2, 0.05]).as_dict()
+    assert stored['accel_bias_m_s2'] == [0.1, -0.2, 0.05]  # JSON: a list
+    assert settings_of({'fusion': {'settings': stored}}).accel_bias_m_s2 == (0.1, -0.2, 0.05)
     assert orientation_covariance(meta)[::4] == pytest.approx([1e-4, 4e-4, 9e-4])
     assert orientation_covariance(meta, 0.1)[::4] == pytest.approx([0.01] * 3)
     assert orientation_covariance({})[::4] == pytest.approx([0.0025] * 3)
     for bad in ({'tau_acc_s': -1.0}, {'tau_acc_s': 'long'}, {'bias_estimation': 'yes'},
-                {'tau': 3.0}):
+                {'tau': 3.0}, {'accel_bias_m_s2': [0.1, 0.2]},
+                {'accel_bias_m_s2': [0.0, 9.81, 0.0]}, {'accel_bias_m_s2': [0.0, None, 0.0]},
+                {'accel_bias_m_s2': [float('nan'), 0.0, 0.0]}):
         with pytest.raises(ModelFileError, match='m.safetensors: inconsistent fusion settings'):
             settings_of({'fusion': {'settings': bad}}, 'm.safetensors')

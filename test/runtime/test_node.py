@@ -63,12 +63,17 @@ def test_a_queued_burst_is_taken_in_one_callback_in_order(harness, model_file):
                                atol=1e-6)
 
 
-def test_imu_data_is_the_imu_tools_contract_with_the_fused_orientation(harness, model_file):
+@pytest.mark.parametrize('accel_bias', ['model', False])  # -p fusion_accel_bias:=off
+def test_imu_data_is_the_imu_tools_contract_with_the_fused_orientation(
+        harness, model_file, accel_bias):
     """imu/data: header copied, VQF orientation with its covariance, corrected gyro."""
+    from denoise_imu_ros.core.modelfile import add_metadata
     from denoise_imu_ros.runtime.fusion import fuse, FusionSettings
+    stored = FusionSettings(3.0, False, (0.02, -0.1, 0.05))  # the node overrides tau_acc
+    add_metadata(model_file, fusion={'settings': stored.as_dict()})
     rec = load_imu(SAMPLE)
     n = 600
-    h = harness(fusion_tau_acc=5.0)
+    h = harness(fusion_tau_acc=5.0, fusion_accel_bias=accel_bias)
     h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(rec.imu_stamp_ns[:n], rec.imu[:n])])
     assert len(h.fused) == n
     gyro = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
@@ -77,13 +82,23 @@ def test_imu_data_is_the_imu_tools_contract_with_the_fused_orientation(harness, 
                                            m.angular_velocity.z] for m in h.corrected]))
     quat = np.array([[m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w]
                      for m in h.fused])
-    np.testing.assert_array_equal(quat, fuse(gyro, rec.imu[:n, 3:], 200.0,
-                                             FusionSettings(tau_acc_s=5.0)))
+    removed = stored.accel_bias_m_s2 if accel_bias == 'model' else (0.0, 0.0, 0.0)
+    np.testing.assert_array_equal(quat, fuse(gyro, rec.imu[:n, 3:], 200.0, FusionSettings(
+        5.0, False, removed)))
+    accel = [[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
+             for m in h.fused]
+    np.testing.assert_array_equal(accel, rec.imu[:n, 3:])  # passed through as it came
     first = h.fused[0]
     assert first.header == h.corrected[0].header
     assert first.linear_acceleration_covariance[0] == 0.04
     np.testing.assert_allclose(np.diag(np.reshape(first.orientation_covariance, (3, 3))),
                                [0.05 ** 2] * 3)  # the model file stores no fused figures
+
+
+@pytest.mark.parametrize('value, estimated', [('model', False), (True, True), ('off', False)])
+def test_bias_estimation_takes_the_model_file_or_a_switch(harness, value, estimated):
+    h = harness(fusion_bias_estimation=value)
+    assert h.node._denoiser.fusion.settings.bias_estimation is estimated
 
 
 def test_imu_data_can_be_turned_off(harness):
@@ -313,8 +328,10 @@ print('ok')
     (['-p', 'input_queue_depth:=5'], 'input_queue_depth out of range'),
     (['-p', 'model:=5'], "parameter 'model'"),
     (['-p', 'embed_attitude:=maybe'], "parameter 'embed_attitude'"),
-    (['-p', 'fusion_bias_estimation:=maybe'], "fusion_bias_estimation must be 'model'"),
+    (['-p', 'fusion_bias_estimation:=maybe'], "fusion_bias_estimation must be 'model', on"),
+    (['-p', 'fusion_bias_estimation:=3'], "fusion_bias_estimation must be 'model', on"),
     (['-p', 'fusion_tau_acc:=-5.0'], 'fusion_tau_acc out of range'),
+    (['-p', 'fusion_accel_bias:=on'], "fusion_accel_bias must be 'model' or off, not True"),
 ])
 def test_a_bad_parameter_is_a_one_line_error_at_start_up(args, message, capsys):
     assert main(['--ros-args', *args]) == 1
