@@ -144,20 +144,18 @@ def score(seq: Sequence, quat: np.ndarray) -> FusedErrors:
 SMOOTHING_S = 0.2  # the poses' second derivative: a cubic fitted over this long
 
 
-def fit_accel_bias(seqs: list[Sequence], end: int) -> tuple[np.ndarray, int] | None:
+def specific_force(seqs: list[Sequence], end: int) -> tuple[np.ndarray, np.ndarray]:
     """
-    Fit the accelerometer's constant bias (m/s^2, body frame) to the poses; its sample count.
+    Return what the accelerometer read and what it should have, (M, 3) each, from the poses.
 
-    What the accelerometer should read is the specific force R^T (p'' + g e_z), with p''
-    the poses' acceleration (a smoothed second derivative, Savitzky-Golay); the bias is
-    the median of the reading minus it over the samples before ``end`` of every sequence
-    whose smoothing window holds no ground-truth hole. Positions are taken as the IMU's
-    (a lever arm of centimetres adds only w^2 r). None when nothing is usable, or when the
-    fit is out of any IMU's range: poses whose world z does not point up, or wrong units.
+    What it should read is the specific force R^T (p'' + g e_z), with p'' the poses'
+    acceleration (a smoothed second derivative, Savitzky-Golay), over the samples before
+    ``end`` of every sequence whose smoothing window holds no ground-truth hole.
+    Positions are taken as the IMU's (a lever arm of centimetres adds only w^2 r).
     """
     from scipy.ndimage import binary_erosion
     from scipy.signal import savgol_filter
-    residuals = []
+    read, should = [np.empty((0, 3))], [np.empty((0, 3))]
     for seq in seqs:
         part = seq.tail(0, end)
         window = 2 * int(SMOOTHING_S * part.rate_hz / 2) + 1
@@ -166,14 +164,26 @@ def fit_accel_bias(seqs: list[Sequence], end: int) -> tuple[np.ndarray, int] | N
         acc = savgol_filter(part.gt_pos, window, 3, deriv=2, delta=1.0 / part.rate_hz, axis=0)
         force = Rotation.from_quat(part.gt_quat).inv().apply(acc + [0.0, 0.0, GRAVITY_M_S2])
         usable = binary_erosion(part.gt_valid, np.ones(window, bool), border_value=False)
-        residuals.append((part.imu[:, 3:] - force)[usable])
-    pooled = np.vstack(residuals) if residuals else np.empty((0, 3))
-    if not len(pooled):
+        read.append(part.imu[usable, 3:])
+        should.append(force[usable])
+    return np.vstack(read), np.vstack(should)
+
+
+def fit_accel_bias(seqs: list[Sequence], end: int) -> tuple[np.ndarray, int] | None:
+    """
+    Fit the accelerometer's constant bias (m/s^2, body frame) to the poses; its sample count.
+
+    The median of the reading minus the specific force (:func:`specific_force`). None
+    when nothing is usable, or when the fit is out of any IMU's range: poses whose world
+    z does not point up, or wrong units.
+    """
+    read, should = specific_force(seqs, end)
+    if not len(read):
         return None
-    bias = np.median(pooled, axis=0)
+    bias = np.median(read - should, axis=0)
     if np.abs(bias).max() > MAX_ACCEL_BIAS_M_S2:
         return None
-    return bias, len(pooled)
+    return bias, len(read)
 
 
 def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: float,

@@ -17,7 +17,12 @@ def _fields(m) -> list[float]:
 
 def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path):
     from denoise_imu_ros.cli import main as cli
+    from denoise_imu_ros.core.modelfile import add_metadata
+    from denoise_imu_ros.runtime.fusion import FusionSettings
     from rosbags.highlevel import AnyReader
+    # settings stored as tune-fusion stores them: both paths must apply all of them
+    add_metadata(model_file, fusion={'settings': FusionSettings(
+        4.0, False, (0.02, -0.1, 0.05)).as_dict(), 'orientation_std_rad': [0.01, 0.02, 0.03]})
     assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
                 str(model_file)]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
