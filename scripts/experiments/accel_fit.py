@@ -26,13 +26,12 @@ Usage: .venv/bin/python scripts/experiments/accel_fit.py MODEL DATA_DIR
 from pathlib import Path
 import sys
 
-import numpy as np
-
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation import filters
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
 from denoise_imu_ros.runtime.fusion import settings_of
+import numpy as np
 
 
 def main(model: str, data: str) -> None:
