@@ -17,9 +17,12 @@ The node's per-message cost with the fused orientation (imu/data) on and off.
 One process, two nodes built from the same model (``publish_fused`` true and false),
 each fed the same real V1_01 IMU messages through its own subscription callback, with a
 subscriber on every output topic in a process of its own, so that each publish
-serialises and sends to a reader that takes it; the rounds alternate between the nodes. Prints the
-median and p99 callback time of each, and the median over rounds of their ratio.
+serialises and sends to a reader that takes it; the rounds alternate between the nodes.
+Messages are handed over at ``--rate`` (an IMU's pace, so that the reader keeps up as it
+would on a robot; 0: back to back). Prints the median and p99 callback time of each, and
+the median over rounds of their ratio.
 Run: .venv/bin/python bench/fusion_cost.py [--model euroc] [--messages 3000] [--rounds 3]
+[--rate 1000]
 """
 
 import argparse
@@ -36,14 +39,21 @@ import rclpy
 from rclpy.parameter import Parameter
 
 SINK = """
+from geometry_msgs.msg import QuaternionStamped
 import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu
 rclpy.init()
 sink = rclpy.create_node('sink')
 qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 for msg_type, topic in ((Imu, 'imu/corrected'), (Imu, 'imu/data'),
                         (QuaternionStamped, 'imu/attitude')):
     sink.create_subscription(msg_type, topic, lambda m: None, qos)
-rclpy.spin(sink)
+try:
+    rclpy.spin(sink)
+except (KeyboardInterrupt, ExternalShutdownException):
+    pass
 """
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc' / 'V1_01_easy'
 
@@ -53,6 +63,7 @@ def main() -> None:
     parser.add_argument('--model', default='euroc')
     parser.add_argument('--messages', type=int, default=3000)
     parser.add_argument('--rounds', type=int, default=3)
+    parser.add_argument('--rate', type=float, default=1000.0, help='Hz; 0: back to back')
     args = parser.parse_args()
     rec = load_imu(DATA)
     types = msgs.rclpy_types()
@@ -64,10 +75,15 @@ def main() -> None:
              for on in (True, False)}
     sink = subprocess.Popen([sys.executable, '-c', SINK])
     deadline = time.monotonic() + 20
-    while time.monotonic() < deadline and any(
-            n.count_subscribers(t) == 0 for n in nodes.values()
-            for t in ('imu/corrected', 'imu/attitude')):
+    def unread() -> list[str]:
+        return [t for on, n in nodes.items() for t in ('imu/corrected', 'imu/attitude') + (
+            ('imu/data',) if on else ()) if n.count_subscribers(t) == 0]
+    while time.monotonic() < deadline and unread() and sink.poll() is None:
         time.sleep(0.1)
+    if unread():
+        sink.terminate()
+        sys.exit(f'fusion_cost: no reader on {", ".join(sorted(set(unread())))}: '
+                 'the publishes would cost nothing')
     times = {True: [], False: []}
     ratios = []
     for _ in range(args.rounds):
@@ -76,7 +92,13 @@ def main() -> None:
             node._denoiser.engine.reset()
             node._denoiser._last_ns = None
             this = []
+            due = time.perf_counter()
             for m in messages:
+                if args.rate > 0:  # sleep most of the wait, spin the last 0.2 ms of it
+                    due += 1.0 / args.rate
+                    time.sleep(max(0.0, due - time.perf_counter() - 2e-4))
+                    while time.perf_counter() < due:
+                        pass
                 t0 = time.perf_counter()
                 node._on_imu(m)
                 this.append(time.perf_counter() - t0)

@@ -50,6 +50,13 @@ def test_shipped_files_store_filter_settings_chosen_on_training_recordings(name)
     assert fusion['chosen_on'].startswith(f'validation tails of {meta["train_sequences"][0]}')
     assert fusion['settings']['bias_estimation'] is False
     assert len(fusion['orientation_std_rad']) == 3
+    # the accelerometer bias fitted on the training poses, stored where the tails kept it
+    fitted = fusion['accel_bias']
+    assert fitted['fitted_on'].startswith(f'poses of {meta["train_sequences"][0]}')
+    assert fusion['settings']['accel_bias_m_s2'] in (fitted['m_s2'], [0.0, 0.0, 0.0])
+    if name.startswith('euroc'):  # the ADIS16448's: about 0.12 m/s^2 on y, 0.7 deg of tilt
+        assert fusion['settings']['accel_bias_m_s2'] == fitted['m_s2']
+        assert 0.08 < fitted['m_s2'][1] < 0.16
 
 
 def test_shipped_model_streams_the_whole_sample_exactly():
