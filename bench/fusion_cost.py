@@ -75,6 +75,7 @@ def main() -> None:
              for on in (True, False)}
     sink = subprocess.Popen([sys.executable, '-c', SINK])
     deadline = time.monotonic() + 20
+
     def unread() -> list[str]:
         return [t for on, n in nodes.items() for t in ('imu/corrected', 'imu/attitude') + (
             ('imu/data',) if on else ()) if n.count_subscribers(t) == 0]
