@@ -38,6 +38,7 @@ from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
+from ..learn import parallel
 from ..learn.config import load_config
 from ..learn.model import correct_gyro
 from ..learn.train import train
@@ -70,6 +71,9 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     it (``per_seed``) for the spread. The calibration row is likewise the mean of the
     seeds' calibrations.
     """
+    if parallel.torchrun_rank() is not None:  # its other processes would have no model
+        raise TrainingError('crossval does not run under torchrun: train its folds as '
+                            'separate processes (--fold I, each with --workers if wanted)')
     if seeds is not None and (not seeds or len(set(seeds)) != len(seeds)
                               or not all(isinstance(s, int) for s in seeds)
                               or overrides.get('seed') is not None):

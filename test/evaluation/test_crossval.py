@@ -155,3 +155,15 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
         'rec0']['network']
     assert main(args + ['--seeds', '3', '3']) == 1
     assert '--seeds must list distinct seeds' in capsys.readouterr().err
+
+
+def test_crossval_under_torchrun_is_a_clear_error_not_a_crash(tmp_path, monkeypatch, capsys):
+    """torchrun's other processes get no model back from train: refused before training."""
+    for key, value in (('RANK', '1'), ('WORLD_SIZE', '2'), ('MASTER_ADDR', '127.0.0.1'),
+                       ('MASTER_PORT', '29500')):
+        monkeypatch.setenv(key, value)
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump({
+        'dataset': 'synthetic', 'data': str(tmp_path), 'sequences': ['a', 'b']}))
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--quiet']) == 1
+    err = capsys.readouterr().err.strip()
+    assert 'crossval does not run under torchrun' in err and len(err.splitlines()) == 1
