@@ -37,8 +37,8 @@ from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..data.load import load_sequence
-from ..learn.checkpoint import load_model
 from ..learn import parallel
+from ..learn.checkpoint import load_model
 from ..learn.config import load_config
 from ..learn.model import correct_gyro
 from ..learn.train import train

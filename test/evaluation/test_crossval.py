@@ -158,7 +158,7 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
 
 
 def test_crossval_under_torchrun_is_a_clear_error_not_a_crash(tmp_path, monkeypatch, capsys):
-    """torchrun's other processes get no model back from train: refused before training."""
+    """Refuse it before training: torchrun's other processes get no model back from train."""
     for key, value in (('RANK', '1'), ('WORLD_SIZE', '2'), ('MASTER_ADDR', '127.0.0.1'),
                        ('MASTER_PORT', '29500')):
         monkeypatch.setenv(key, value)
