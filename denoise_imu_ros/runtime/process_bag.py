@@ -72,7 +72,9 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
 
     The IMU samples go through the pipeline in header-stamp order (a recorder's transport
     latency reorders receive times, and the pipeline would drop every late one), and each
-    output is written at its input's receive time, beside it. Copied topics keep their
+    output is written at its input's receive time, beside it. A first pass reads only the
+    stamps; the second holds a message only until its turn in stamp order comes, so memory
+    follows how far the bag is out of order, not its length. Copied topics keep their
     recorded QoS; ``compress`` (zstd) defaults to the input's compression.
     """
     src = Path(src)
@@ -87,7 +89,10 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
         try:
             with open_bag(_ros2_source(src, Path(tmp))) as rd:
                 imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
-                imu, results = _run_in_stamp_order(rd, imu_conns, den, src)
+                stamps = np.array([stamp_ns(rd.deserialize(raw, c.msgtype).header) for c, _, raw
+                                   in rd.messages(connections=imu_conns)], dtype=np.int64)
+                check_rate(np.sort(stamps), den.rate_hz, src)
+                turn = np.argsort(stamps, kind='stable')  # turn[i]: the i-th to go through
                 wr = Writer(partial, version=9, storage_plugin=plugin)
                 if is_compressed(rd) if compress is None else compress:
                     wr.set_compression(CompressionMode.STORAGE if plugin == StoragePlugin.MCAP
@@ -97,45 +102,43 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                         c.topic, c.msgtype, typestore=rd.typestore,
                         offered_qos_profiles=getattr(c.ext, 'offered_qos_profiles', ()))
                         for c in rd.connections}
-                    corr = wr.add_connection(CORRECTED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
-                    fused = wr.add_connection(FUSED_TOPIC, IMU_TYPE, typestore=TYPESTORE)
-                    att = wr.add_connection(ATTITUDE_TOPIC, ATTITUDE_TYPE, typestore=TYPESTORE)
+                    topics = (wr.add_connection(CORRECTED_TOPIC, IMU_TYPE, typestore=TYPESTORE),
+                              wr.add_connection(FUSED_TOPIC, IMU_TYPE, typestore=TYPESTORE),
+                              wr.add_connection(ATTITUDE_TOPIC, ATTITUDE_TYPE,
+                                                typestore=TYPESTORE))
                     imu_ids = {c.id for c in imu_conns}
-                    k = -1
+                    waiting: dict[int, tuple[Any, int]] = {}  # received, its turn not come
+                    k, done = -1, 0
                     for conn, stamp, raw in rd.messages():
                         wr.write(out[conn.id], stamp, raw)
                         if conn.id not in imu_ids:
                             continue
                         k += 1
-                        res = results[k]
-                        if isinstance(res, Drop):
-                            continue
-                        msg = imu[k]  # deserialised once, by the first pass
-                        corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov,
-                                                       accel_cov=res.accel_cov)
-                        oriented = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov,
-                                                      res.orientation, fused_cov, res.accel_cov)
-                        attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
-                        wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
-                        # what the node withholds is not written either (node.py)
-                        if res.rate_suspect:
-                            continue
-                        wr.write(fused, stamp, TYPESTORE.serialize_cdr(oriented, IMU_TYPE))
-                        if res.event != Event.GAP:
-                            wr.write(att, stamp,
-                                     TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
+                        waiting[k] = rd.deserialize(raw, conn.msgtype), stamp
+                        while done < len(turn) and turn[done] in waiting:
+                            msg, received = waiting.pop(turn[done])
+                            done += 1
+                            res = den.process_imu(msg)
+                            if not isinstance(res, Drop):
+                                _write_outputs(wr, topics, received, msg, res, cov, fused_cov,
+                                               fixed_frame)
         except (*CORRUPT, WriterError, FileExistsError) as err:
             raise DatasetError(f'{src} -> {dst}: {err}') from err
     return {k: v for k, v in den.counts.items() if v or k in DROP_CAUSES}
 
 
-def _run_in_stamp_order(rd: Any, imu_conns: list, den: OnlineDenoiser,
-                        src: Path) -> tuple[list[Any], list[Output | Drop]]:
-    """Return every IMU message and its pipeline result (receive order), run by stamp."""
-    imu = [rd.deserialize(raw, c.msgtype) for c, _, raw in rd.messages(connections=imu_conns)]
-    stamps = np.array([stamp_ns(m.header) for m in imu], dtype=np.int64)
-    check_rate(np.sort(stamps), den.rate_hz, src)
-    results: list[Output | Drop | None] = [None] * len(imu)
-    for k in np.argsort(stamps, kind='stable'):
-        results[k] = den.process_imu(imu[k])
-    return imu, results
+def _write_outputs(wr: Writer, topics: tuple[Any, Any, Any], stamp: int, msg: Any,
+                   res: Output, cov: np.ndarray, fused_cov: np.ndarray,
+                   fixed_frame: str) -> None:
+    """Write one sample's corrected IMU, orientation and attitude at ``stamp``, as the node."""
+    corr, fused, att = topics
+    corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov, accel_cov=res.accel_cov)
+    wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
+    if res.rate_suspect:  # what the node withholds is not written either (node.py)
+        return
+    oriented = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov, res.orientation, fused_cov,
+                                  res.accel_cov)
+    wr.write(fused, stamp, TYPESTORE.serialize_cdr(oriented, IMU_TYPE))
+    if res.event != Event.GAP:
+        attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
+        wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))
