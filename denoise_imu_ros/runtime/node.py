@@ -168,6 +168,8 @@ class GyroDenoiser(Node):
         self.attitude_withheld = 0  # accepted samples whose attitude was not published
         self.fused_withheld = 0  # accepted samples whose imu/data was not published
         self._infer_s: deque[float] = deque(maxlen=1000)
+        self._corrected: Imu | None = None  # the outgoing messages, refilled every sample
+        self._attitude: QuaternionStamped | None = None
         self._apply_parameters()
         self.get_logger().info(
             f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field '
@@ -262,8 +264,9 @@ class GyroDenoiser(Node):
         self._stamps.append(out.stamp_ns)
 
         embed = out.attitude if self._embed else None
-        corrected = msgs.corrected_imu(self._types, msg, out.gyro, self._gyro_cov, embed,
-                                       self._orientation_cov, out.accel_cov)
+        corrected = self._corrected = msgs.corrected_imu(
+            self._types, msg, out.gyro, self._gyro_cov, embed, self._orientation_cov,
+            out.accel_cov, into=self._corrected)
         self._pub_imu.publish(corrected)
         # a filter run at a rate it was not set up for is not published as if it were valid
         off_rate = self._rate_error or out.rate_suspect
@@ -274,8 +277,9 @@ class GyroDenoiser(Node):
         # an attitude held across a gap, or integrated at a rate the model was not made
         # for, is not published as if it were valid
         if out.event != Event.GAP and not off_rate:
-            self._pub_att.publish(msgs.attitude(self._types, msg, self._fixed_frame,
-                                                out.attitude))
+            self._attitude = msgs.attitude(self._types, msg, self._fixed_frame, out.attitude,
+                                           into=self._attitude)
+            self._pub_att.publish(self._attitude)
         else:
             self.attitude_withheld += 1
         self._infer_s.append(time.perf_counter() - t0)

@@ -298,14 +298,14 @@ from denoise_imu_ros.core import msgs
 from denoise_imu_ros.runtime.node import GyroDenoiser
 rclpy.init(domain_id={DOMAIN})
 node = GyroDenoiser(parameter_overrides=[Parameter('model', value='euroc')])
-sent = []
-node._pub_imu.publish = sent.append  # what the callback publishes
+sent = []  # what the callback publishes (one message refilled: its values, as serialised)
+node._pub_imu.publish = lambda m: sent.append(
+    [m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z])
 data = np.load({str(tmp_path / 'data.npz')!r})
 types = msgs.rclpy_types()
 for t, row in zip(data['stamps'], data['imu']):
     node._on_imu(msgs.imu(types, msgs.header(types, int(t), 'imu0'), row[:3], row[3:]))
-out = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z]
-                for m in sent])
+out = np.array(sent)
 assert len(out) == len(data['batch']), len(out)
 print('max difference', np.abs(out - data['batch']).max())
 assert np.abs(out - data['batch']).max() <= 1e-6
