@@ -27,6 +27,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 NO_ORIENTATION = np.array([-1.0] + [0.0] * 8)  # REP-145: orientation not provided
+NO_ORIENTATION.flags.writeable = False
 UNKNOWN_COVARIANCE = np.zeros(9)  # REP-145: covariance unknown
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 UNKNOWN_COVARIANCE.flags.writeable = False
@@ -86,7 +87,7 @@ def _quat(types: MsgTypes, q: Any) -> Any:
 
 
 def imu(types: MsgTypes, head: Any, gyro: Any, accel: Any,
-        orientation: Any = (0.0, 0.0, 0.0, 1.0), orientation_cov: Any = NO_ORIENTATION,
+        orientation: Any = IDENTITY, orientation_cov: Any = NO_ORIENTATION,
         gyro_cov: Any = np.zeros(9), accel_cov: Any = np.zeros(9)) -> Any:
     """Build a sensor_msgs/Imu from arrays (orientation xyzw, covariances row-major)."""
     return types.Imu(header=head, orientation=_quat(types, orientation),
@@ -107,7 +108,7 @@ def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
                   attitude: np.ndarray | None = None, orientation_cov: Any = None,
                   accel_cov: Any = None, into: Any = None) -> Any:
     """
-    Build the imu/corrected message of a raw one: header copied, never re-stamped.
+    Build the imu/corrected message of a raw one: its header, never re-stamped.
 
     The accelerometer and its covariance pass through (``accel_cov`` when the caller has
     already checked it; a non-finite one becomes zeros, 'unknown', never NaN on the
@@ -115,6 +116,8 @@ def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
     with ``orientation_cov`` when given, else absent (covariance[0] = -1, REP-145).
     ``into``, a message this built before, is overwritten instead of building one: a
     publish serialises at once, and building a message costs several times filling it.
+    The header is the raw message's own object (as the stamp of :func:`attitude` with
+    ``into``): neither is changed in place here, and must not be.
     """
     msg = imu(types, raw.header, gyro, (0.0, 0.0, 0.0)) if into is None else into
     msg.header = raw.header

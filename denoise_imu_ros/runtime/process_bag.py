@@ -72,9 +72,9 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
 
     The IMU samples go through the pipeline in header-stamp order (a recorder's transport
     latency reorders receive times, and the pipeline would drop every late one), and each
-    output is written at its input's receive time, beside it. A first pass reads only the
-    stamps; the second holds a message only until its turn in stamp order comes, so memory
-    follows how far the bag is out of order, not its length. Copied topics keep their
+    output is written with its input's receive time (a reader sorts by it). A first pass
+    reads only the stamps; the second holds a message only until its turn in stamp order
+    comes, so memory follows how far the bag is out of order, not its length. Copied topics keep their
     recorded QoS; ``compress`` (zstd) defaults to the input's compression.
     """
     src = Path(src)
@@ -89,8 +89,11 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
         try:
             with open_bag(_ros2_source(src, Path(tmp))) as rd:
                 imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
-                stamps = np.array([stamp_ns(rd.deserialize(raw, c.msgtype).header) for c, _, raw
-                                   in rd.messages(connections=imu_conns)], dtype=np.int64)
+                imu_ids = {c.id for c in imu_conns}
+                # all topics, as the second pass reads them: the same order, ties included
+                stamps = np.array([stamp_ns(rd.deserialize(raw, c.msgtype).header)
+                                   for c, _, raw in rd.messages() if c.id in imu_ids],
+                                  dtype=np.int64)
                 check_rate(np.sort(stamps), den.rate_hz, src)
                 turn = np.argsort(stamps, kind='stable')  # turn[i]: the i-th to go through
                 wr = Writer(partial, version=9, storage_plugin=plugin)
@@ -106,7 +109,6 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                               wr.add_connection(FUSED_TOPIC, IMU_TYPE, typestore=TYPESTORE),
                               wr.add_connection(ATTITUDE_TOPIC, ATTITUDE_TYPE,
                                                 typestore=TYPESTORE))
-                    imu_ids = {c.id for c in imu_conns}
                     waiting: dict[int, tuple[Any, int]] = {}  # received, its turn not come
                     k, done = -1, 0
                     for conn, stamp, raw in rd.messages():
@@ -114,7 +116,11 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                         if conn.id not in imu_ids:
                             continue
                         k += 1
-                        waiting[k] = rd.deserialize(raw, conn.msgtype), stamp
+                        msg = rd.deserialize(raw, conn.msgtype)
+                        if k >= len(stamps) or stamp_ns(msg.header) != stamps[k]:
+                            raise DatasetError(f'{src}: its IMU messages came back in another '
+                                               'order the second time they were read')
+                        waiting[k] = msg, stamp
                         while done < len(turn) and turn[done] in waiting:
                             msg, received = waiting.pop(turn[done])
                             done += 1
@@ -122,6 +128,9 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                             if not isinstance(res, Drop):
                                 _write_outputs(wr, topics, received, msg, res, cov, fused_cov,
                                                fixed_frame)
+                    if done != len(stamps):
+                        raise DatasetError(f'{src}: {len(stamps) - done} IMU messages read '
+                                           'the first time were not there the second')
         except (*CORRUPT, WriterError, FileExistsError) as err:
             raise DatasetError(f'{src} -> {dst}: {err}') from err
     return {k: v for k, v in den.counts.items() if v or k in DROP_CAUSES}

@@ -40,7 +40,8 @@ def main(model: str, data: str) -> None:
     cfg, names = net.meta['train_config'], net.meta['train_sequences']
     start = int(cfg['window']) + int(cfg.get('max_offset', 0))
     seqs = [load_sequence(f'{data}/{n}', cfg.get('imu_topic'), cfg.get('pose_topic'),
-                          cfg.get('max_gt_gap_s')) for n in names]
+                          cfg.get('max_gt_gap_s'), align_poses=cfg.get('align', 'none'))
+            for n in names]  # as tune-fusion reads them
     for name, seq in zip(names, seqs):
         fitted = filters.fit_accel_bias([seq], start)
         gt_file = Path(data) / name / 'mav0' / 'state_groundtruth_estimate0' / 'data.csv'
@@ -48,7 +49,10 @@ def main(model: str, data: str) -> None:
         own = '' if cols is None or cols.shape[1] < 17 else \
             f', ground-truth file {np.round(cols[:, 14:17].mean(0), 3).tolist()}'
         print(f'{name}: {np.round(fitted[0], 3).tolist() if fitted else None}{own}')
-    bias, samples = filters.fit_accel_bias(seqs, start)
+    pooled = filters.fit_accel_bias(seqs, start)
+    if pooled is None:
+        sys.exit('no usable poses before the tails (or a fit out of any IMU\'s range)')
+    bias, samples = pooled
     read, should = filters.specific_force(seqs, start)
     solved, *_ = np.linalg.lstsq(np.hstack([should, np.ones((len(should), 1))]), read,
                                  rcond=None)

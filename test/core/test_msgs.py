@@ -31,7 +31,8 @@ def test_refilling_the_outgoing_messages_equals_building_them(types):
         msgs.reorient(reused, quat, fused_cov)  # imu/data, published from the same message
         fresh_att = msgs.attitude(types, raw, 'odom', quat)
         attitude = msgs.attitude(types, raw, 'odom', quat, into=attitude)
-        assert [attitude.header.stamp.sec, attitude.header.stamp.nanosec, attitude.header.frame_id,
-                attitude.quaternion.x, attitude.quaternion.w] == [
-            fresh_att.header.stamp.sec, fresh_att.header.stamp.nanosec, 'odom',
-            fresh_att.quaternion.x, fresh_att.quaternion.w]
+        def fields(m) -> list:
+            q = m.quaternion
+            return [m.header.stamp.sec, m.header.stamp.nanosec, m.header.frame_id,
+                    q.x, q.y, q.z, q.w]
+        assert fields(attitude) == fields(fresh_att) and fresh_att.header.frame_id == 'odom'

@@ -95,10 +95,18 @@ def test_imu_data_is_the_imu_tools_contract_with_the_fused_orientation(
                                [0.05 ** 2] * 3)  # the model file stores no fused figures
 
 
-@pytest.mark.parametrize('value, estimated', [('model', False), (True, True), ('off', False)])
-def test_bias_estimation_takes_the_model_file_or_a_switch(harness, value, estimated):
-    h = harness(fusion_bias_estimation=value)
-    assert h.node._denoiser.fusion.settings.bias_estimation is estimated
+@pytest.mark.parametrize('value, estimated, accel', [
+    ('model', True, 'model'), (False, False, 'off'), ('off', False, False), (True, True, 'model')])
+def test_the_filter_switches_take_the_model_file_or_a_switch(harness, model_file, value,
+                                                             estimated, accel):
+    from denoise_imu_ros.core.modelfile import add_metadata
+    from denoise_imu_ros.runtime.fusion import FusionSettings
+    stored = FusionSettings(3.0, True, (0.02, -0.1, 0.05))  # not the defaults, either of them
+    add_metadata(model_file, fusion={'settings': stored.as_dict()})
+    h = harness(fusion_bias_estimation=value, fusion_accel_bias=accel)
+    settings = h.node._denoiser.fusion.settings
+    assert settings.bias_estimation is estimated
+    assert settings.accel_bias_m_s2 == (stored.accel_bias_m_s2 if accel == 'model' else (0.0,) * 3)
 
 
 def test_imu_data_can_be_turned_off(harness):

@@ -180,6 +180,14 @@ def test_receive_order_jitter_drops_nothing_and_qos_and_compression_are_kept(
     jittered, qos = corrected(tmp_path / 'out')
     ordered, _ = corrected(tmp_path / 'ordered')
     assert len(jittered) == 3000  # nothing dropped as out of order
+    with AnyReader([tmp_path / 'out']) as reader:  # each output once, at its input's time
+        times = {}
+        for c, t, raw in reader.messages():
+            if c.topic != '/tf_static':
+                m = reader.deserialize(raw, c.msgtype)
+                times.setdefault(c.topic, []).append((msgs.stamp_ns(m.header), t))
+    for topic in ('/imu/corrected', '/imu/data', '/imu/attitude'):
+        assert sorted(times[topic]) == sorted(times['/imu0']), topic
     assert all(jittered[t] == ordered[t] for t in jittered)  # what header order gives
     # transient local kept, for the late subscribers of a replay
     assert qos['/tf_static'][0].durability == QosDurability.TRANSIENT_LOCAL
