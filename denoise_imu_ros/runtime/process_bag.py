@@ -74,8 +74,8 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     latency reorders receive times, and the pipeline would drop every late one), and each
     output is written with its input's receive time (a reader sorts by it). A first pass
     reads only the stamps; the second holds a message only until its turn in stamp order
-    comes, so memory follows how far the bag is out of order, not its length. Copied topics keep their
-    recorded QoS; ``compress`` (zstd) defaults to the input's compression.
+    comes, so memory follows how far the bag is out of order, not its length. Copied
+    topics keep their recorded QoS; ``compress`` (zstd) defaults to the input's compression.
     """
     src = Path(src)
     if not src.exists():

@@ -51,7 +51,7 @@ def main(model: str, data: str) -> None:
         print(f'{name}: {np.round(fitted[0], 3).tolist() if fitted else None}{own}')
     pooled = filters.fit_accel_bias(seqs, start)
     if pooled is None:
-        sys.exit('no usable poses before the tails (or a fit out of any IMU\'s range)')
+        sys.exit("no usable poses before the tails (or a fit out of any IMU's range)")
     bias, samples = pooled
     read, should = filters.specific_force(seqs, start)
     solved, *_ = np.linalg.lstsq(np.hstack([should, np.ones((len(should), 1))]), read,

@@ -31,6 +31,7 @@ def test_refilling_the_outgoing_messages_equals_building_them(types):
         msgs.reorient(reused, quat, fused_cov)  # imu/data, published from the same message
         fresh_att = msgs.attitude(types, raw, 'odom', quat)
         attitude = msgs.attitude(types, raw, 'odom', quat, into=attitude)
+
         def fields(m) -> list:
             q = m.quaternion
             return [m.header.stamp.sec, m.header.stamp.nanosec, m.header.frame_id,
