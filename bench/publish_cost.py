@@ -1,0 +1,107 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+What one rclpy publish of a sensor_msgs/Imu costs, with and without a reader.
+
+The node's cost per sample is mostly its publishes (bench/fusion_cost.py): this times
+the publish alone, at an IMU's pace (1 kHz), in one run: a message to a topic with a
+reader in another process, the same message pre-serialised (``serialize_message``,
+timed apart) to a second such topic, and the message to a topic nobody reads; with the
+QoS of ``--reliability`` on both sides.
+Run: .venv/bin/python bench/publish_cost.py [--reliability reliable|best_effort]
+"""
+
+import argparse
+import subprocess
+import sys
+import time
+
+from denoise_imu_ros.core import msgs
+import numpy as np
+import rclpy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
+from sensor_msgs.msg import Imu
+
+SINK = """
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import Imu
+rclpy.init()
+sink = rclpy.create_node('sink')
+for topic in ('read', 'read_bytes'):
+    sink.create_subscription(Imu, topic, lambda m: None,
+                             QoSProfile(depth=100, reliability=ReliabilityPolicy.{policy}))
+try:
+    rclpy.spin(sink)
+except (KeyboardInterrupt, ExternalShutdownException):
+    pass
+"""
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument('--reliability', choices=('reliable', 'best_effort'),
+                        default='reliable')
+    parser.add_argument('--messages', type=int, default=12000)
+    args = parser.parse_args()
+    policy = args.reliability.upper()
+    rclpy.init()
+    node = rclpy.create_node('publish_cost')
+    qos = QoSProfile(depth=100, reliability=getattr(ReliabilityPolicy, policy))
+    read, read_bytes, unread = (node.create_publisher(Imu, t, qos)
+                                for t in ('read', 'read_bytes', 'unread'))
+    sink = subprocess.Popen([sys.executable, '-c', SINK.format(policy=policy)])
+    deadline = time.monotonic() + 20
+    while (read.get_subscription_count() == 0 or read_bytes.get_subscription_count() == 0):
+        if time.monotonic() > deadline or sink.poll() is not None:
+            sink.terminate()
+            sys.exit('publish_cost: the reader process did not subscribe')
+        time.sleep(0.1)
+    time.sleep(1.0)  # discovery settled
+    types = msgs.rclpy_types()
+    msg = msgs.imu(types, msgs.header(types, 10**9, 'imu0'), [0.1, 0.2, 0.3], [0.1, 9.8, 0.2])
+    times = {'message, read': [], 'serialise': [], 'bytes, read': [], 'message, unread': []}
+    due = time.perf_counter()
+    for k in range(args.messages):
+        due += 1e-3  # sleep most of the wait, spin the last 0.2 ms of it
+        time.sleep(max(0.0, due - time.perf_counter() - 2e-4))
+        while time.perf_counter() < due:
+            pass
+        t0 = time.perf_counter()
+        if k % 3 == 0:
+            read.publish(msg)
+            times['message, read'].append(time.perf_counter() - t0)
+        elif k % 3 == 1:
+            raw = serialize_message(msg)
+            t1 = time.perf_counter()
+            read_bytes.publish(raw)
+            times['serialise'].append(t1 - t0)
+            times['bytes, read'].append(time.perf_counter() - t1)
+        else:
+            unread.publish(msg)
+            times['message, unread'].append(time.perf_counter() - t0)
+    for what, t in times.items():
+        t = np.array(t) * 1e6
+        print(f'{args.reliability:11s} {what:16s}: median {np.median(t):6.1f} us, '
+              f'p99 {np.percentile(t, 99):6.1f} us ({len(t)})')
+    sink.terminate()
+    sink.wait()
+    node.destroy_node()
+    rclpy.shutdown()
+
+
+if __name__ == '__main__':
+    main()
