@@ -38,7 +38,7 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -369,7 +369,11 @@ def main(args: list[str] | None = None) -> int:
     node = None
     try:
         node = GyroDenoiser()
-        rclpy.spin(node)
+        # its own executor: rclpy.spin's global one is None when a signal has already
+        # shut rclpy down (Ctrl-C during start-up); this one then returns at once
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        executor.spin()
     except DenoiseError as err:
         print(f'gyro_denoiser: error: {err}', file=sys.stderr)
         return 1
@@ -381,7 +385,11 @@ def main(args: list[str] | None = None) -> int:
     finally:
         if node is not None:
             node.destroy_node()
-        rclpy.try_shutdown()
+        try:
+            rclpy.try_shutdown()
+        except _rclpy.RCLError:  # a signal's shutdown landed between its check and its call
+            if rclpy.ok():
+                raise
     return 0
 
 

@@ -2,6 +2,8 @@
 # Licensed under the Apache License, Version 2.0
 """The gyro_denoiser node in-process: topics, headers, bad input, fuzz, services."""
 
+import os
+
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.learn.checkpoint import load_model, save_model
 from denoise_imu_ros.learn.model import correct_gyro
@@ -278,6 +280,26 @@ def test_qos_is_overridable_through_parameters(harness):
                    'qos_overrides./imu/corrected.publisher.depth': 7})
     assert h.node._pub_imu.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
     assert h.node._pub_imu.qos_profile.depth == 7
+
+
+def test_ctrl_c_during_start_up_ends_the_node_cleanly(tmp_path, model_file):
+    """A SIGINT after the node is built but before it spins: exit 0, no traceback."""
+    script = tmp_path / 'race.py'
+    script.write_text(f"""
+import os, signal, sys
+from denoise_imu_ros.runtime import node
+built = node.GyroDenoiser.__init__
+def init(self, **kwargs):
+    built(self, **kwargs)
+    os.kill(os.getpid(), signal.SIGINT)  # rclpy's handler shuts its context down
+node.GyroDenoiser.__init__ = init
+sys.exit(node.main(['--ros-args', '-p', 'model:={model_file}']))
+""")
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=120, env=dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN)))
+    assert run.returncode == 0 and 'Traceback' not in run.stderr, run.stderr
 
 
 def test_the_node_needs_no_torch_and_equals_the_batch_network(tmp_path):
