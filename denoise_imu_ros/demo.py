@@ -49,6 +49,7 @@ from .core.msgs import stamp_ns
 from .core.records import Sequence
 from .data.load import load_sequence
 from .evaluation.plots import plot_errors
+from .runtime.node import shutdown_rclpy
 from .runtime.player import Player, read_imu_messages
 from .runtime.streaming import StreamingCorrector
 
@@ -173,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
         executor.shutdown()
         player.destroy_node()
         monitor.destroy_node()
-        rclpy.try_shutdown()
+        shutdown_rclpy()
     return 0
 
 

@@ -385,12 +385,17 @@ def main(args: list[str] | None = None) -> int:
     finally:
         if node is not None:
             node.destroy_node()
-        try:
-            rclpy.try_shutdown()
-        except _rclpy.RCLError:  # a signal's shutdown landed between its check and its call
-            if rclpy.ok():
-                raise
+        shutdown_rclpy()
     return 0
+
+
+def shutdown_rclpy() -> None:
+    """Shut rclpy down unless a signal did: ``try_shutdown`` can race the signal's own."""
+    try:
+        rclpy.try_shutdown()
+    except _rclpy.RCLError:  # the signal's shutdown landed between its check and its call
+        if rclpy.ok():
+            raise
 
 
 if __name__ == '__main__':

@@ -100,6 +100,7 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,
     """Run ``denoise-imu play``: initialise rclpy, publish the bag, shut down."""
     import rclpy
     from rclpy.executors import ExternalShutdownException
+    from .node import shutdown_rclpy
     messages = read_imu_messages(bag, imu_topic)
     try:
         validate_topic_name(topic)
@@ -123,5 +124,5 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,
     finally:
         if player is not None:
             player.destroy_node()
-        rclpy.try_shutdown()
+        shutdown_rclpy()
     return 0
