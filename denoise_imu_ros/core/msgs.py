@@ -140,7 +140,7 @@ def reorient(msg: Any, quat: np.ndarray, orientation_cov: Any) -> Any:
     as imu/data (a publish serialises at once): one message built per sample, not two.
     """
     o = msg.orientation
-    o.x, o.y, o.z, o.w = (float(v) for v in quat)
+    o.x, o.y, o.z, o.w = map(float, quat)
     msg.orientation_covariance = np.asarray(orientation_cov, np.float64)
     return msg
 
@@ -157,7 +157,7 @@ def attitude(types: MsgTypes, raw: Any, frame_id: str, quat: np.ndarray,
                                        quaternion=_quat(types, quat))
     into.header.stamp = raw.header.stamp
     q = into.quaternion
-    q.x, q.y, q.z, q.w = (float(v) for v in quat)
+    q.x, q.y, q.z, q.w = map(float, quat)
     return into
 
 

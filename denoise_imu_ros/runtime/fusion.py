@@ -95,8 +95,11 @@ def _vqf(rate_hz: float, settings: FusionSettings) -> VQF:
                restBiasEstEnabled=settings.bias_estimation, magDistRejectionEnabled=False)
 
 
+_XYZW = np.array([1, 2, 3, 0])  # VQF's wxyz to the package's xyzw
+
+
 def _xyzw(wxyz: np.ndarray) -> np.ndarray:
-    return wxyz[..., [1, 2, 3, 0]]
+    return wxyz.take(_XYZW, axis=-1)
 
 
 class GravityFilter:
@@ -106,18 +109,19 @@ class GravityFilter:
         self.settings = settings
         self._vqf = _vqf(rate_hz, settings)
         self._accel_bias = np.array(settings.accel_bias_m_s2)
-        self._last_gyro: np.ndarray | None = None
+        # preallocated: this runs on every IMU message
+        self._gyro, self._accel = np.zeros(3), np.empty(3)
 
     def reset(self) -> None:
         """Start again: the next sample's accelerometer sets the tilt, yaw 0."""
         self._vqf.resetState()
-        self._last_gyro = None
+        self._gyro[:] = 0.0
 
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
         """Orientation (4,) xyzw at this sample's stamp; ``gyro`` drives the next step."""
-        self._vqf.update(np.zeros(3) if self._last_gyro is None else self._last_gyro,
-                         np.asarray(accel, dtype=np.float64) - self._accel_bias)
-        self._last_gyro = np.array(gyro, dtype=np.float64)
+        np.subtract(accel, self._accel_bias, out=self._accel)
+        self._vqf.update(self._gyro, self._accel)  # the last sample's gyro, 0 at the start
+        self._gyro[:] = gyro
         return _xyzw(self._vqf.getQuat6D())
 
 
