@@ -19,8 +19,9 @@ each fed the same real V1_01 IMU messages through its own subscription callback,
 subscriber on every output topic in a process of its own, so that each publish
 serialises and sends to a reader that takes it; the rounds alternate between the nodes.
 Messages are handed over at ``--rate`` (an IMU's pace, so that the reader keeps up as it
-would on a robot; 0: back to back). Prints the median and p99 callback time of each, and
-the median over rounds of their ratio.
+would on a robot; 0: back to back). Prints the median and p99 callback time of each, the
+median over rounds of their ratio, and how much of the difference is the imu/data
+publish itself (rclpy's, timed around the call in the same callbacks).
 Run: .venv/bin/python bench/fusion_cost.py [--model euroc] [--messages 3000] [--rounds 3]
 [--rate 1000]
 """
@@ -85,14 +86,23 @@ def main() -> None:
         sink.terminate()
         sys.exit(f'fusion_cost: no reader on {", ".join(sorted(set(unread())))}: '
                  'the publishes would cost nothing')
+    publish_s: list[float] = []  # imu/data's publish call, inside the callbacks timed
+    fused = nodes[True]._pub_fused
+    rclpy_publish = fused.publish
+
+    def timed_publish(msg) -> None:
+        t = time.perf_counter()
+        rclpy_publish(msg)
+        publish_s.append(time.perf_counter() - t)
+    fused.publish = timed_publish
     times = {True: [], False: []}
-    ratios = []
+    ratios, ratios_less = [], []
     for _ in range(args.rounds):
         medians = {}
         for on, node in nodes.items():
             node._denoiser.engine.reset()
             node._denoiser._last_ns = None
-            this = []
+            this, less = [], []
             due = time.perf_counter()
             for m in messages:
                 if args.rate > 0:  # sleep most of the wait, spin the last 0.2 ms of it
@@ -100,18 +110,25 @@ def main() -> None:
                     time.sleep(max(0.0, due - time.perf_counter() - 2e-4))
                     while time.perf_counter() < due:
                         pass
+                first = len(publish_s)
                 t0 = time.perf_counter()
                 node._on_imu(m)
                 this.append(time.perf_counter() - t0)
+                less.append(this[-1] - sum(publish_s[first:]))
             times[on] += this
             medians[on] = np.median(this)
+            if on:
+                median_less = np.median(less)
         ratios.append(medians[True] / medians[False])
+        ratios_less.append(median_less / medians[False])
     for on in (True, False):
         t = np.array(times[on]) * 1e6
         print(f'imu/data {"on " if on else "off"}: median {np.median(t):7.1f} us, '
               f'p99 {np.percentile(t, 99):7.1f} us per message ({len(t)} messages)')
     print(f'ratio on/off: {np.median(ratios):.2f} (median over {len(ratios)} rounds; '
           f'each round: {", ".join(f"{r:.2f}" for r in ratios)})')
+    print(f'of which the imu/data publish call: median {np.median(publish_s) * 1e6:.1f} us; '
+          f'ratio on/off without it: {np.median(ratios_less):.2f}')
     sink.terminate()
     for node in nodes.values():
         node.destroy_node()
