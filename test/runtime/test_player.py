@@ -42,6 +42,7 @@ def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, eur
 def test_sigterm_stops_play_quietly_and_says_how_far_it_got():
     """A supervisor's SIGTERM (or a timeout) shut rclpy down: no traceback, exit 0."""
     import os
+    import select
     import signal
     import subprocess
     import sys
@@ -49,9 +50,19 @@ def test_sigterm_stops_play_quietly_and_says_how_far_it_got():
     env = {**os.environ, 'ROS_DOMAIN_ID': str(DOMAIN)}
     play = subprocess.Popen([sys.executable, '-m', 'denoise_imu_ros.cli', 'play', str(SAMPLE),
                              '--wait', '0'], env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    time.sleep(4)  # imports, then a second or two of the 90 s bag
+                            stderr=subprocess.PIPE)
+    # the signal must come once play is publishing (rclpy's handlers in place), however
+    # long the imports take on a loaded machine: its "playing anyway" warning says so
+    err, deadline = b'', time.monotonic() + 60
+    while b'playing anyway' not in err and time.monotonic() < deadline:
+        if select.select([play.stderr], [], [], 1.0)[0]:
+            chunk = os.read(play.stderr.fileno(), 4096)
+            if not chunk:
+                break
+            err += chunk
+    time.sleep(1)  # a second of the 90 s bag
     play.send_signal(signal.SIGTERM)
-    out, err = play.communicate(timeout=30)
+    out, rest = play.communicate(timeout=30)
+    out, err = out.decode(), (err + rest).decode()
     assert play.returncode == 0 and 'Traceback' not in err, err
     assert '(stopped: ' in out and ' of 18000)' in out, out
