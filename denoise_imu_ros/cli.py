@@ -64,16 +64,19 @@ def _train(args: argparse.Namespace) -> None:
           f'{result.meta["train_seconds"]:.0f} s')
 
 
-def _guard_output(output: str | Path, inputs: list[str | Path], overwrite: bool) -> None:
+def _guard_output(output: str | Path, inputs: list[str | Path], overwrite: bool | None) -> None:
     """
     Apply the one output policy: never over an input, nor over a file unless asked.
 
     An output that is an input, or lies inside an input folder (an ASL recording's CSV,
-    a bag's inner file), is refused whatever ``--overwrite`` says.
+    a bag's inner file), is refused whatever ``--overwrite`` says. ``overwrite`` None: the
+    command has no ``--overwrite`` (a bag it writes is never replaced).
     """
     _not_an_input(output, inputs)
     if Path(output).exists() and not overwrite:
-        raise OutputError(f'{output}: exists already (pass --overwrite to replace it)')
+        raise OutputError(f'{output}: exists already (' + (
+            'pass --overwrite to replace it)' if overwrite is not None else
+            'a bag is never written over: remove it or choose another name)'))
 
 
 def _not_an_input(output: str | Path, inputs: list[str | Path]) -> None:
@@ -170,12 +173,13 @@ def _eval(args: argparse.Namespace) -> None:
 
 
 def _noise(args: argparse.Namespace) -> None:
-    from .evaluation.noise import markdown, noise
+    from .evaluation.noise import markdown, noise, yaml_snippet
     _not_an_input(args.out, _report_inputs(args))
     report = noise(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
                    imu_topic=args.imu_topic, pose_topic=args.pose_topic)
     sys.stdout.write(markdown(report))
-    print(f'\nYAML for a VIO, Allan plots and JSON in {args.out}/')
+    print(f'\nFor a VIO ({args.out}/noise.yaml; Allan plots and JSON beside it):\n')
+    sys.stdout.write(yaml_snippet(report['pooled'], ', '.join(report['recordings'])))
 
 
 def _warn_if_not_recommended(model: str) -> None:
@@ -199,7 +203,7 @@ def _convert(args: argparse.Namespace) -> None:
     from .data.asl import read_asl
     from .data.bags import IMU_TOPIC, POSE_TOPIC, write_bag
     from .data.timebase import crop, overlap
-    _guard_output(args.out_bag, [args.asl_dir], overwrite=False)
+    _guard_output(args.out_bag, [args.asl_dir], overwrite=None)
     rec = read_asl(args.asl_dir)
     rec = crop(overlap(rec) if args.overlap else rec, args.start, args.duration)
     write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress,
@@ -210,7 +214,8 @@ def _convert(args: argparse.Namespace) -> None:
 def _process_bag(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file
     from .runtime.process_bag import process_bag
-    _guard_output(args.output, [args.input, read_model_file(args.model).path], overwrite=False)
+    _guard_output(args.output, [args.input, read_model_file(args.model).path],
+                  overwrite=None)
     _warn_if_not_recommended(args.model)
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame,
@@ -305,7 +310,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('eval', parents=[topics],
                        help='AOE/ROE of raw, calibrated and corrected gyro integration')
-    p.add_argument('--model', required=True, help='shipped name (euroc, tumvi) or file')
+    p.add_argument('--model', required=True, help='shipped name (euroc, tumvi, euroc_calibrated, tumvi_calibrated) or file')
     p.add_argument('--data', required=True, help='folder holding the sequences')
     p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags')
     p.add_argument('--out', required=True, help='output folder (JSON, Markdown, PNG)')
@@ -370,8 +375,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser('play', parents=[topics],
                        help="publish a bag's IMU in real time (ros2 bag play stand-in)")
     p.add_argument('bag')
-    p.add_argument('--topic', default='imu/data_raw', help='topic to publish on')
-    p.add_argument('--rate', type=float, default=1.0, help='playback speed factor')
+    p.add_argument('--topic', default='imu/data_raw', help='topic to publish on (default: %(default)s)')
+    p.add_argument('--rate', type=float, default=1.0,
+                   help='playback speed factor (default: %(default)s)')
     p.add_argument('--clock', action='store_true', help='also publish /clock')
     p.add_argument('--wait', type=float, default=10.0,
                    help='s to wait for a subscriber before playing (default 10)')

@@ -39,8 +39,8 @@ def test_a_model_its_validation_advises_against_runs_with_a_warning(tmp_path, ca
     verdict = load_model('tumvi').meta['crossval']['verdict']
     assert verdict.endswith('deploy no correction')
     assert capsys.readouterr().err == (
-        'warning: tumvi.safetensors is a network model, but its cross-recording validation '
-        f'says: {verdict}\n')
+        'warning: tumvi.safetensors is a network model, but the cross-recording validation '
+        f'of its recipe says: {verdict}\n')
 
 
 def test_errors_are_one_line_naming_the_file(model_file, tmp_path, capsys):
@@ -187,4 +187,5 @@ def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_p
     # process-bag twice to one output: the second is refused before it reads anything
     assert main(['process-bag', str(bag), str(tmp_path / 'pb'), '--model', str(model_file)]) == 0
     assert main(['process-bag', str(bag), str(tmp_path / 'pb'), '--model', str(model_file)]) == 1
-    assert 'exists already' in _error(capsys)
+    err = _error(capsys)  # it has no --overwrite to suggest
+    assert 'exists already' in err and 'remove it' in err and '--overwrite' not in err

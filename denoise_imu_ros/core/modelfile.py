@@ -97,8 +97,8 @@ def deployment_warning(loaded: ModelFile) -> str | None:
     kind = 'calibration' if loaded.config.calibration_only else 'network'
     if deploy not in ('network', 'calibration', 'none') or deploy == kind:
         return None
-    return (f'{loaded.path.name} is a {kind} model, but its cross-recording validation '
-            f'says: {report.get("verdict")}')
+    return (f'{loaded.path.name} is a {kind} model, but the cross-recording validation of '
+            f'its recipe says: {report.get("verdict")}')
 
 
 def shipped_models() -> list[str]:

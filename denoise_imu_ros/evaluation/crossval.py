@@ -47,6 +47,9 @@ from ..learn.train import train
 def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:
     """Held-out groups, round-robin over the recipe's list; None = leave one out."""
     k = len(recordings) if k is None else k
+    if len(recordings) < 2:
+        raise TrainingError(f'cross-recording validation needs at least two recordings in the '
+                            f'recipe (it has {len(recordings)}): each fold holds one out')
     if not 2 <= k <= len(recordings):
         raise TrainingError(f'folds must be between 2 and {len(recordings)} (one per '
                             f'recording of the recipe), got {k}')

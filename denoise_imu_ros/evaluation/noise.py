@@ -123,11 +123,24 @@ def covariance_check(err: np.ndarray, std: np.ndarray,
     return out
 
 
-def yaml_snippet(name: str, fig: dict[str, Any], where: str) -> str:
-    """Return the lines to paste into a Kalibr / OpenVINS / VINS-Fusion IMU configuration."""
-    return (f'# {name} gyro, measured against ground truth on {where} (denoise-imu noise)\n'
-            f'gyroscope_noise_density: {fig["gyroscope_noise_density"]:.3e}  # rad/s/sqrt(Hz)\n'
-            f'gyroscope_random_walk: {fig["gyroscope_random_walk"]:.3e}  # rad/s^2/sqrt(Hz)\n')
+def yaml_snippet(pooled: dict[str, dict[str, Any]], where: str) -> str:
+    """
+    Return the lines to paste into a Kalibr / OpenVINS / VINS-Fusion IMU configuration.
+
+    One YAML document: the corrected gyro's figures (what ``imu/corrected`` publishes) as
+    the keys, the other gyros' as comments for comparison (a key twice is not YAML).
+    """
+    def line(fig: dict[str, Any], comment: str = '') -> str:
+        return (f'{comment}gyroscope_noise_density: {fig["gyroscope_noise_density"]:.3e}'
+                f'  # rad/s/sqrt(Hz)\n'
+                f'{comment}gyroscope_random_walk: {fig["gyroscope_random_walk"]:.3e}'
+                f'  # rad/s^2/sqrt(Hz)\n')
+    text = (f'# corrected gyro (imu/corrected), measured against ground truth on {where} '
+            f'(denoise-imu noise)\n' + line(pooled['corrected']))
+    for name, fig in pooled.items():
+        if name != 'corrected':
+            text += f'# the {name} gyro, for comparison:\n' + line(fig, '# ')
+    return text
 
 
 def plot(path: Path, curves: dict[str, dict[str, Any]]) -> None:
@@ -152,15 +165,13 @@ def plot(path: Path, curves: dict[str, dict[str, Any]]) -> None:
 
 
 def write(out: Path, report: dict[str, Any]) -> None:
-    """results: noise.json, noise.yaml (one snippet per gyro), allan_<recording>.png."""
+    """results: noise.json, noise.yaml (:func:`yaml_snippet`), allan_<recording>.png."""
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise OutputError(f'{out}: cannot create the output folder ({err.strerror})') from err
     write_text(out / 'noise.json', jsonio.dumps(report, indent=2))
-    write_text(out / 'noise.yaml', '\n'.join(
-        yaml_snippet(g, f, ', '.join(report['recordings']))
-        for g, f in report['pooled'].items()))
+    write_text(out / 'noise.yaml', yaml_snippet(report['pooled'], ', '.join(report['recordings'])))
     for name, curves in report['recordings'].items():
         plot(out / f'allan_{name}.png', {g: c['figures'] for g, c in curves.items()})
 

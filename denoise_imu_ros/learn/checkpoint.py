@@ -59,7 +59,9 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
     rates = [m.meta.get('sample_rate_hz') for m in members]
     rate = sample_rate(members[0])
     if any(not isinstance(r, (int, float)) or abs(r / rate - 1) > 1e-3 for r in rates):
-        raise ModelFileError(f'ensemble members were trained at different rates: {rates}')
+        shown = ', '.join(f'{r:.2f} Hz' if isinstance(r, (int, float)) else repr(r)
+                          for r in rates)
+        raise ModelFileError(f'ensemble members were trained at different rates: {shown}')
     try:
         model = merge([m.model for m in members])
     except ValueError as err:

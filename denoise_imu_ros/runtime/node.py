@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections import deque
 import math
+import re
 import sys
 import time
 
@@ -72,7 +73,8 @@ DRAIN_MAX = 50  # queued messages one callback takes after its own
 
 PARAMETERS = [
     ('model', 'euroc', _param(
-        'Shipped model name (euroc, tumvi) or path to a .safetensors model file.',
+        'Shipped model name (euroc, tumvi, euroc_calibrated, tumvi_calibrated) or path to a '
+        '.safetensors model file.',
         read_only=True)),
     ('fixed_frame', 'odom', _param(
         'frame_id of imu/attitude: gravity-aligned at start (roll/pitch from the '
@@ -127,7 +129,10 @@ class GyroDenoiser(Node):
         try:
             self.declare_parameters('', PARAMETERS)
         except ParameterException as err:  # a wrong type or range given at start-up
-            raise DenoiseError(f'bad parameter: {" ".join(str(err).split())}') from err
+            why = ' '.join(str(err).split())
+            if "of type 'INTEGER', expecting type 'DOUBLE'" in why:  # ROS does not convert
+                why += ' (write a decimal parameter with a point, e.g. 3.0)'
+            raise DenoiseError(f'bad parameter: {why}') from err
         p = self.get_parameter
         loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()
         fusion = self._fusion_settings(loaded) if p('publish_fused').value else None
@@ -182,6 +187,15 @@ class GyroDenoiser(Node):
                f'{[round(b, 4) for b in fusion.accel_bias_m_s2]} m/s^2)'))
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)
+        # rclpy ignores a value given for a parameter no node declares: say so, since a
+        # misspelt name would otherwise run with the default (the QoS overrides are
+        # declared by now, with the publishers and the subscription)
+        given = getattr(self, '_parameter_overrides', {})  # rclpy keeps them, privately
+        self.unknown_parameters = sorted(n for n in given if not self.has_parameter(n))
+        if self.unknown_parameters:
+            self.get_logger().warning(
+                f'ignored parameters this node does not have: '
+                f'{", ".join(self.unknown_parameters)} (gyro_denoiser --help lists its own)')
 
     # -- parameters ---------------------------------------------------------------
     def _apply_parameters(self) -> None:
@@ -356,7 +370,12 @@ Example: gyro_denoiser --ros-args --params-file config/gyro_denoiser.yaml -p mod
 def main(args: list[str] | None = None) -> int:
     """Entry point of ``gyro_denoiser`` (console script and ``ros2 run``)."""
     # args, as in tests, holds no program name; sys.argv does
-    rest = remove_ros_args(sys.argv)[1:] if args is None else remove_ros_args(args)
+    try:
+        rest = remove_ros_args(sys.argv)[1:] if args is None else remove_ros_args(args)
+    except _rclpy.RCLInvalidROSArgsError as err:  # e.g. a missing or malformed params file
+        where = re.sub(r',? at \S+:\d+', '', str(err))  # rcl's source locations
+        print(f'gyro_denoiser: error: {" ".join(where.split())}', file=sys.stderr)
+        return 1
     if rest and rest[0] in ('-h', '--help'):
         print(USAGE, end='')
         return 0

@@ -24,6 +24,8 @@ def test_folds_hold_every_recording_out_exactly_once():
     assert sorted(sum(folds(names, 2), [])) == names and len(folds(names, 2)) == 2
     with pytest.raises(TrainingError, match='folds must be between 2 and 5'):
         folds(names, 1)
+    with pytest.raises(TrainingError, match='needs at least two recordings in the recipe'):
+        folds(['a'])
 
 
 def test_verdict_follows_the_figures():

@@ -4,6 +4,7 @@
 
 from denoise_imu_ros.evaluation.noise import covariance_check, figures, yaml_snippet
 import numpy as np
+import yaml
 
 
 def test_the_fit_recovers_white_noise_and_random_walk_and_keeps_pose_noise_apart():
@@ -17,8 +18,13 @@ def test_the_fit_recovers_white_noise_and_random_walk_and_keeps_pose_noise_apart
     assert abs(fig['gyroscope_noise_density'] / density - 1) < 0.2
     assert 0.5 < fig['gyroscope_random_walk'] / walk < 2.0
     assert all(abs(a['angle_noise_rad'] / angle - 1) < 0.2 for a in fig['per_axis'])
-    snippet = yaml_snippet('corrected', fig, 'a test')
-    assert 'gyroscope_noise_density: 2.' in snippet and 'gyroscope_random_walk:' in snippet
+    raw = dict(fig, gyroscope_noise_density=5e-3, gyroscope_random_walk=7e-4)
+    snippet = yaml_snippet({'raw': raw, 'corrected': fig}, 'a test')
+    pasted = yaml.safe_load(snippet)  # one document: the corrected gyro's keys, once each
+    keys = [line.split(':')[0] for line in snippet.splitlines() if not line.startswith('#')]
+    assert keys == ['gyroscope_noise_density', 'gyroscope_random_walk'] == list(pasted)
+    assert abs(pasted['gyroscope_noise_density'] / density - 1) < 0.2
+    assert '# gyroscope_noise_density: 5.000e-03' in snippet  # the raw one, a comment
 
 
 def test_the_covariance_check_counts_samples_inside_one_two_three_sigma():

@@ -49,8 +49,8 @@ def test_a_model_of_another_kind_than_its_validation_recommends_says_so(
     assert (warning is not None) == warns
     if warns:
         kind = 'calibration' if calibration_only else 'network'
-        assert warning == (f'm.safetensors is a {kind} model, but its cross-recording '
-                           f'validation says: ... deploy {deploy}')
+        assert warning == (f'm.safetensors is a {kind} model, but the cross-recording '
+                           f'validation of its recipe says: ... deploy {deploy}')
 
 
 def test_corrupt_foreign_and_missing_files_raise_model_file_error(tmp_path):

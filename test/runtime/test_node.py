@@ -206,8 +206,8 @@ def test_a_model_its_cross_recording_validation_advises_against_warns(model_file
     h.spin_until(lambda: h.diagnostics, timeout=5.0)
     status = h.diagnostics[-1].status[0]
     assert status.level == DiagnosticStatus.WARN
-    assert status.message == ('model.safetensors is a network model, but its cross-recording '
-                              'validation says: the network does not beat plain integration '
+    assert status.message == ('model.safetensors is a network model, but the cross-recording '
+                              'validation of its recipe says: the network does not beat plain integration '
                               'on unseen recordings (1 of 3, -61 % in mean AOE): deploy no '
                               'correction')
     assert len(h.corrected) == 600  # it still runs: the user decides
@@ -373,7 +373,24 @@ def test_a_bad_parameter_is_a_one_line_error_at_start_up(args, message, capsys):
 def test_a_params_file_with_an_int_for_a_double_is_refused(tmp_path, capsys):
     (tmp_path / 'p.yaml').write_text('/**:\n  ros__parameters:\n    max_gap_factor: 3\n')
     assert main(['--ros-args', '--params-file', str(tmp_path / 'p.yaml')]) == 1
-    assert "parameter 'max_gap_factor'" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "parameter 'max_gap_factor'" in err and 'with a point, e.g. 3.0' in err
+
+
+def test_a_missing_or_malformed_params_file_is_a_one_line_error(tmp_path, capsys):
+    (tmp_path / 'bad.yaml').write_text('x: [\n')
+    for name in ('missing.yaml', 'bad.yaml'):
+        assert main(['--ros-args', '--params-file', str(tmp_path / name)]) == 1
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("gyro_denoiser: error: Failed to parse ROS arguments: Couldn't "
+                              'parse params file') and name in err
+        assert len(err.splitlines()) == 1 and '/project/src' not in err
+
+
+def test_a_misspelt_parameter_is_named_not_silently_ignored(harness):
+    h = harness(modle='tumvi', max_gap_factor=4.0)
+    assert h.node.unknown_parameters == ['modle']
+    assert harness().node.unknown_parameters == []  # nor a false alarm for the QoS ones
 
 
 def test_help_and_unknown_arguments(capsys):
