@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 from pathlib import Path
 import sys
 import tempfile
@@ -102,8 +101,12 @@ def _check_writable(folder: str | Path | None) -> None:
         Path(folder).mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise DenoiseError(f'{folder}: cannot create the output folder ({err.strerror})') from err
-    if not os.access(folder, os.W_OK):
-        raise DenoiseError(f'{folder}: output folder is not writable')
+    try:  # a real file: permission bits say nothing to root, nor of /proc or a full disk
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as err:
+        raise DenoiseError(f'{folder}: output folder is not writable (a file cannot be '
+                           f'created there: {err.strerror})') from err
 
 
 def _crossval(args: argparse.Namespace) -> None:
@@ -310,7 +313,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('eval', parents=[topics],
                        help='AOE/ROE of raw, calibrated and corrected gyro integration')
-    p.add_argument('--model', required=True, help='shipped name (euroc, tumvi, euroc_calibrated, tumvi_calibrated) or file')
+    p.add_argument('--model', required=True,
+                   help='shipped name (euroc, tumvi, euroc_calibrated, tumvi_calibrated) or file')
     p.add_argument('--data', required=True, help='folder holding the sequences')
     p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags')
     p.add_argument('--out', required=True, help='output folder (JSON, Markdown, PNG)')
@@ -375,7 +379,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser('play', parents=[topics],
                        help="publish a bag's IMU in real time (ros2 bag play stand-in)")
     p.add_argument('bag')
-    p.add_argument('--topic', default='imu/data_raw', help='topic to publish on (default: %(default)s)')
+    p.add_argument('--topic', default='imu/data_raw',
+                   help='topic to publish on (default: %(default)s)')
     p.add_argument('--rate', type=float, default=1.0,
                    help='playback speed factor (default: %(default)s)')
     p.add_argument('--clock', action='store_true', help='also publish /clock')

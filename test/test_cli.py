@@ -2,6 +2,8 @@
 # Licensed under the Apache License, Version 2.0
 """denoise-imu correct / eval end to end, and one-line errors with exit code 1."""
 
+from pathlib import Path
+
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.learn.checkpoint import load_model
@@ -136,6 +138,10 @@ def test_garbage_inputs_and_bad_options_are_one_line_errors(model_file, tmp_path
                           ('--wait', 'nan')):
         cases.append((['play', str(SAMPLE), option, value], f'{option} {value}: must be'))
     cases.append((['train', '--config', 'x.yaml', '--seed', '-1'], '--seed -1: must be'))
+    recipe = str(Path(__file__).resolve().parents[1] / 'config' / 'train_euroc.yaml')
+    # checked by creating a file, before any training: /proc passes a permission test
+    cases.append((['train', '--config', recipe, '--out', '/proc/m.safetensors'],
+                  '/proc: output folder is not writable'))
     cases.append((['crossval', '--config', 'x.yaml', '--seeds', '0', '-1'], '--seeds -1: must be'))
     for argv, message in cases:
         assert main(argv) == 1, argv

@@ -109,6 +109,9 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                'denoise-imu crossval before deploying it' if weak else
                "supervision: a constant bias fitted on each recording's poses lowers its "
                'attitude error')
+    if len(sequences) < 2:
+        why.append('one recording: train works, crossval (whether the network beats plain '
+                   'integration on a recording it never saw) needs at least two')
     return recipe, why
 
 
