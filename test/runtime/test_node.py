@@ -207,9 +207,9 @@ def test_a_model_its_cross_recording_validation_advises_against_warns(model_file
     status = h.diagnostics[-1].status[0]
     assert status.level == DiagnosticStatus.WARN
     assert status.message == ('model.safetensors is a network model, but the cross-recording '
-                              'validation of its recipe says: the network does not beat plain integration '
-                              'on unseen recordings (1 of 3, -61 % in mean AOE): deploy no '
-                              'correction')
+                              'validation of its recipe says: the network does not beat plain '
+                              'integration on unseen recordings (1 of 3, -61 % in mean AOE): '
+                              'deploy no correction')
     assert len(h.corrected) == 600  # it still runs: the user decides
 
 
