@@ -38,6 +38,7 @@ from denoise_imu_ros.runtime.node import GyroDenoiser
 import numpy as np
 import rclpy
 from rclpy.parameter import Parameter
+from sensor_msgs.msg import Imu
 
 SINK = """
 from geometry_msgs.msg import QuaternionStamped
@@ -90,7 +91,7 @@ def main() -> None:
     fused = nodes[True]._pub_fused
     rclpy_publish = fused.publish
 
-    def timed_publish(msg) -> None:
+    def timed_publish(msg: Imu) -> None:
         t = time.perf_counter()
         rclpy_publish(msg)
         publish_s.append(time.perf_counter() - t)
@@ -98,7 +99,7 @@ def main() -> None:
     times = {True: [], False: []}
     ratios, ratios_less = [], []
     for _ in range(args.rounds):
-        medians = {}
+        medians, medians_less = {}, {}
         for on, node in nodes.items():
             node._denoiser.engine.reset()
             node._denoiser._last_ns = None
@@ -117,10 +118,9 @@ def main() -> None:
                 less.append(this[-1] - sum(publish_s[first:]))
             times[on] += this
             medians[on] = np.median(this)
-            if on:
-                median_less = np.median(less)
+            medians_less[on] = np.median(less)  # off: nothing to take away
         ratios.append(medians[True] / medians[False])
-        ratios_less.append(median_less / medians[False])
+        ratios_less.append(medians_less[True] / medians[False])
     for on in (True, False):
         t = np.array(times[on]) * 1e6
         print(f'imu/data {"on " if on else "off"}: median {np.median(t):7.1f} us, '

@@ -31,6 +31,7 @@ from .core.errors import DenoiseError, OptionError, OutputError
 # Commands that run the torch network; the others (process-bag, play, check-data,
 # convert, init-recipe, correct --engine streaming) never import torch.
 TORCH_COMMANDS = ('train', 'crossval', 'eval', 'ensemble', 'tune-fusion', 'noise')
+NEVER_OVER_A_BAG = 'a bag is never written over: remove it or choose another name'
 
 
 def _train(args: argparse.Namespace) -> None:
@@ -63,19 +64,19 @@ def _train(args: argparse.Namespace) -> None:
           f'{result.meta["train_seconds"]:.0f} s')
 
 
-def _guard_output(output: str | Path, inputs: list[str | Path], overwrite: bool | None) -> None:
+def _guard_output(output: str | Path, inputs: list[str | Path], overwrite: bool,
+                  instead: str = 'pass --overwrite to replace it') -> None:
     """
     Apply the one output policy: never over an input, nor over a file unless asked.
 
     An output that is an input, or lies inside an input folder (an ASL recording's CSV,
-    a bag's inner file), is refused whatever ``--overwrite`` says. ``overwrite`` None: the
-    command has no ``--overwrite`` (a bag it writes is never replaced).
+    a bag's inner file), is refused whatever ``--overwrite`` says; ``instead`` is what
+    the refusal of an existing output suggests (a command without ``--overwrite`` says
+    something else).
     """
     _not_an_input(output, inputs)
     if Path(output).exists() and not overwrite:
-        raise OutputError(f'{output}: exists already (' + (
-            'pass --overwrite to replace it)' if overwrite is not None else
-            'a bag is never written over: remove it or choose another name)'))
+        raise OutputError(f'{output}: exists already ({instead})')
 
 
 def _not_an_input(output: str | Path, inputs: list[str | Path]) -> None:
@@ -101,7 +102,7 @@ def _check_writable(folder: str | Path | None) -> None:
         Path(folder).mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise DenoiseError(f'{folder}: cannot create the output folder ({err.strerror})') from err
-    try:  # a real file: permission bits say nothing to root, nor of /proc or a full disk
+    try:  # a real file: permission bits say nothing to root, nor of /proc
         with tempfile.TemporaryFile(dir=folder):
             pass
     except OSError as err:
@@ -206,7 +207,7 @@ def _convert(args: argparse.Namespace) -> None:
     from .data.asl import read_asl
     from .data.bags import IMU_TOPIC, POSE_TOPIC, write_bag
     from .data.timebase import crop, overlap
-    _guard_output(args.out_bag, [args.asl_dir], overwrite=None)
+    _guard_output(args.out_bag, [args.asl_dir], False, NEVER_OVER_A_BAG)
     rec = read_asl(args.asl_dir)
     rec = crop(overlap(rec) if args.overlap else rec, args.start, args.duration)
     write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress,
@@ -217,8 +218,8 @@ def _convert(args: argparse.Namespace) -> None:
 def _process_bag(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file
     from .runtime.process_bag import process_bag
-    _guard_output(args.output, [args.input, read_model_file(args.model).path],
-                  overwrite=None)
+    _guard_output(args.output, [args.input, read_model_file(args.model).path], False,
+                  NEVER_OVER_A_BAG)
     _warn_if_not_recommended(args.model)
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame,

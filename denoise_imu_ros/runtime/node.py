@@ -130,8 +130,10 @@ class GyroDenoiser(Node):
             self.declare_parameters('', PARAMETERS)
         except ParameterException as err:  # a wrong type or range given at start-up
             why = ' '.join(str(err).split())
-            if "of type 'INTEGER', expecting type 'DOUBLE'" in why:  # ROS does not convert
-                why += ' (write a decimal parameter with a point, e.g. 3.0)'
+            given = re.search(r"parameter '([^']+)' to '(-?\d+)' of type 'INTEGER', "
+                              r"expecting type 'DOUBLE'", why)
+            if given:  # ROS does not convert: say how to write it
+                why += f' (write a decimal with a point: {given[1]}:={given[2]}.0)'
             raise DenoiseError(f'bad parameter: {why}') from err
         p = self.get_parameter
         loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()

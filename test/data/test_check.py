@@ -161,6 +161,11 @@ def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
     assert '16/32 are noise-dominated' in out.read_text().splitlines()[2]
     assert out.read_text().splitlines()[6].startswith(
         '# supervision: the poses of dataset-room5_512_16 do not lower their own attitude')
+    assert 'one recording' not in capsys.readouterr().out  # two: crossval can hold one out
+    one = tmp_path / 'one.yaml'
+    assert main(['init-recipe', '--data', str(data_dir / 'tumvi'), '--sequences', rooms[0],
+                 '--out', str(one)]) == 0
+    assert 'one recording: train works, crossval' in capsys.readouterr().out
 
 
 def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_path, capsys):

@@ -122,6 +122,11 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
     assert main(['ensemble', str(model_file), str(tmp_path / 'd.safetensors'),
                  '--out', str(tmp_path / 'y.safetensors')]) == 1
     assert not (tmp_path / 'y.safetensors').exists()
+    # nor a model of another rate (a NaN rate is refused on reading already)
+    from denoise_imu_ros.learn.checkpoint import save_ensemble
+    save_model(tmp_path / 'e.safetensors', untrained_model(), {'sample_rate_hz': 100.0})
+    with pytest.raises(ModelFileError, match='trained at different rates: 200.00 Hz, 100.00 Hz$'):
+        save_ensemble(tmp_path / 'z.safetensors', [model_file, tmp_path / 'e.safetensors'])
 
 
 def test_model_files_are_readable_by_everyone(tmp_path):

@@ -23,7 +23,12 @@ def imu():
                                       FusionSettings(5.0, False, (-0.01, 0.12, 0.06))])
 def test_online_equals_offline_bit_for_bit(imu, settings):
     online = GravityFilter(200.0, settings)
-    one_by_one = np.array([online.update(row[:3], row[3:]) for row in imu])
+    buffer = np.empty(6)  # the caller refills one array, as a streaming engine may
+
+    def update(row: np.ndarray) -> np.ndarray:
+        buffer[:] = row
+        return online.update(buffer[:3], buffer[3:])
+    one_by_one = np.array([update(row) for row in imu])
     assert np.array_equal(one_by_one, fuse(imu[:, :3], imu[:, 3:], 200.0, settings))
     online.reset()
     assert np.array_equal(online.update(imu[0, :3], imu[0, 3:]), one_by_one[0])

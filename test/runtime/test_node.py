@@ -3,6 +3,7 @@
 """The gyro_denoiser node in-process: topics, headers, bad input, fuzz, services."""
 
 import os
+import re
 
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.learn.checkpoint import load_model, save_model
@@ -374,7 +375,7 @@ def test_a_params_file_with_an_int_for_a_double_is_refused(tmp_path, capsys):
     (tmp_path / 'p.yaml').write_text('/**:\n  ros__parameters:\n    max_gap_factor: 3\n')
     assert main(['--ros-args', '--params-file', str(tmp_path / 'p.yaml')]) == 1
     err = capsys.readouterr().err
-    assert "parameter 'max_gap_factor'" in err and 'with a point, e.g. 3.0' in err
+    assert "parameter 'max_gap_factor'" in err and 'with a point: max_gap_factor:=3.0' in err
 
 
 def test_a_missing_or_malformed_params_file_is_a_one_line_error(tmp_path, capsys):
@@ -384,13 +385,14 @@ def test_a_missing_or_malformed_params_file_is_a_one_line_error(tmp_path, capsys
         err = capsys.readouterr().err.strip()
         assert err.startswith("gyro_denoiser: error: Failed to parse ROS arguments: Couldn't "
                               'parse params file') and name in err
-        assert len(err.splitlines()) == 1 and '/project/src' not in err
+        assert len(err.splitlines()) == 1 and not re.search(r'\.c:\d+', err)  # rcl's files
 
 
 def test_a_misspelt_parameter_is_named_not_silently_ignored(harness):
     h = harness(modle='tumvi', max_gap_factor=4.0)
     assert h.node.unknown_parameters == ['modle']
-    assert harness().node.unknown_parameters == []  # nor a false alarm for the QoS ones
+    qos = harness(**{'qos_overrides./imu/corrected.publisher.depth': 50})
+    assert qos.node.unknown_parameters == []  # QoS overrides are the node's own
 
 
 def test_help_and_unknown_arguments(capsys):

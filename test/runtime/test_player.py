@@ -60,6 +60,7 @@ def test_sigterm_stops_play_quietly_and_says_how_far_it_got():
             if not chunk:
                 break
             err += chunk
+    assert b'playing anyway' in err, err
     time.sleep(1)  # a second of the 90 s bag
     play.send_signal(signal.SIGTERM)
     out, rest = play.communicate(timeout=30)
