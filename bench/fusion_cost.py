@@ -28,7 +28,6 @@ Run: .venv/bin/python bench/fusion_cost.py [--model euroc] [--messages 3000] [--
 
 import argparse
 from pathlib import Path
-import subprocess
 import sys
 import time
 
@@ -38,6 +37,7 @@ from denoise_imu_ros.runtime.node import GyroDenoiser
 import numpy as np
 import rclpy
 from rclpy.parameter import Parameter
+from ros_link import start
 from sensor_msgs.msg import Imu
 
 SINK = """
@@ -75,7 +75,7 @@ def main() -> None:
     nodes = {on: GyroDenoiser(parameter_overrides=[Parameter('model', value=args.model),
                                                    Parameter('publish_fused', value=on)])
              for on in (True, False)}
-    sink = subprocess.Popen([sys.executable, '-c', SINK])
+    sink = start([sys.executable, '-c', SINK])
     deadline = time.monotonic() + 20
 
     def unread() -> list[str]:

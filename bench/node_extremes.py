@@ -26,7 +26,6 @@ Run: .venv/bin/python bench/node_extremes.py [--seconds 30] [--every 10]
 import argparse
 import os
 from pathlib import Path
-import subprocess
 import sys
 import time
 
@@ -40,7 +39,7 @@ import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-from ros_link import wait_until_flowing  # noqa: E402
+from ros_link import start, wait_until_flowing  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc' / 'V1_01_easy'
@@ -53,8 +52,8 @@ def main():
     parser.add_argument('--every', type=int, default=10, help='inject after every N-th sample')
     args = parser.parse_args()
     imu = load_imu(DATA).imu
-    node = subprocess.Popen([sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args',
-                             '-p', 'model:=euroc', '--log-level', 'error'])
+    node = start([sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args',
+                  '-p', 'model:=euroc', '--log-level', 'error'])
     rclpy.init()
     bench = rclpy.create_node('extremes_bench')
     types = msgs.rclpy_types()

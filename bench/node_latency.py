@@ -28,7 +28,6 @@ Needs ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST (set below if missing).
 import argparse
 import os
 from pathlib import Path
-import subprocess
 import sys
 import time
 
@@ -42,7 +41,7 @@ import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-from ros_link import wait_until_flowing  # noqa: E402
+from ros_link import start, wait_until_flowing  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc' / 'V1_01_easy'
@@ -74,7 +73,7 @@ def run(kind, rates, seconds, imu, model='euroc'):
     cmd = ([sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args',
             '-p', f'model:={model}', '--log-level', 'error'] if kind == 'node'
            else [sys.executable, '-c', RELAY])
-    proc = subprocess.Popen(cmd)
+    proc = start(cmd)
     rclpy.init()
     bench = rclpy.create_node('latency_bench')
     sent, got = {}, {}

@@ -23,7 +23,6 @@ Run: .venv/bin/python bench/publish_cost.py [--reliability reliable|best_effort]
 """
 
 import argparse
-import subprocess
 import sys
 import time
 
@@ -32,6 +31,7 @@ import numpy as np
 import rclpy
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
+from ros_link import start
 from sensor_msgs.msg import Imu
 
 SINK = """
@@ -63,7 +63,7 @@ def main() -> None:
     qos = QoSProfile(depth=100, reliability=getattr(ReliabilityPolicy, policy))
     read, read_bytes, unread = (node.create_publisher(Imu, t, qos)
                                 for t in ('read', 'read_bytes', 'unread'))
-    sink = subprocess.Popen([sys.executable, '-c', SINK.format(policy=policy)])
+    sink = start([sys.executable, '-c', SINK.format(policy=policy)])
     deadline = time.monotonic() + 20
     while (read.get_subscription_count() == 0 or read_bytes.get_subscription_count() == 0):
         if time.monotonic() > deadline or sink.poll() is not None:

@@ -11,8 +11,10 @@
 # WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
 # See the License for the specific language governing permissions and
 # limitations under the License.
-"""Shared by the node benches: wait until samples flow through the node under test."""
+"""Shared by the node benches: their child processes, and samples flowing through them."""
 
+import ctypes
+import signal
 import subprocess
 import sys
 
@@ -20,6 +22,21 @@ from rclpy.executors import Executor
 from rclpy.publisher import Publisher
 from rclpy.subscription import Subscription
 from sensor_msgs.msg import Imu
+
+
+def _die_with_parent() -> None:
+    """In the child, before it runs: SIGTERM when the bench dies, however it dies."""
+    ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG (Linux)
+
+
+def start(cmd: list[str]) -> subprocess.Popen:
+    """
+    Start a process the bench talks to (node, relay, reader) that dies with the bench.
+
+    A bench stopped by a signal or a timeout would otherwise leave it running, on the
+    same ROS domain: it answers the next bench's samples and takes its CPU.
+    """
+    return subprocess.Popen(cmd, preexec_fn=_die_with_parent)
 
 
 def wait_until_flowing(ex: Executor, pub: Publisher, sub: Subscription, got: dict,
