@@ -112,8 +112,9 @@ PARAMETERS = [
         "off. On stacks a second estimator on the network's correction.", read_only=True,
         dynamic=True)),
     ('fusion_accel_bias', 'model', _param(
-        "The accelerometer bias removed before the filter: 'model' (the one the model file "
-        'fitted on its training poses, if it chose to) or off (none).', read_only=True,
+        "The accelerometer bias removed before the filter and from imu/attitude's initial "
+        "tilt: 'model' (the one the model file fitted on its training poses, if it chose "
+        'to) or off (none).', read_only=True,
         dynamic=True)),
     ('fused_orientation_stddev', -1.0, _param(
         'rad; imu/data orientation covariance diagonal; < 0: the fused errors the model '
@@ -137,8 +138,10 @@ class GyroDenoiser(Node):
             raise DenoiseError(f'bad parameter: {why}') from err
         p = self.get_parameter
         loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()
-        fusion = self._fusion_settings(loaded) if p('publish_fused').value else None
-        self._denoiser = OnlineDenoiser.from_model_file(loaded, fusion)
+        settings = self._fusion_settings(loaded)  # its accelerometer bias: imu/attitude's too
+        fusion = settings if p('publish_fused').value else None
+        self._denoiser = OnlineDenoiser.from_model_file(loaded, fusion,
+                                                        accel_bias=settings.accel_bias_m_s2)
         self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
         self._not_recommended = deployment_warning(loaded)  # kept as a diagnostics WARN

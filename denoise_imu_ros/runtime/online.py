@@ -101,6 +101,8 @@ class OnlineDenoiser:
     time_jump_s: float = 1.0            # backward stamp jump that resets everything
     fusion: GravityFilter | None = None  # the gravity-aided orientation, if wanted
     rate_tolerance: float = RATE_TOLERANCE  # relative interval error of an off-rate stream
+    # the accelerometer's constant bias (m/s^2), removed before the initial tilt is read
+    accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
          'skipped_input_periods', 'non_finite_covariance'), 0))
@@ -118,9 +120,13 @@ class OnlineDenoiser:
         """
         Build the pipeline of a model file (node and process-bag): numpy only, no torch.
 
-        With ``fusion`` settings, the gravity-aided orientation is computed too.
+        With ``fusion`` settings, the gravity-aided orientation is computed too, and the
+        accelerometer bias they remove is removed from the open-loop attitude's initial
+        tilt as well (unless ``accel_bias`` is given).
         """
         rate = sample_rate(model)
+        if fusion is not None:
+            options.setdefault('accel_bias', fusion.accel_bias_m_s2)
         return cls(StreamingCorrector(model.config, model.arrays), rate,
                    fusion=None if fusion is None else GravityFilter(rate, fusion), **options)
 
@@ -200,7 +206,9 @@ class OnlineDenoiser:
             self._off_rate_run, self._input_period_ns = 0, 0.0
             self._intervals.clear()
         if event in (Event.START, Event.TIME_JUMP) or self._pending_reset:
-            self._attitude = rotation.from_gravity(*map(float, accel))
+            bx, by, bz = self.accel_bias
+            self._attitude = rotation.from_gravity(float(accel[0]) - bx, float(accel[1]) - by,
+                                                   float(accel[2]) - bz)
             if self.fusion is not None:
                 self.fusion.reset()
             self._pending_reset = False

@@ -109,7 +109,11 @@ def test_the_filter_switches_take_the_model_file_or_a_switch(harness, model_file
     h = harness(fusion_bias_estimation=value, fusion_accel_bias=accel)
     settings = h.node._denoiser.fusion.settings
     assert settings.bias_estimation is estimated
-    assert settings.accel_bias_m_s2 == (stored.accel_bias_m_s2 if accel == 'model' else (0.0,) * 3)
+    removed = stored.accel_bias_m_s2 if accel == 'model' else (0.0,) * 3
+    assert settings.accel_bias_m_s2 == removed
+    assert h.node._denoiser.accel_bias == removed  # imu/attitude's initial tilt too
+    unfused = harness(publish_fused=False, fusion_accel_bias=accel)  # with imu/data off too
+    assert unfused.node._denoiser.fusion is None and unfused.node._denoiser.accel_bias == removed
 
 
 def test_imu_data_can_be_turned_off(harness):

@@ -51,6 +51,18 @@ def test_the_start_attitude_levels_the_accelerometer():
     assert (Rotation.from_quat(from_gravity(*accel)).inv() * tilt).magnitude() < 1e-12
 
 
+def test_the_start_and_reset_tilt_come_from_the_accelerometer_less_its_bias(seq, model):
+    bias = (-0.013, 0.122, 0.063)  # EuRoC's fitted one: 0.7 deg of tilt
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, accel_bias=bias)
+    first = _run(den, seq.stamp_ns[:500], seq.imu[:500])[0]
+    np.testing.assert_allclose(first.attitude, from_gravity(*(seq.imu[0, 3:] - bias)))
+    assert (Rotation.from_quat(first.attitude).inv()
+            * Rotation.from_quat(from_gravity(*seq.imu[0, 3:]))).magnitude() > 0.01
+    den.reset_attitude()
+    out = den.process(int(seq.stamp_ns[500]), seq.imu[500, :3], seq.imu[500, 3:])
+    np.testing.assert_allclose(out.attitude, from_gravity(*(seq.imu[500, 3:] - bias)))
+
+
 def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
     den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
     t, imu = seq.stamp_ns, seq.imu
