@@ -34,29 +34,13 @@ import time
 from denoise_imu_ros.core import msgs
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.runtime.node import GyroDenoiser
+from geometry_msgs.msg import QuaternionStamped
 import numpy as np
 import rclpy
 from rclpy.parameter import Parameter
-from ros_link import start
+from ros_link import start_reader, wait_until
 from sensor_msgs.msg import Imu
 
-SINK = """
-from geometry_msgs.msg import QuaternionStamped
-import rclpy
-from rclpy.executors import ExternalShutdownException
-from rclpy.qos import QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import Imu
-rclpy.init()
-sink = rclpy.create_node('sink')
-qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-for msg_type, topic in ((Imu, 'imu/corrected'), (Imu, 'imu/data'),
-                        (QuaternionStamped, 'imu/attitude')):
-    sink.create_subscription(msg_type, topic, lambda m: None, qos)
-try:
-    rclpy.spin(sink)
-except (KeyboardInterrupt, ExternalShutdownException):
-    pass
-"""
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc' / 'V1_01_easy'
 
 
@@ -75,7 +59,8 @@ def main() -> None:
     nodes = {on: GyroDenoiser(parameter_overrides=[Parameter('model', value=args.model),
                                                    Parameter('publish_fused', value=on)])
              for on in (True, False)}
-    sink = start([sys.executable, '-c', SINK])
+    sink = start_reader([(Imu, 'imu/corrected'), (Imu, 'imu/data'),
+                         (QuaternionStamped, 'imu/attitude')])
     deadline = time.monotonic() + 20
 
     def unread() -> list[str]:
@@ -106,11 +91,9 @@ def main() -> None:
             this, less = [], []
             due = time.perf_counter()
             for m in messages:
-                if args.rate > 0:  # sleep most of the wait, spin the last 0.2 ms of it
+                if args.rate > 0:
                     due += 1.0 / args.rate
-                    time.sleep(max(0.0, due - time.perf_counter() - 2e-4))
-                    while time.perf_counter() < due:
-                        pass
+                    wait_until(due)
                 first = len(publish_s)
                 t0 = time.perf_counter()
                 node._on_imu(m)

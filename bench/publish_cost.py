@@ -31,24 +31,8 @@ import numpy as np
 import rclpy
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.serialization import serialize_message
-from ros_link import start
+from ros_link import start_reader, wait_until
 from sensor_msgs.msg import Imu
-
-SINK = """
-import rclpy
-from rclpy.executors import ExternalShutdownException
-from rclpy.qos import QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import Imu
-rclpy.init()
-sink = rclpy.create_node('sink')
-for topic in ('read', 'read_bytes'):
-    sink.create_subscription(Imu, topic, lambda m: None,
-                             QoSProfile(depth=100, reliability=ReliabilityPolicy.{policy}))
-try:
-    rclpy.spin(sink)
-except (KeyboardInterrupt, ExternalShutdownException):
-    pass
-"""
 
 
 def main() -> None:
@@ -63,7 +47,7 @@ def main() -> None:
     qos = QoSProfile(depth=100, reliability=getattr(ReliabilityPolicy, policy))
     read, read_bytes, unread = (node.create_publisher(Imu, t, qos)
                                 for t in ('read', 'read_bytes', 'unread'))
-    sink = start([sys.executable, '-c', SINK.format(policy=policy)])
+    sink = start_reader([(Imu, 'read'), (Imu, 'read_bytes')], policy)
     deadline = time.monotonic() + 20
     while (read.get_subscription_count() == 0 or read_bytes.get_subscription_count() == 0):
         if time.monotonic() > deadline or sink.poll() is not None:
@@ -76,10 +60,8 @@ def main() -> None:
     times = {'message, read': [], 'serialise': [], 'bytes, read': [], 'message, unread': []}
     due = time.perf_counter()
     for k in range(args.messages):
-        due += 1e-3  # sleep most of the wait, spin the last 0.2 ms of it
-        time.sleep(max(0.0, due - time.perf_counter() - 2e-4))
-        while time.perf_counter() < due:
-            pass
+        due += 1e-3
+        wait_until(due)
         t0 = time.perf_counter()
         if k % 3 == 0:
             read.publish(msg)

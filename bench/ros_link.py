@@ -17,6 +17,7 @@ import ctypes
 import signal
 import subprocess
 import sys
+import time
 
 from rclpy.executors import Executor
 from rclpy.publisher import Publisher
@@ -37,6 +38,43 @@ def start(cmd: list[str]) -> subprocess.Popen:
     same ROS domain: it answers the next bench's samples and takes its CPU.
     """
     return subprocess.Popen(cmd, preexec_fn=_die_with_parent)
+
+
+READER = """
+import importlib, sys
+import rclpy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+rclpy.init()
+reader = rclpy.create_node('reader')
+qos = QoSProfile(depth=100, reliability=getattr(ReliabilityPolicy, sys.argv[1]))
+for spec in sys.argv[2:]:
+    module, name, topic = spec.split(':')
+    msg_type = getattr(importlib.import_module(module), name)
+    reader.create_subscription(msg_type, topic, lambda m: None, qos)
+try:
+    rclpy.spin(reader)
+except (KeyboardInterrupt, Exception):  # stopped by the bench, in whatever state
+    pass
+"""
+
+
+def start_reader(topics: list[tuple[type, str]], reliability: str = 'RELIABLE'
+                 ) -> subprocess.Popen:
+    """
+    Start a process that subscribes to every (message type, topic) and takes each message.
+
+    A publish to a topic nobody reads costs less than one a reader takes: a bench of the
+    node's publishes needs a reader on each, in a process of its own as on a robot.
+    """
+    specs = [f'{t.__module__}:{t.__name__}:{topic}' for t, topic in topics]
+    return start([sys.executable, '-c', READER, reliability.upper(), *specs])
+
+
+def wait_until(due: float) -> None:
+    """Sleep most of the way to ``due`` (``time.perf_counter``), spin the last 0.2 ms."""
+    time.sleep(max(0.0, due - time.perf_counter() - 2e-4))
+    while time.perf_counter() < due:
+        pass
 
 
 def wait_until_flowing(ex: Executor, pub: Publisher, sub: Subscription, got: dict,
