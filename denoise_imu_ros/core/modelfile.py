@@ -101,6 +101,44 @@ def deployment_warning(loaded: ModelFile) -> str | None:
             f'its recipe says: {report.get("verdict")}')
 
 
+def training_span(meta: dict[str, Any]) -> int | None:
+    """
+    Return how many samples of each training recording the network was fitted on, or None.
+
+    The recipe draws its windows from the first ``window + max_offset`` samples of every
+    training recording; what follows is its validation tail. None when the file does not
+    say (an older or hand-made file).
+    """
+    cfg = meta.get('train_config')
+    if not isinstance(cfg, dict) or 'window' not in cfg:
+        return None
+    return int(cfg['window']) + int(cfg.get('max_offset', 0))
+
+
+def scored_on_training_samples(meta: dict[str, Any], names: list[str],
+                               start_sample: int) -> list[str]:
+    """
+    Which of ``names`` are training recordings of this model scored on its training span.
+
+    Figures there measure the fit, not what a robot will see: a report says so.
+    """
+    trained = {Path(str(n)).name for n in meta.get('train_sequences') or []}
+    span = training_span(meta)
+    return [n for n in names if Path(n).name in trained
+            and (span is None or start_sample < span)]
+
+
+def fitting_note(names: list[str], span: int | None) -> str:
+    """Say that figures on a model's own training samples measure its fit."""
+    which = ', '.join(Path(n).name for n in names)
+    if span is None:
+        return (f'{which}: training recording(s) of this model: these figures measure its '
+                'fit, not what unseen recordings will show')
+    return (f'{which}: training recording(s) of this model, scored on the first {span} '
+            'samples it was fitted on: these figures measure its fit, not what unseen '
+            f'recordings will show (--start-sample {span} scores only the validation tails)')
+
+
 def shipped_models() -> list[str]:
     """Names accepted by ``--model`` besides paths."""
     return sorted(p.stem for p in SHIPPED_DIR.glob('*.safetensors'))

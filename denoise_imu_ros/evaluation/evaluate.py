@@ -36,7 +36,8 @@ from ..core.errors import OptionError, OutputError
 from ..core.limits import check_gaps, check_rate, check_units
 from ..core.metrics import (align_yaw, error_components, sequence_errors,
                             tilt_growth_deg_min)
-from ..core.modelfile import shipped_models
+from ..core.modelfile import (fitting_note, scored_on_training_samples, shipped_models,
+                              training_span)
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..learn.model import correct_gyro
@@ -76,6 +77,10 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     except OSError as err:
         raise OutputError(f'{out_dir}: cannot create the output folder ({err.strerror})'
                           ) from err
+    fitted_on = scored_on_training_samples(loaded.meta, sequences, start_sample)
+    note = fitting_note(fitted_on, training_span(loaded.meta)) if fitted_on else None
+    if note:
+        print(f'warning: {note}', file=sys.stderr)
     results: dict[str, Any] = {}
     fused: dict[str, Any] = {}
     rows = eval_filters(loaded.meta, models['calibrated'].meta if 'calibrated' in models
@@ -124,6 +129,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
                          for k in ('aoe_deg', 'tilt_deg', 'aoe_yaw_deg')} for m in rows}
     report = {'model': str(loaded.path), 'model_code_version': loaded.meta.get('code_version'),
               'baseline': baseline, 'data': str(data), 'start_sample': start_sample,
+              'training_fit_note': note,
               'sequences': results,
               'average': average,
               'fused': fused, 'fused_average': fused_average,
@@ -140,6 +146,8 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     write_text(out_dir / 'results.json', jsonio.dumps(report, indent=2))
     table = (eval_table(results, average) + fused_table(fused, fused_average)
              + growth_table(results, fused))
+    if note:
+        table += f'\nNote: {note}\n'
     if 'crossval' in report:
         table += '\nThe recipe on recordings it never saw (stored in the model file):\n\n'
         table += crossval_table(crossval)

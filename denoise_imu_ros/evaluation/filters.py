@@ -37,7 +37,7 @@ from scipy.spatial.transform import Rotation
 from ..core.errors import DatasetError
 from ..core.limits import GRAVITY_M_S2
 from ..core.metrics import fused_errors, FusedErrors
-from ..core.modelfile import read_model_file
+from ..core.modelfile import read_model_file, training_span
 from ..core.records import Sequence
 from ..core.rotation import from_gravity
 from ..data.load import load_sequence
@@ -236,10 +236,10 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
     cfg = net.meta.get('train_config') or {}
     names = net.meta.get('train_sequences') or []
     folder = data or (net.meta.get('run') or {}).get('data')
-    if not names or folder is None or 'window' not in cfg:
+    start = training_span(net.meta)
+    if not names or folder is None or start is None:
         raise DatasetError(f'{net.path}: the model file does not name its training '
                            'recordings, their folder and its window (pass --data)')
-    start = int(cfg['window']) + int(cfg.get('max_offset', 0))
     tails, seqs, gyros = [], [], {source: [] for source in KINDS}
     for name in names:
         seq = load_sequence(f'{folder}/{name}', cfg.get('imu_topic'), cfg.get('pose_topic'),

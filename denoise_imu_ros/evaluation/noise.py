@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+import sys
 from typing import Any
 
 import allantools
@@ -216,6 +217,8 @@ def markdown(report: dict[str, Any]) -> str:
                      + ('/'.join(f'{100 * v:.1f} %' for v in block) if block else '–') + ' | '
                      + ('/'.join(f'{v:.2f}' for v in c['block_rms_over_sigma']) if block
                         else '–') + ' |\n')
+    if report.get('training_fit_note'):
+        lines.append(f'\nNote: {report["training_fit_note"]}\n')
     return ''.join(lines)
 
 
@@ -244,7 +247,7 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
           baseline: str | None = None, imu_topic: str | None = None,
           pose_topic: str | None = None) -> dict[str, Any]:
     """Run the noise figures of raw, calibrated and corrected gyro; write and return them."""
-    from ..core.modelfile import gyro_covariance
+    from ..core.modelfile import fitting_note, gyro_covariance, scored_on_training_samples
     from ..data.load import load_sequence
     from ..learn.checkpoint import load_model
     from ..learn.model import correct_gyro
@@ -252,6 +255,10 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     net = load_model(model_spec)
     baseline = default_baseline(net.meta, baseline)
     calib = load_model(baseline) if baseline is not None else None
+    fitted_on = scored_on_training_samples(net.meta, sequences, 0)
+    note = fitting_note(fitted_on, None) if fitted_on else None  # no --start-sample here
+    if note:
+        print(f'warning: {note}', file=sys.stderr)
     seqs, gyros = [], {'raw': [], 'calibrated': [], 'corrected': []}
     for name in sequences:
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
@@ -264,6 +271,6 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     gyros = {g: v for g, v in gyros.items() if v}
     std = np.sqrt(np.diag(np.reshape(gyro_covariance(net), (3, 3))))
     report = noise_report(seqs, gyros, std if std.any() else None)
-    report.update(model=str(net.path), baseline=baseline)
+    report.update(model=str(net.path), baseline=baseline, training_fit_note=note)
     write(Path(out), report)
     return report

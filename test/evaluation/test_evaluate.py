@@ -63,3 +63,31 @@ def test_eval_of_a_short_recording_writes_strict_json_and_plots(model_file, tmp_
         assert (out / png).read_bytes()[:4] == b'\x89PNG'
     assert sorted(p.name for p in out.iterdir()) == ['base.png', 'results.json', 'results.md',
                                                      'roe.png']
+
+
+def test_eval_says_when_it_scores_a_recording_the_model_was_fitted_on(tmp_path, capsys):
+    from helpers import write_untrained_model
+    model = write_untrained_model(tmp_path / 'model.safetensors', {
+        'dataset': 'test', 'sample_rate_hz': 200.0, 'train_sequences': [SAMPLE.name],
+        'train_config': {'window': 1000, 'max_offset': 32}})
+    out = tmp_path / 'eval'
+    assert main(['eval', '--model', str(model), '--data', str(SAMPLE_DIR), '--sequences',
+                 SAMPLE.name, '--out', str(out), '--baseline', str(model), '--no-plots']) == 0
+    warning = capsys.readouterr().err
+    assert f'warning: {SAMPLE.name}: training recording' in warning
+    assert '--start-sample 1032' in warning
+    assert json.loads((out / 'results.json').read_text())['training_fit_note'] in warning
+    assert 'measure its fit' in (out / 'results.md').read_text()
+
+
+def test_only_a_training_recordings_fitted_span_is_flagged():
+    from denoise_imu_ros.core.modelfile import scored_on_training_samples
+    meta = {'train_sequences': ['MH_01_easy'], 'train_config': {'window': 16000,
+                                                                'max_offset': 32}}
+    names = ['MH_01_easy', 'data/MH_02_easy']
+    assert scored_on_training_samples(meta, names, 0) == ['MH_01_easy']
+    assert scored_on_training_samples(meta, names, 16031) == ['MH_01_easy']
+    assert scored_on_training_samples(meta, names, 16032) == []  # the validation tail
+    assert scored_on_training_samples({}, names, 0) == []
+    assert scored_on_training_samples({'train_sequences': ['MH_02_easy']}, names,
+                                      10 ** 6) == ['data/MH_02_easy']  # span unknown
