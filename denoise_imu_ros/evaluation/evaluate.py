@@ -111,7 +111,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
                 'roe_median_deg': {str(int(d)): v for d, v in err.roe_median().items()}}
             roe_all.setdefault(method, []).append(err.roe)
         for method, (source, flt) in rows.items():
-            quat = run(flt, gyros[source], seq.imu[:, 3:], seq.rate_hz)
+            quat = run(flt, gyros[source], seq.imu[:, 3:], seq.rate_hz, seq.stamp_ns)
             err = score(seq, quat)
             fused[name][method] = {
                 'filter': flt.label, 'aoe_deg': err.aoe, 'tilt_deg': err.tilt,

@@ -43,7 +43,8 @@ from ..core.rotation import from_gravity
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..learn.model import correct_gyro
-from ..runtime.fusion import fuse, FusionSettings, MAX_ACCEL_BIAS_M_S2, settings_of
+from ..runtime.fusion import (fuse, FusionSettings, MAX_ACCEL_BIAS_M_S2, settings_of,
+                              step_periods)
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
@@ -104,10 +105,17 @@ def grid(kind: str, accel_bias: tuple[float, float, float] | None = None) -> lis
     return [Filter(kind, gain=g, accel_bias_m_s2=b) for b in biases for g in gains]
 
 
-def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float) -> np.ndarray:
-    """Orientation (N, 4) xyzw at every stamp; sample k - 1's gyro drives the step to k."""
+def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
+        stamp_ns: np.ndarray | None = None) -> np.ndarray:
+    """
+    Orientation (N, 4) xyzw at every stamp; sample k - 1's gyro drives the step to k.
+
+    With ``stamp_ns``, VQF integrates the real intervals as the node does (the baselines
+    step by one period: the recordings scored have none missing).
+    """
     if flt.kind == 'vqf':
-        return fuse(gyro, accel, rate_hz, flt.settings)
+        return fuse(gyro, accel, rate_hz, flt.settings,
+                    None if stamp_ns is None else step_periods(stamp_ns, rate_hz))
     accel = accel - np.array(flt.accel_bias_m_s2)  # as fuse does
     shifted = np.zeros((len(gyro), 3))
     shifted[1:] = gyro[:-1]
@@ -202,7 +210,7 @@ def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: flo
         for kind in kinds[source]:
             figures = {}
             for flt in grid(kind, accel_bias):
-                errs = [score(seq, run(flt, g, seq.imu[:, 3:], rate_hz))
+                errs = [score(seq, run(flt, g, seq.imu[:, 3:], rate_hz, seq.stamp_ns))
                         for seq, g in zip(tails, per_tail)]
                 figures[flt] = errs
             mean = {f: float(np.mean([e.aoe for e in errs])) for f, errs in figures.items()}

@@ -26,6 +26,10 @@ the filter cannot average away (0.7 deg for EuRoC's ADIS16448).
 Time convention, the package's one: gyro sample k drives the orientation from stamp k
 to stamp k + 1. So at sample k the filter first integrates sample k - 1's gyro, then
 corrects with sample k's accelerometer, and the result is the orientation at stamp k.
+VQF steps by one nominal period; the gyro is scaled by the real interval in periods, so
+that a lost message does not take its rotation out of the yaw (as the open-loop attitude,
+which integrates the real interval). Across a gap (the network restarts) there is no
+gyro step: the yaw is held, as the attitude is, and gravity keeps correcting the tilt.
 :func:`fuse` (offline, one compiled batch) equals :meth:`GravityFilter.update` (online,
 per sample) bit for bit.
 
@@ -43,6 +47,7 @@ import numpy as np
 from vqf import VQF
 
 from ..core.errors import ModelFileError
+from ..core.limits import MAX_GAP_FACTOR
 
 
 MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
@@ -110,26 +115,53 @@ class GravityFilter:
         self._vqf = _vqf(rate_hz, settings)
         self._accel_bias = np.array(settings.accel_bias_m_s2)
         # preallocated: this runs on every IMU message
-        self._gyro, self._accel = np.zeros(3), np.empty(3)
+        self._gyro, self._step, self._accel = np.zeros(3), np.empty(3), np.empty(3)
 
     def reset(self) -> None:
         """Start again: the next sample's accelerometer sets the tilt, yaw 0."""
         self._vqf.resetState()
         self._gyro[:] = 0.0
 
-    def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
-        """Orientation (4,) xyzw at this sample's stamp; ``gyro`` drives the next step."""
+    def update(self, gyro: np.ndarray, accel: np.ndarray, periods: float = 1.0) -> np.ndarray:
+        """
+        Orientation (4,) xyzw at this sample's stamp; ``gyro`` drives the next step.
+
+        ``periods``: the interval since the last sample, in nominal periods.
+        """
         np.subtract(accel, self._accel_bias, out=self._accel)
-        self._vqf.update(self._gyro, self._accel)  # the last sample's gyro, 0 at the start
+        np.multiply(self._gyro, periods, out=self._step)  # the last sample's gyro, 0 at start
+        self._vqf.update(self._step, self._accel)
         self._gyro[:] = gyro
         return _xyzw(self._vqf.getQuat6D())
 
 
+def step_periods(stamp_ns: np.ndarray, rate_hz: float,
+                 max_gap_factor: float = MAX_GAP_FACTOR) -> np.ndarray:
+    """
+    Each interval to a stamp in nominal periods, as the online pipeline passes them.
+
+    0 across a gap (more than ``max_gap_factor`` periods: no gyro step) and for the first
+    stamp (nothing before it).
+    """
+    periods = np.zeros(len(stamp_ns))
+    periods[1:] = np.diff(np.asarray(stamp_ns, dtype=np.int64)) * 1e-9 * rate_hz
+    periods[periods > max_gap_factor] = 0.0
+    return periods
+
+
 def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
-         settings: FusionSettings = FusionSettings()) -> np.ndarray:
-    """Orientation (N, 4) xyzw at every stamp of (N, 3) gyro and accelerometer samples."""
+         settings: FusionSettings = FusionSettings(),
+         periods: np.ndarray | None = None) -> np.ndarray:
+    """
+    Orientation (N, 4) xyzw at every stamp of (N, 3) gyro and accelerometer samples.
+
+    ``periods`` (N,): each interval to a stamp in nominal periods (:func:`step_periods`);
+    None: every interval one period.
+    """
     shifted = np.zeros((len(gyro), 3))
     shifted[1:] = gyro[:-1]  # sample k - 1 drives the step to stamp k
+    if periods is not None:
+        shifted *= np.asarray(periods, dtype=np.float64)[:, None]
     out = _vqf(rate_hz, settings).updateBatch(
         np.ascontiguousarray(shifted),
         np.asarray(accel, dtype=np.float64) - np.array(settings.accel_bias_m_s2))

@@ -282,20 +282,20 @@ class GyroDenoiser(Node):
                 throttle_duration_sec=5.0)
         self._stamps.append(out.stamp_ns)
 
-        embed = out.attitude if self._embed else None
+        # an attitude held across a gap, or integrated at a rate the model was not made
+        # for, is not published as if it were valid (nor a filter run at such a rate)
+        off_rate = self._rate_error or out.rate_suspect
+        valid_attitude = out.event != Event.GAP and not off_rate
+        embed = out.attitude if self._embed and valid_attitude else None
         corrected = self._corrected = msgs.corrected_imu(
             self._types, msg, out.gyro, self._gyro_cov, embed, self._orientation_cov,
             out.accel_cov, into=self._corrected)
         self._pub_imu.publish(corrected)
-        # a filter run at a rate it was not set up for is not published as if it were valid
-        off_rate = self._rate_error or out.rate_suspect
         if self._pub_fused is not None and not off_rate:
             self._pub_fused.publish(msgs.reorient(corrected, out.orientation, self._fused_cov))
         elif self._pub_fused is not None:
             self.fused_withheld += 1
-        # an attitude held across a gap, or integrated at a rate the model was not made
-        # for, is not published as if it were valid
-        if out.event != Event.GAP and not off_rate:
+        if valid_attitude:
             self._attitude = msgs.attitude(self._types, msg, self._fixed_frame, out.attitude,
                                            into=self._attitude)
             self._pub_att.publish(self._attitude)

@@ -35,7 +35,7 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
   period of the stream's own rate (``skipped_input_periods``, the median of its recent
   intervals), which counts losses of a stream faster than the model too;
 - RATE_RUN consecutive stamp intervals more than ``rate_tolerance`` off the model's
-  period make :attr:`rate_suspect` true until an interval is on time again: the node
+  period (gaps included: a stream slower than the gap limit is all gaps) make :attr:`rate_suspect` true until an interval is on time again: the node
   withholds its attitudes from that sample on, without waiting for its rate check.
 """
 
@@ -175,7 +175,7 @@ class OnlineDenoiser:
             return self._drop(Drop.OUT_OF_RANGE)
         if stamp_ns <= 0:
             return self._drop(Drop.ZERO_STAMP)
-        event = None
+        event, periods = None, 1.0
         if self._last_ns is None:
             event = Event.START
         elif stamp_ns == self._last_ns:
@@ -195,6 +195,7 @@ class OnlineDenoiser:
             if periods > self.max_gap_factor:
                 event = Event.GAP
                 self.counts['gap_resets'] += 1
+                self._off_rate_run += 1  # a stream slower than the gap limit: all gaps
             else:
                 off = abs(periods - 1) > self.rate_tolerance
                 self._off_rate_run = self._off_rate_run + 1 if off else 0
@@ -219,7 +220,8 @@ class OnlineDenoiser:
         corrected = self.engine.step(np.concatenate([gyro, accel]))
         self._last_ns, self._last_gyro = stamp_ns, corrected
         self.counts['accepted'] += 1
-        orientation = None if self.fusion is None else self.fusion.update(corrected, accel)
+        orientation = None if self.fusion is None else self.fusion.update(
+            corrected, accel, periods if event is None else 0.0)  # a gap: yaw held
         return Output(stamp_ns=stamp_ns, gyro=corrected, attitude=np.array(self._attitude),
                       event=event, orientation=orientation, rate_suspect=self.rate_suspect,
                       accel_cov=accel_cov)

@@ -6,7 +6,8 @@ from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.modelfile import read_model_file
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.runtime.fusion import (fuse, FusionSettings, GravityFilter,
-                                            orientation_covariance, settings_of)
+                                            orientation_covariance, settings_of,
+                                            step_periods)
 from denoise_imu_ros.runtime.online import OnlineDenoiser
 from helpers import SAMPLE
 import numpy as np
@@ -43,6 +44,23 @@ def test_sample_k_drives_the_step_to_stamp_k_plus_one():
     yaw = Rotation.from_quat(quat).as_rotvec()[:, 2]
     expected = np.concatenate([[0.0], np.cumsum(rate[:-1] * 0.005)])
     np.testing.assert_allclose(np.unwrap(yaw), expected, atol=1e-9)
+
+
+def test_a_lost_message_keeps_its_rotation_in_the_yaw():
+    """VQF steps by one period; the real interval scales the gyro, online and offline."""
+    stamps = 5_000_000 * np.array([k for k in range(2000) if k % 5 != 4])  # every 5th lost
+    gyro = np.tile([0.0, 0.0, 0.5], (len(stamps), 1))
+    accel = np.tile([0.0, 0.0, 9.81], (len(stamps), 1))
+    periods = step_periods(stamps, 200.0)
+    assert periods[0] == 0.0 and set(np.round(periods[1:], 9)) == {1.0, 2.0}
+    online = GravityFilter(200.0, FusionSettings(tau_acc_s=1.0))
+    one_by_one = np.array([online.update(g, a, p) for g, a, p in zip(gyro, accel, periods)])
+    quat = fuse(gyro, accel, 200.0, FusionSettings(tau_acc_s=1.0), periods)
+    assert np.array_equal(one_by_one, quat)
+    yaw = np.unwrap(Rotation.from_quat(quat).as_rotvec()[:, 2])
+    np.testing.assert_allclose(yaw[-1], 0.5 * stamps[-1] * 1e-9, atol=1e-9)
+    # across a gap (the network restarts) no gyro step, as the online pipeline passes it
+    assert step_periods(np.array([0, 5_000_000, 30_000_000]), 200.0).tolist() == [0, 1, 0]
 
 
 def test_gravity_pulls_the_tilt_back_and_yaw_starts_at_zero():
@@ -84,10 +102,11 @@ def test_the_online_pipeline_fuses_its_own_corrected_gyro(model_file, imu):
     mf = read_model_file(model_file)
     den = OnlineDenoiser.from_model_file(mf, FusionSettings(2.0, False))
     stamps = 1_000_000_000 + 5_000_000 * np.arange(len(imu))
+    stamps[500:] += 5_000_000  # a message lost: its interval is two periods
     outs = [den.process(int(t), row[:3], row[3:]) for t, row in zip(stamps, imu)]
     gyro = np.array([o.gyro for o in outs])
-    assert np.array_equal(np.array([o.orientation for o in outs]),
-                          fuse(gyro, imu[:, 3:], 200.0, FusionSettings(2.0, False)))
+    assert np.array_equal(np.array([o.orientation for o in outs]), fuse(
+        gyro, imu[:, 3:], 200.0, FusionSettings(2.0, False), step_periods(stamps, 200.0)))
     # a backward jump resets the filter: the sample after it starts from its accelerometer
     back = den.process(int(stamps[0]), imu[0, :3], imu[0, 3:])
     assert np.array_equal(back.orientation, fuse(gyro[:1], imu[:1, 3:], 200.0)[0])

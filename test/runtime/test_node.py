@@ -236,6 +236,10 @@ def test_reset_attitude_service_and_embedded_attitude(harness):
     assert h.corrected[-1].orientation_covariance[0] == pytest.approx(0.01)
     assert h.corrected[-1].orientation.w == pytest.approx(1.0)
     assert h.attitude[-1].quaternion.w == pytest.approx(1.0)
+    # after a gap the attitude is held, not published: nor embedded as if it were valid
+    h.send([imu_msg(10**9 + 300 * 5_000_000, [0, 0, 1.0], [0, 0, 9.81])])
+    assert h.corrected[-1].orientation_covariance[0] == -1.0
+    assert h.node.attitude_withheld == 1
 
 
 def test_missing_or_corrupt_model_exits_non_zero_with_one_line(tmp_path, capsys):

@@ -208,6 +208,15 @@ def test_a_second_clock_and_a_rate_change_are_told_from_losses(seq, model):
     assert not den.rate_suspect
 
 
+def test_a_stream_slower_than_the_gap_limit_is_off_rate_too(seq, model):
+    """50 Hz into the 200 Hz model: every interval is a gap, and the stream is suspect."""
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    flags = [den.process(10**9 + k * 20_000_000, seq.imu[k, :3], seq.imu[k, 3:]).rate_suspect
+             for k in range(30)]
+    assert den.counts['gap_resets'] == 29
+    assert flags.index(True) == 10 and all(flags[10:])
+
+
 def test_losses_of_a_stream_faster_than_the_model_are_counted(seq, model):
     """Issue 20, case 5: 1 kHz into the 200 Hz model, every fifth message lost."""
     den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
