@@ -26,13 +26,24 @@ import math
 
 BN_EPS = 1e-5  # BatchNorm epsilon (torch's default), also used by the streaming engine
 BLOCK = 4      # modules per hidden block in GyroNet.net: conv, BatchNorm, GELU, dropout
+IMU_CHANNELS = 6  # what every tool feeds the network: gyro xyz, accelerometer xyz
+# bounds of what a model file may ask the runtime to allocate (model files are user input)
+MAX_WIDTH = 4096
+MAX_RECEPTIVE_FIELD = 1 << 16
+MAX_MEMBERS = 64
+
+
+def _counts(values: tuple[int, ...], upper: int | None = None) -> bool:
+    """Whether every value is an integer of at least 1 (and at most ``upper``)."""
+    return all(isinstance(v, int) and not isinstance(v, bool) and v >= 1
+               and (upper is None or v <= upper) for v in values)
 
 
 @dataclass(frozen=True)
 class ModelConfig:
     """Architecture; defaults are the paper's network (77,052 trainable parameters)."""
 
-    in_channels: int = 6                         # gyro xyz (rad/s) + accel xyz (m/s^2)
+    in_channels: int = IMU_CHANNELS              # gyro xyz (rad/s) + accel xyz (m/s^2)
     channels: tuple[int, ...] = (16, 32, 64, 128)  # hidden widths, doubling per layer
     kernels: tuple[int, ...] = (7, 7, 7, 7)      # hidden kernel sizes
     dilations: tuple[int, ...] = (1, 4, 16, 64)  # cumulative products of [4, 4, 4]
@@ -46,13 +57,26 @@ class ModelConfig:
 
     def __post_init__(self) -> None:
         """Reject inconsistent layer lists early (config files are user input)."""
+        if self.in_channels != IMU_CHANNELS:
+            raise ValueError(f'in_channels must be {IMU_CHANNELS} (gyro and accelerometer xyz), '
+                             f'not {self.in_channels!r}')
         if not len(self.channels) == len(self.kernels) == len(self.dilations):
             raise ValueError('channels, kernels and dilations must have the same length')
+        if not (_counts(self.channels, MAX_WIDTH) and _counts(self.kernels)
+                and _counts(self.dilations)):
+            raise ValueError(f'channels (at most {MAX_WIDTH}), kernels and dilations must be '
+                             'positive integers')
+        if self.receptive_field > MAX_RECEPTIVE_FIELD:
+            raise ValueError(f'receptive field {self.receptive_field} samples: more than '
+                             f'{MAX_RECEPTIVE_FIELD}')
+        if not 0.0 <= self.dropout < 1.0 or not 0.0 <= self.bn_momentum <= 1.0:
+            raise ValueError('dropout must be in [0, 1) and bn_momentum in [0, 1]')
         if len(self.gyro_std) != 3 or min(self.gyro_std) <= 0:
             raise ValueError('gyro_std must be three positive values (rad/s)')
-        if not isinstance(self.members, int) or self.members < 1 or (
+        if not _counts((self.members,), MAX_MEMBERS) or (
                 self.calibration_only and self.members > 1):
-            raise ValueError('members must be a positive integer (1 for calibration_only)')
+            raise ValueError(f'members must be an integer from 1 to {MAX_MEMBERS} (1 for '
+                             'calibration_only)')
 
     @property
     def receptive_field(self) -> int:

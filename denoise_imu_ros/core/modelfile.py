@@ -40,6 +40,7 @@ from safetensors.numpy import load_file, save_file
 from .architecture import ModelConfig
 from .atomic import atomic_output
 from .errors import ModelFileError, OutputError
+from .limits import MAX_RATE_HZ
 from .. import __version__
 
 FORMAT = 'denoise_imu_ros.gyro_model'
@@ -229,6 +230,8 @@ def read_model_file(spec: str | Path) -> ModelFile:
         raise ModelFileError(f'{path}: model file holds non-finite weights')
     if not (arrays['input_std'] > 0).all():
         raise ModelFileError(f'{path}: model file has a non-positive input_std')
+    if not all((v > 0).all() for k, v in arrays.items() if k.endswith('.running_var')):
+        raise ModelFileError(f'{path}: model file has a non-positive BatchNorm variance')
     _check_meta(meta, path)
     return ModelFile(config, arrays, meta, path)
 
@@ -239,9 +242,9 @@ def _check_meta(meta: dict[str, Any], path: Path) -> None:
         return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
     rate = meta.get('sample_rate_hz')
-    if rate is not None and not (number(rate) and rate > 0):
+    if rate is not None and not (number(rate) and 0 < rate <= MAX_RATE_HZ):
         raise ModelFileError(f'{path}: inconsistent model file (sample_rate_hz {rate!r} is '
-                             'not a positive number)')
+                             f'not a rate from 0 to {MAX_RATE_HZ:g} Hz)')
     validation = meta.get('validation', {})
     std = validation.get('gyro_residual_std') if isinstance(validation, dict) else None
     if not isinstance(validation, dict) or (std is not None and not (

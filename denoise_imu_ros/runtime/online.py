@@ -22,7 +22,8 @@ identical numbers.
 
 Policies (each counted in :attr:`OnlineDenoiser.counts`):
 - a non-finite field, a value beyond the physical range (:mod:`denoise_imu_ros.core.limits`),
-  a zero stamp, a duplicate or out-of-order stamp: sample dropped;
+  a zero stamp, a duplicate or out-of-order stamp: sample dropped; so is a sample whose
+  correction is not finite (a model file that passed its checks and still overflows);
 - a stamp more than ``time_jump_s`` behind the last one (bag loop, clock reset): full
   reset (network history and attitude), the sample is the first of a new recording;
 - a gap longer than ``max_gap_factor`` nominal periods: the network history restarts
@@ -63,6 +64,7 @@ class Drop(str, Enum):
     ZERO_STAMP = 'zero_stamp'
     DUPLICATE_STAMP = 'duplicate_stamp'
     OUT_OF_ORDER = 'out_of_order'
+    NON_FINITE_OUTPUT = 'non_finite_output'  # the model's correction: a broken model file
 
 
 class Event(str, Enum):
@@ -203,6 +205,9 @@ class OnlineDenoiser:
 
         if event is not None:
             self.engine.reset()
+        corrected = self.engine.step(np.concatenate([gyro, accel]))
+        if not np.isfinite(corrected).all():  # never published: dropped as if lost
+            return self._drop(Drop.NON_FINITE_OUTPUT)
         if event in (Event.START, Event.TIME_JUMP):  # another stream: its rate is new too
             self._off_rate_run, self._input_period_ns = 0, 0.0
             self._intervals.clear()
@@ -217,7 +222,6 @@ class OnlineDenoiser:
             dt = (stamp_ns - self._last_ns) * 1e-9
             step = rotation.exp(*(float(w) * dt for w in self._last_gyro))
             self._attitude = rotation.multiply(self._attitude, step)
-        corrected = self.engine.step(np.concatenate([gyro, accel]))
         self._last_ns, self._last_gyro = stamp_ns, corrected
         self.counts['accepted'] += 1
         orientation = None if self.fusion is None else self.fusion.update(

@@ -144,8 +144,9 @@ def test_copied_metadata_never_overrides_the_architecture(tmp_path):
 
 
 @pytest.mark.parametrize('meta, message', [
-    ({'sample_rate_hz': 'fast'}, "sample_rate_hz 'fast' is not a positive number"),
-    ({'sample_rate_hz': 0}, 'sample_rate_hz 0 is not a positive number'),
+    ({'sample_rate_hz': 'fast'}, "sample_rate_hz 'fast' is not a rate from 0 to"),
+    ({'sample_rate_hz': 0}, 'sample_rate_hz 0 is not a rate from 0 to 100000 Hz'),
+    ({'sample_rate_hz': 1e20}, 'sample_rate_hz 1e[+]20 is not a rate'),  # no deque of 2e20
     ({'validation': {'gyro_residual_std': ['a', 1, 2]}}, 'gyro_residual_std'),
     ({'validation': [1, 2]}, 'gyro_residual_std'),
 ])
@@ -172,3 +173,41 @@ def test_a_model_config_that_is_not_a_mapping_or_zero_input_std_is_refused(tmp_p
     write_model_file(tmp_path / 'c.safetensors', model.config, arrays, {})
     with pytest.raises(ModelFileError, match='non-positive input_std'):
         read_model_file(tmp_path / 'c.safetensors')
+
+
+@pytest.mark.parametrize('change, message', [
+    ({'dilations': [1, 4, 16, -64]}, 'positive integers'),  # a negative span: heap damage
+    ({'kernels': [7, 7, 7, 0]}, 'positive integers'),
+    ({'dilations': [1, 4, 16, 10 ** 9]}, 'receptive field'),  # a huge history allocation
+    ({'in_channels': 3}, 'in_channels must be 6'),  # crashed at the first sample
+    ({'members': 10 ** 6}, 'members must be an integer'),
+])
+def test_an_architecture_the_runtime_cannot_run_is_refused_on_reading(tmp_path, change,
+                                                                       message):
+    """Model files are untrusted: their header cannot make the engine write out of bounds."""
+    import json
+    from denoise_imu_ros.core.modelfile import read_model_file, write_model_file
+    from safetensors import safe_open
+    from safetensors.numpy import load_file
+    from safetensors.numpy import save_file as save_np
+    model = _model().eval()
+    write_model_file(tmp_path / 'a.safetensors', model.config,
+                     {k: v.numpy() for k, v in model.state_dict().items()}, {})
+    with safe_open(str(tmp_path / 'a.safetensors'), framework='np') as f:
+        header = f.metadata()
+    header['model_config'] = json.dumps(dict(json.loads(header['model_config']), **change))
+    save_np(load_file(str(tmp_path / 'a.safetensors')), str(tmp_path / 'b.safetensors'),
+            metadata=header)
+    with pytest.raises(ModelFileError, match=f'inconsistent model file .*{message}'):
+        read_model_file(tmp_path / 'b.safetensors')
+
+
+def test_a_non_positive_batchnorm_variance_is_refused_on_reading(tmp_path):
+    """It passes as finite, and turns every corrected gyro into NaN."""
+    from denoise_imu_ros.core.modelfile import read_model_file, write_model_file
+    model = _model().eval()
+    arrays = {k: v.numpy() for k, v in model.state_dict().items()}
+    arrays['net.1.running_var'][0] = -1.0
+    write_model_file(tmp_path / 'a.safetensors', model.config, arrays, {})
+    with pytest.raises(ModelFileError, match='non-positive BatchNorm variance'):
+        read_model_file(tmp_path / 'a.safetensors')

@@ -78,7 +78,7 @@ def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
     assert isinstance(den.process(int(t[1]), imu[1, :3], imu[1, 3:]), Output)
     assert den.counts == {'non_finite': 2, 'out_of_range': 2, 'zero_stamp': 1,
                           'duplicate_stamp': 1,
-                          'out_of_order': 1, 'accepted': 2, 'gap_resets': 0,
+                          'out_of_order': 1, 'non_finite_output': 0, 'accepted': 2, 'gap_resets': 0,
                           'time_jump_resets': 0, 'skipped_periods': 0,
                           'skipped_input_periods': 0, 'non_finite_covariance': 0}
 
@@ -228,3 +228,17 @@ def test_losses_of_a_stream_faster_than_the_model_are_counted(seq, model):
     assert den.counts['skipped_input_periods'] == sum(1 for k in range(41, 1999)
                                                       if k % 5 == 4)
     assert den.counts['skipped_periods'] == 0  # in periods of the model's rate: none
+
+
+def test_a_correction_that_is_not_finite_is_dropped_never_output(tmp_path, seq):
+    """Finite weights can still overflow float32: such a sample is counted, not published."""
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from helpers import write_untrained_model
+    path = write_untrained_model(tmp_path / 'm.safetensors', {'sample_rate_hz': 200.0})
+    loaded = read_model_file(path)
+    loaded.arrays['net.0.weight'][:] = 3e38  # finite, and its products overflow
+    den = OnlineDenoiser.from_model_file(loaded)
+    outs = [den.process(10**9 + k * 5_000_000, seq.imu[k, :3], seq.imu[k, 3:])
+            for k in range(20)]
+    assert outs == ['non_finite_output'] * 20 and den.counts['accepted'] == 0
+    assert den.counts['non_finite_output'] == 20
