@@ -223,7 +223,7 @@ def _process_bag(args: argparse.Namespace) -> None:
     _warn_if_not_recommended(args.model)
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame,
-                         compress=args.compress)
+                         compress=args.compress, namespace=args.namespace)
     print(f'wrote {args.output}: ' + ', '.join(f'{k} {v}' for k, v in counts.items()))
 
 
@@ -373,6 +373,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--model', required=True)
     p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
     p.add_argument('--fixed-frame', default='odom', help='frame_id of /imu/attitude')
+    p.add_argument('--namespace', default='/',
+                   help="the node's namespace for the outputs (default /: /imu/corrected, "
+                        "/imu/data, /imu/attitude; /denoised: /denoised/imu/corrected, ...)")
     p.add_argument('--compress', action=argparse.BooleanOptionalAction,
                    help='zstd compression (default: as the input bag says it is compressed)')
     p.set_defaults(func=_process_bag)

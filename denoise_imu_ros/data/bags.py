@@ -26,6 +26,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 import struct
+import tempfile
 from typing import Any
 
 import numpy as np
@@ -92,16 +93,22 @@ def open_bag(path: str | Path) -> Iterator[AnyReader]:
     path = Path(path)
     if not path.exists():
         raise DatasetError(f'{path}: bag not found')
-    reader = AnyReader([path], default_typestore=TYPESTORE)
-    try:
-        reader.open()
-    except CORRUPT as err:
-        raise DatasetError(f'{path}: not a readable bag ({type(err).__name__}: '
-                           f'{" ".join(str(err).split())[:120]})') from err
-    try:
-        yield reader
-    finally:
-        reader.close()
+    with tempfile.TemporaryDirectory() as tmp:
+        if path.is_dir() and path.suffix == '.bag':  # rosbags reads *.bag as ROS 1 files
+            Path(tmp, 'bag').symlink_to(path.resolve(), target_is_directory=True)
+            source = Path(tmp, 'bag')
+        else:
+            source = path
+        reader = AnyReader([source], default_typestore=TYPESTORE)
+        try:
+            reader.open()
+        except CORRUPT as err:
+            raise DatasetError(f'{path}: not a readable bag ({type(err).__name__}: '
+                               f'{" ".join(str(err).split())[:120]})') from err
+        try:
+            yield reader
+        finally:
+            reader.close()
 
 
 def is_compressed(reader: AnyReader) -> bool:

@@ -24,6 +24,7 @@ ROS 1 bags are first converted to ROS 2 with ``rosbags.convert``.
 from __future__ import annotations
 
 from pathlib import Path
+import re
 import tempfile
 from typing import Any
 
@@ -43,15 +44,25 @@ from ..core.msgs import stamp_ns
 from ..data.bags import (BAG_TYPES, CORRUPT, IMU_TYPE, is_compressed, open_bag,
                          pick_connections, TYPESTORE)
 
-CORRECTED_TOPIC = '/imu/corrected'
-FUSED_TOPIC = '/imu/data'
-ATTITUDE_TOPIC = '/imu/attitude'
+OUTPUT_TOPICS = ('imu/corrected', 'imu/data', 'imu/attitude')  # the node's, relative
 ATTITUDE_TYPE = 'geometry_msgs/msg/QuaternionStamped'
+_NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
+
+
+def output_topics(namespace: str = '/') -> tuple[str, str, str]:
+    """The node's output topics, resolved in ``namespace`` as ROS resolves them."""
+    tokens = [t for t in namespace.split('/') if t]
+    if not all(_NAME_TOKEN.fullmatch(t) for t in tokens):
+        raise DatasetError(f'--namespace {namespace!r}: not a ROS namespace (names of '
+                           'letters, digits and _, not starting with a digit, between /)')
+    prefix = ''.join(f'/{t}' for t in tokens)
+    corrected, fused, attitude = (f'{prefix}/{t}' for t in OUTPUT_TOPICS)
+    return corrected, fused, attitude
 
 
 def _ros2_source(src: Path, workdir: Path) -> Path:
-    """Return the bag itself if it is ROS 2, else its conversion into ``workdir``."""
-    if src.suffix != '.bag':
+    """Return the bag itself if it is ROS 2 (not one .bag file), else its ROS 2 copy."""
+    if not (src.is_file() and src.suffix == '.bag'):
         return src
     dst = workdir / 'converted'
     try:
@@ -66,7 +77,8 @@ def _ros2_source(src: Path, workdir: Path) -> Path:
 
 def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
-                fixed_frame: str = 'odom', compress: bool | None = None) -> dict[str, int]:
+                fixed_frame: str = 'odom', compress: bool | None = None,
+                namespace: str = '/') -> dict[str, int]:
     """
     Copy a bag, add the corrected IMU, orientation and attitude; return the counts.
 
@@ -76,10 +88,13 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     reads only the stamps; the second holds a message only until its turn in stamp order
     comes, so memory follows how far the bag is out of order, not its length. Copied
     topics keep their recorded QoS; ``compress`` (zstd) defaults to the input's compression.
+    The outputs are the node's topics in ``namespace``; a bag that has one already is
+    refused (the two would mix on one topic).
     """
     src = Path(src)
     if not src.exists():
         raise DatasetError(f'{src}: bag not found')
+    names = output_topics(namespace)
     loaded = read_model_file(model_spec)
     den = OnlineDenoiser.from_model_file(loaded, settings_of(loaded.meta, loaded.path))
     cov = np.array(gyro_covariance(loaded))
@@ -88,6 +103,12 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
         try:
             with open_bag(_ros2_source(src, Path(tmp))) as rd:
+                taken = sorted({c.topic for c in rd.connections} & set(names))
+                if taken:
+                    raise DatasetError(
+                        f'{src}: it has {", ".join(taken)} already, which the output would mix '
+                        'with the new one: write the outputs in another namespace, e.g. '
+                        '--namespace /denoised (/denoised/imu/corrected, ...)')
                 imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
                 imu_ids = {c.id for c in imu_conns}
                 # all topics, as the second pass reads them: the same order, ties included
@@ -105,10 +126,9 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                         c.topic, c.msgtype, typestore=rd.typestore,
                         offered_qos_profiles=getattr(c.ext, 'offered_qos_profiles', ()))
                         for c in rd.connections}
-                    topics = (wr.add_connection(CORRECTED_TOPIC, IMU_TYPE, typestore=TYPESTORE),
-                              wr.add_connection(FUSED_TOPIC, IMU_TYPE, typestore=TYPESTORE),
-                              wr.add_connection(ATTITUDE_TOPIC, ATTITUDE_TYPE,
-                                                typestore=TYPESTORE))
+                    topics = tuple(wr.add_connection(name, msgtype, typestore=TYPESTORE)
+                                   for name, msgtype in zip(names, (IMU_TYPE, IMU_TYPE,
+                                                                    ATTITUDE_TYPE)))
                     waiting: dict[int, tuple[Any, int]] = {}  # received, its turn not come
                     k, done = -1, 0
                     for conn, stamp, raw in rd.messages():

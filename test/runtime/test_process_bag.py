@@ -205,3 +205,41 @@ def test_receive_order_jitter_drops_nothing_and_qos_and_compression_are_kept(
                 '--model', str(model_file)]) == 0
     with open_bag(tmp_path / 'kept') as reader:
         assert is_compressed(reader)
+
+
+def test_a_bag_that_has_an_output_topic_already_is_refused_or_namespaced(
+        tmp_path, model_file, capsys):
+    """Many drivers publish the raw IMU on /imu/data: the output must not mix with it."""
+    from denoise_imu_ros.runtime.process_bag import output_topics
+    from rosbags.highlevel import AnyReader
+    from helpers import write_asl
+    assert main(['convert', str(write_asl(tmp_path / 'a', n_imu=1200)), str(tmp_path / 'in'),
+                 '--imu-topic', '/imu/data']) == 0
+    capsys.readouterr()
+    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+                 '--model', str(model_file)]) == 1
+    assert 'it has /imu/data already' in capsys.readouterr().err
+    assert not (tmp_path / 'out').exists()
+    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'), '--model',
+                 str(model_file), '--namespace', '/denoised']) == 0
+    with AnyReader([tmp_path / 'out']) as reader:
+        topics = {c.topic: c.msgcount for c in reader.connections}
+    assert topics == {'/imu/data': 1200, '/groundtruth/pose': 1200,
+                      '/denoised/imu/corrected': 1200, '/denoised/imu/data': 1200,
+                      '/denoised/imu/attitude': 1200}
+    assert output_topics('robot/') == ('/robot/imu/corrected', '/robot/imu/data',
+                                       '/robot/imu/attitude')
+    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'o2'), '--model',
+                 str(model_file), '--namespace', '/9bad']) == 1
+    assert 'not a ROS namespace' in capsys.readouterr().err
+
+
+def test_a_ros2_bag_folder_named_like_a_ros1_bag_is_read_as_ros2(tmp_path, model_file):
+    from helpers import write_asl
+    assert main(['convert', str(write_asl(tmp_path / 'a', n_imu=1200)),
+                 str(tmp_path / 'in.bag')]) == 0
+    assert main(['process-bag', str(tmp_path / 'in.bag'), str(tmp_path / 'out'),
+                 '--model', str(model_file)]) == 0
+    from denoise_imu_ros.data.bags import read_bag
+    assert len(read_bag(tmp_path / 'in.bag').imu) == len(read_bag(
+        tmp_path / 'out', imu_topic='/imu/corrected').imu) == 1200
