@@ -375,7 +375,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--fixed-frame', default='odom', help='frame_id of /imu/attitude')
     p.add_argument('--namespace', default='/',
                    help="the node's namespace for the outputs (default /: /imu/corrected, "
-                        "/imu/data, /imu/attitude; /denoised: /denoised/imu/corrected, ...)")
+                        '/imu/data, /imu/attitude; /denoised: /denoised/imu/corrected, ...)')
     p.add_argument('--compress', action=argparse.BooleanOptionalAction,
                    help='zstd compression (default: as the input bag says it is compressed)')
     p.set_defaults(func=_process_bag)

@@ -36,8 +36,9 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
   period of the stream's own rate (``skipped_input_periods``, the median of its recent
   intervals), which counts losses of a stream faster than the model too;
 - RATE_RUN consecutive stamp intervals more than ``rate_tolerance`` off the model's
-  period (gaps included: a stream slower than the gap limit is all gaps) make :attr:`rate_suspect` true until an interval is on time again: the node
-  withholds its attitudes from that sample on, without waiting for its rate check.
+  period (gaps included: a stream slower than the gap limit is all gaps) make
+  :attr:`rate_suspect` true until an interval is on time again: the node withholds its
+  attitudes from that sample on, without waiting for its rate check.
 """
 
 from __future__ import annotations
