@@ -50,7 +50,7 @@ _NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
 
 
 def output_topics(namespace: str = '/') -> tuple[str, str, str]:
-    """The node's output topics, resolved in ``namespace`` as ROS resolves them."""
+    """Resolve the node's output topics in ``namespace``, as ROS resolves them."""
     tokens = [t for t in namespace.split('/') if t]
     if not all(_NAME_TOKEN.fullmatch(t) for t in tokens):
         raise DatasetError(f'--namespace {namespace!r}: not a ROS namespace (names of '

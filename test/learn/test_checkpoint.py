@@ -182,8 +182,8 @@ def test_a_model_config_that_is_not_a_mapping_or_zero_input_std_is_refused(tmp_p
     ({'in_channels': 3}, 'in_channels must be 6'),  # crashed at the first sample
     ({'members': 10 ** 6}, 'members must be an integer'),
 ])
-def test_an_architecture_the_runtime_cannot_run_is_refused_on_reading(tmp_path, change,
-                                                                       message):
+def test_an_architecture_the_runtime_cannot_run_is_refused_on_reading(
+        tmp_path, change, message):
     """Model files are untrusted: their header cannot make the engine write out of bounds."""
     import json
     from denoise_imu_ros.core.modelfile import read_model_file, write_model_file

@@ -78,7 +78,8 @@ def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
     assert isinstance(den.process(int(t[1]), imu[1, :3], imu[1, 3:]), Output)
     assert den.counts == {'non_finite': 2, 'out_of_range': 2, 'zero_stamp': 1,
                           'duplicate_stamp': 1,
-                          'out_of_order': 1, 'non_finite_output': 0, 'accepted': 2, 'gap_resets': 0,
+                          'out_of_order': 1, 'non_finite_output': 0, 'accepted': 2,
+                          'gap_resets': 0,
                           'time_jump_resets': 0, 'skipped_periods': 0,
                           'skipped_input_periods': 0, 'non_finite_covariance': 0}
 
