@@ -319,11 +319,15 @@ class GyroDenoiser(Node):
         """
         return stream_rate_hz(np.array(self._stamps)) if len(self._stamps) >= 3 else 0.0
 
+    def _imu_frame(self) -> str:
+        """The IMU's frame_id, from its last message (diagnostics name the device)."""
+        return '' if self._corrected is None else self._corrected.header.frame_id
+
     def _publish_diagnostics(self) -> None:
         counts = self._denoiser.counts
         rate = self.input_rate_hz()
         status = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: gyro correction',
-                                  hardware_id=self._fixed_frame, level=DiagnosticStatus.OK,
+                                  hardware_id=self._imu_frame(), level=DiagnosticStatus.OK,
                                   message='ok')
         fill = min(self._denoiser.engine.samples, self._denoiser.engine.receptive_field)
         self._rate_error = bool(rate) and abs(rate / self._model_rate - 1.0) > self._rate_tolerance

@@ -176,6 +176,7 @@ def test_rate_mismatch_is_a_diagnostics_error(harness):
                                                 'out_of_order', 'callback_time_p50_us',
                                                 'skipped_periods', 'attitude_withheld'}
     assert status.name == '/gyro_denoiser: gyro correction'  # the namespaced node name
+    assert status.hardware_id == 'imu4'  # the device: its messages' frame_id
     # from now on the corrected gyro flows, the attitude is not published as if valid
     before = len(h.attitude)
     later = stamps[-1] + np.arange(1, 201) * 10_000_000
