@@ -75,6 +75,25 @@ def _ros2_source(src: Path, workdir: Path) -> Path:
     return dst
 
 
+def stamp_order(stamps: np.ndarray, jump_ns: int) -> np.ndarray:
+    """
+    The order the pipeline takes IMU messages in: by header stamp within each session.
+
+    A stamp more than ``jump_ns`` behind every one before it (in receive order) starts a
+    new session (a clock set back, a driver restarted): sorting across it would
+    interleave two recordings; the pipeline resets there instead, as the node does.
+    """
+    session = np.zeros(len(stamps), dtype=np.int64)
+    k, newest = 0, None
+    for i, t in enumerate(stamps.tolist()):
+        if newest is not None and t < newest - jump_ns:
+            k, newest = k + 1, t
+        else:
+            newest = t if newest is None else max(newest, t)
+        session[i] = k
+    return np.lexsort((stamps, session))
+
+
 def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
                 fixed_frame: str = 'odom', compress: bool | None = None,
@@ -86,7 +105,8 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     latency reorders receive times, and the pipeline would drop every late one), and each
     output is written with its input's receive time (a reader sorts by it). A first pass
     reads only the stamps; the second holds a message only until its turn in stamp order
-    comes, so memory follows how far the bag is out of order, not its length. Copied
+    comes, so memory follows how far the bag is out of order, not its length (a clock
+    set back starts a new session, :func:`stamp_order`). Copied
     topics keep their recorded QoS; ``compress`` (zstd) defaults to the input's compression.
     The outputs are the node's topics in ``namespace``; a bag that has one already is
     refused (the two would mix on one topic).
@@ -115,8 +135,8 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 stamps = np.array([stamp_ns(rd.deserialize(raw, c.msgtype).header)
                                    for c, _, raw in rd.messages() if c.id in imu_ids],
                                   dtype=np.int64)
-                check_rate(np.sort(stamps), den.rate_hz, src)
-                turn = np.argsort(stamps, kind='stable')  # turn[i]: the i-th to go through
+                turn = stamp_order(stamps, round(den.time_jump_s * 1e9))  # the i-th to go
+                check_rate(stamps[turn], den.rate_hz, src)
                 wr = Writer(partial, version=9, storage_plugin=plugin)
                 if is_compressed(rd) if compress is None else compress:
                     wr.set_compression(CompressionMode.STORAGE if plugin == StoragePlugin.MCAP

@@ -243,3 +243,27 @@ def test_a_ros2_bag_folder_named_like_a_ros1_bag_is_read_as_ros2(tmp_path, model
     from denoise_imu_ros.data.bags import read_bag
     assert len(read_bag(tmp_path / 'in.bag').imu) == len(read_bag(
         tmp_path / 'out', imu_topic='/imu/corrected').imu) == 1200
+
+
+def test_a_clock_set_back_mid_bag_is_two_sessions_not_one_interleaved(tmp_path, model_file):
+    """Sorting by stamp across a clock reset would interleave two recordings' samples."""
+    from denoise_imu_ros.core import msgs
+    from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
+    from denoise_imu_ros.runtime.process_bag import process_bag, stamp_order
+    from denoise_imu_ros.runtime.player import read_imu_messages
+    from rosbags.rosbag2 import Writer
+    imu = read_imu_messages(SAMPLE)[:1200]
+    t0 = msgs.stamp_ns(imu[0].header)
+    stamps = [t0 + 5_000_000 * k for k in range(600)]  # 3 s, then the clock goes back
+    stamps += [t0 + 2_500_000 + 5_000_000 * k for k in range(600)]  # inside the first
+    with Writer(tmp_path / 'in', version=9) as w:
+        conn = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        for k, (m, t) in enumerate(zip(imu, stamps)):
+            m = msgs.copy_imu(BAG_TYPES, m)
+            m.header = msgs.header(BAG_TYPES, t, 'imu0')
+            w.write(conn, t0 + 5_000_000 * k, TYPESTORE.serialize_cdr(m, IMU_TYPE))
+    counts = process_bag(tmp_path / 'in', tmp_path / 'out', str(model_file))
+    assert counts['accepted'] == 1200 and counts['time_jump_resets'] == 1
+    assert counts.get('gap_resets', 0) == 0 and counts['out_of_order'] == 0
+    assert stamp_order(np.array([5, 3, 4, 100, 90, 2, 1]), 50).tolist() == [1, 2, 0, 4, 3, 6,
+                                                                              5]
