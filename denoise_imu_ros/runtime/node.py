@@ -320,7 +320,7 @@ class GyroDenoiser(Node):
         return stream_rate_hz(np.array(self._stamps)) if len(self._stamps) >= 3 else 0.0
 
     def _imu_frame(self) -> str:
-        """The IMU's frame_id, from its last message (diagnostics name the device)."""
+        """Return the IMU's frame_id, from its last message (diagnostics name the device)."""
         return '' if self._corrected is None else self._corrected.header.frame_id
 
     def _publish_diagnostics(self) -> None:

@@ -77,7 +77,7 @@ def _ros2_source(src: Path, workdir: Path) -> Path:
 
 def stamp_order(stamps: np.ndarray, jump_ns: int) -> np.ndarray:
     """
-    The order the pipeline takes IMU messages in: by header stamp within each session.
+    Return the order the pipeline takes IMU messages in: by stamp within each session.
 
     A stamp more than ``jump_ns`` behind every one before it (in receive order) starts a
     new session (a clock set back, a driver restarted): sorting across it would
