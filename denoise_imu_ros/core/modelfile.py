@@ -230,8 +230,8 @@ def read_model_file(spec: str | Path) -> ModelFile:
         raise ModelFileError(f'{path}: model file holds non-finite weights')
     if not (arrays['input_std'] > 0).all():
         raise ModelFileError(f'{path}: model file has a non-positive input_std')
-    if not all((v > 0).all() for k, v in arrays.items() if k.endswith('.running_var')):
-        raise ModelFileError(f'{path}: model file has a non-positive BatchNorm variance')
+    if not all((v >= 0).all() for k, v in arrays.items() if k.endswith('.running_var')):
+        raise ModelFileError(f'{path}: model file has a negative BatchNorm variance')
     _check_meta(meta, path)
     return ModelFile(config, arrays, meta, path)
 

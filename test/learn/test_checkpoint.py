@@ -202,12 +202,12 @@ def test_an_architecture_the_runtime_cannot_run_is_refused_on_reading(
         read_model_file(tmp_path / 'b.safetensors')
 
 
-def test_a_non_positive_batchnorm_variance_is_refused_on_reading(tmp_path):
+def test_a_negative_batchnorm_variance_is_refused_on_reading(tmp_path):
     """It passes as finite, and turns every corrected gyro into NaN."""
     from denoise_imu_ros.core.modelfile import read_model_file, write_model_file
     model = _model().eval()
     arrays = {k: v.numpy() for k, v in model.state_dict().items()}
     arrays['net.1.running_var'][0] = -1.0
     write_model_file(tmp_path / 'a.safetensors', model.config, arrays, {})
-    with pytest.raises(ModelFileError, match='non-positive BatchNorm variance'):
+    with pytest.raises(ModelFileError, match='negative BatchNorm variance'):
         read_model_file(tmp_path / 'a.safetensors')
