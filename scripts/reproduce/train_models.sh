@@ -3,7 +3,7 @@
 # and TUM-VI ensembles of the seeds, the cross-recording reports of the recipes and the
 # filter settings.
 #   scripts/reproduce/train_models.sh OUT_DIR [SEEDS...]    (EuRoC seeds, default: 0 1 2 3 4)
-#   TUMVI_SEEDS="0 1" scripts/reproduce/train_models.sh ... (TUM-VI seeds, default: 0 to 8)
+#   TUMVI_SEEDS="0 1" scripts/reproduce/train_models.sh ... (TUM-VI seeds, default: 0 to 10)
 #   TUMVI_CV_SEEDS="0 1" ...                                (its crossval seeds, default: 0 1 2)
 #   DATA=DIR ...                                            (the data, default ../shared/data)
 # Each run writes OUT_DIR/<name>.safetensors and OUT_DIR/<name>.log. Runs one after the
@@ -28,7 +28,7 @@ run tumvi_calibrated --config config/train_tumvi.yaml --calibration-only
 first=${seeds[0]%% *}
 run "euroc_s$first" --config config/train_euroc.yaml --seed "$first"
 family=()
-for seed in ${TUMVI_SEEDS:-0 1 2 3 4 5 6 7 8}; do
+for seed in ${TUMVI_SEEDS:-0 1 2 3 4 5 6 7 8 9 10}; do
   run "tumvi_family_s$seed" --config config/train_tumvi_family.yaml --seed "$seed"
   family+=("$out/tumvi_family_s$seed.safetensors")
 done

@@ -87,10 +87,10 @@ def test_shipped_euroc_is_the_ensemble_of_five_trainings():
     assert sorted(m['seed'] for m in loaded.meta['members']) == [0, 1, 2, 3, 4]
 
 
-def test_shipped_tumvi_is_the_ensemble_of_nine_family_trainings_and_its_folds_verdict():
+def test_shipped_tumvi_is_the_ensemble_of_eleven_family_trainings_and_its_folds_verdict():
     loaded = load_model('tumvi')
-    assert loaded.model.config.members == 9
-    assert sorted(m['seed'] for m in loaded.meta['members']) == list(range(9))
+    assert loaded.model.config.members == 11
+    assert sorted(m['seed'] for m in loaded.meta['members']) == list(range(11))
     assert loaded.meta['train_config']['increments'] == [16, 32, 64, 128]
     report = loaded.meta['crossval']  # the folds' ensembles of seeds, as what ships
     assert report['recipe'].endswith('train_tumvi_family.yaml')
