@@ -71,7 +71,7 @@ def test_imu_data_is_the_imu_tools_contract_with_the_fused_orientation(
         harness, model_file, accel_bias):
     """imu/data: header copied, VQF orientation with its covariance, corrected gyro."""
     from denoise_imu_ros.core.modelfile import add_metadata
-    from denoise_imu_ros.runtime.fusion import fuse, FusionSettings
+    from denoise_imu_ros.runtime.fusion import fuse, FusionSettings, step_periods
     stored = FusionSettings(3.0, False, (0.02, -0.1, 0.05))  # the node overrides tau_acc
     add_metadata(model_file, fusion={'settings': stored.as_dict()})
     rec = load_imu(SAMPLE)
@@ -87,7 +87,7 @@ def test_imu_data_is_the_imu_tools_contract_with_the_fused_orientation(
                      for m in h.fused])
     removed = stored.accel_bias_m_s2 if accel_bias == 'model' else (0.0, 0.0, 0.0)
     np.testing.assert_array_equal(quat, fuse(gyro, rec.imu[:n, 3:], 200.0, FusionSettings(
-        5.0, False, removed)))
+        5.0, False, removed), step_periods(rec.imu_stamp_ns[:n], 200.0)))
     accel = [[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
              for m in h.fused]
     np.testing.assert_array_equal(accel, rec.imu[:n, 3:])  # passed through as it came
