@@ -192,11 +192,25 @@ def attitude_errors(est: Rotation, gt: Rotation, gt_pos: np.ndarray, valid: np.n
         error_deg=np.where(valid, angle, np.nan))
 
 
+def integrate_from_trusted(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
+                           dt: np.ndarray) -> Rotation:
+    """
+    Integrate a gyro (one sample per stamp) from the first stamp with a trusted pose.
+
+    A pose interpolated across a mocap hole is not a start: from one, every error after
+    it carries the interpolation's. The stamps before keep their ground truth, which no
+    error counts (they are not trusted either).
+    """
+    k = int(np.argmax(gt_valid)) if gt_valid.any() else 0
+    est = integrate(gt_quat[k], gyro[k:len(dt)], dt[k:])
+    return est if k == 0 else Rotation.concatenate([Rotation.from_quat(gt_quat[:k]), est])
+
+
 def sequence_errors(seq: Sequence, gyro: np.ndarray,
                     distances: tuple[float, ...] = ROE_DISTANCES_M
                     ) -> tuple[Rotation, AttitudeErrors]:
-    """Integrate a gyro (N, 3) over a whole sequence from its first pose; its errors too."""
-    est = integrate(seq.gt_quat[0], gyro[:-1], seq.dt)
+    """Integrate a gyro (N, 3) over a sequence from its first trusted pose; its errors."""
+    est = integrate_from_trusted(seq.gt_quat, seq.gt_valid, gyro, seq.dt)
     return est, attitude_errors(est, Rotation.from_quat(seq.gt_quat), seq.gt_pos,
                                 seq.gt_valid, distances)
 

@@ -45,7 +45,7 @@ from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
 from ..core.limits import accel_units, imu_holes, MAX_GAP_FACTOR
 from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residuals, integrate,
-                            sequence_errors)
+                            integrate_from_trusted, sequence_errors)
 from ..core.records import Recording, Sequence
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
@@ -121,7 +121,7 @@ def supervision(seq: Sequence, lengths: tuple[int, ...]) -> dict[str, Any]:
     def aoe(g: np.ndarray) -> float:
         return sequence_errors(seq, g, distances=())[1].aoe
 
-    est = integrate(seq.gt_quat[0], gyro[:-1], seq.dt)  # plain integration, shared
+    est = integrate_from_trusted(seq.gt_quat, seq.gt_valid, gyro, seq.dt)  # shared
     plain = attitude_errors(est, Rotation.from_quat(seq.gt_quat), seq.gt_pos, seq.gt_valid,
                             distances=()).aoe
     fits = {}

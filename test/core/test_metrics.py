@@ -63,3 +63,23 @@ def test_ground_truth_holes_are_skipped():
     valid = np.arange(n) < 500
     err = attitude_errors(est, gt, np.zeros((n, 3)), valid, distances=())
     assert err.aoe == 0 and np.isnan(err.error_deg[600])
+
+
+def test_integration_starts_at_the_first_trusted_pose_not_one_across_a_hole():
+    """A tail that starts inside a mocap hole starts from no interpolated pose."""
+    from denoise_imu_ros.core.metrics import integrate_from_trusted, sequence_errors
+    from denoise_imu_ros.core.records import Sequence
+    n = 400
+    t = np.arange(n) * 5_000_000
+    gyro = np.tile([0.0, 0.0, 0.2], (n, 1))
+    truth = Rotation.from_rotvec(np.outer(0.2 * t * 1e-9, [0.0, 0.0, 1.0]))
+    quat = truth.as_quat()
+    quat[:50] = Rotation.from_euler('x', 10, degrees=True).as_quat()  # interpolated, wrong
+    valid = np.arange(n) >= 50
+    seq = Sequence('s', t, np.hstack([gyro, np.tile([0.0, 0.0, 9.81], (n, 1))]), quat,
+                   np.zeros((n, 3)), valid)
+    est, err = sequence_errors(seq, gyro, distances=())
+    assert err.aoe < 1e-9  # the true gyro, integrated from the first trusted pose
+    np.testing.assert_allclose(est[50:].as_quat(), quat[50:], atol=1e-12)
+    whole = integrate_from_trusted(quat, np.ones(n, bool), gyro, np.diff(t) * 1e-9)
+    np.testing.assert_allclose(whole.as_quat()[0], quat[0])  # all trusted: from the first
