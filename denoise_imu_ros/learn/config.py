@@ -137,6 +137,7 @@ RANGES = {
     'huber_delta': (0, None, False), 'skip_blocks': (0, None, True),
     'val_every': (1, None, True), 'swa_start': (0, None, True), 'threads': (1, None, True),
     'workers': (1, None, True), 'dropout': (0, 1, True), 'max_gt_gap_s': (0, None, False),
+    'seed': (0, 2 ** 32, True),  # numpy's seeds, and torch's
 }
 
 
@@ -153,6 +154,17 @@ def _is(value: Any, kind: str) -> bool:
         'dict': isinstance(value, dict),
     }
     return any(value is None if k == 'None' else checks[k] for k in kind.split(' | '))
+
+
+def _alignment(value: Any) -> bool:
+    """Whether a recipe's ``align`` mapping is one check-data could have written."""
+    if not isinstance(value, dict) or set(value) != {'time_offset_s',
+                                                     'imu_from_pose_rotation_xyzw'}:
+        return False
+    offset, quat = value['time_offset_s'], value['imu_from_pose_rotation_xyzw']
+    return (_is(offset, 'float') and abs(offset) <= 60.0 and isinstance(quat, list)
+            and len(quat) == 4 and all(_is(q, 'float') for q in quat)
+            and abs(math.hypot(*quat) - 1.0) < 1e-3)
 
 
 def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
@@ -196,13 +208,17 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: {err}') from err
     if cfg.window % span:
         raise TrainingError(f'{path}: window must be a multiple of {span}')
+    longest = max(cfg.increments)
+    if cfg.skip_blocks >= cfg.window // longest:  # the loss would drop every such block
+        raise TrainingError(f'{path}: skip_blocks {cfg.skip_blocks} leaves no '
+                            f'{longest}-sample increment of a {cfg.window}-sample window '
+                            f'(at most {cfg.window // longest - 1})')
     if not cfg.sequences:
         raise TrainingError(f'{path}: no training sequences')
-    if not (cfg.align in ('none', 'auto') or (
-            isinstance(cfg.align, dict)
-            and set(cfg.align) == {'time_offset_s', 'imu_from_pose_rotation_xyzw'})):
+    if not (cfg.align in ('none', 'auto') or _alignment(cfg.align)):
         raise TrainingError(f'{path}: align must be none, auto or a mapping with '
-                            'time_offset_s and imu_from_pose_rotation_xyzw')
+                            'time_offset_s (seconds, at most 60 either way) and '
+                            'imu_from_pose_rotation_xyzw (a unit quaternion)')
     cfg.workers = min(cfg.workers, len(cfg.sequences))  # each worker needs a sequence
     if cfg.device is not None and not DEVICE.fullmatch(cfg.device):
         raise TrainingError(f'device {cfg.device!r}: not a torch device (use cpu or cuda)')

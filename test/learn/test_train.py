@@ -195,6 +195,13 @@ def test_align_auto_trains_on_poses_of_a_rotated_marker_on_a_late_clock(euroc, t
     ('dropout: 1.5', 'dropout must be at least 0 and below 1'),
     ('increments: [16, 32.5]', r'increments must be list\[int\]'),
     ('42', 'a training config is a mapping of keys, not int'),
+    ('seed: 18446744073709551616', 'seed must be at least 0 and below 4294967296'),
+    ('seed: -1', 'seed must be at least 0'),
+    ('window: 64', 'skip_blocks 5 leaves no 32-sample increment of a 64-sample window'),
+    ('align: {time_offset_s: 0.01, imu_from_pose_rotation_xyzw: [0, 0, 0, 0]}',
+     'align must be none, auto or a mapping'),
+    ('align: {time_offset_s: .nan, imu_from_pose_rotation_xyzw: [0, 0, 0, 1]}',
+     'align must be none, auto or a mapping'),
 ])
 def test_recipe_values_of_the_wrong_type_or_range_are_refused(tmp_path, text, message):
     (tmp_path / 'r.yaml').write_text(('sequences: [a]\n' if ':' in text else '') + text + '\n')
