@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .pose_alignment import estimate_pose_alignment, MAX_OFFSET_S
+from .pose_alignment import estimate_pose_alignment, MAX_OFFSET_S, not_following
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
 from ..core.limits import accel_units, imu_holes, MAX_GAP_FACTOR
@@ -230,13 +230,9 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
     if report['duration_s'] < MIN_DURATION_S:
         reasons.append(f'too short: {report["duration_s"]:.1f} s of IMU with poses, training '
                        f'needs {MIN_DURATION_S:g} s')
-    motion = float(np.sqrt(np.mean(np.square(report['excitation_rms_deg_s']))))
-    if report['time_offset_at_search_limit'] or report['rate_residual_rms_deg_s'] > 0.5 * motion:
-        reasons.append(
-            f'the poses do not follow the gyro at any clock offset within +-{max_offset_s:g} s '
-            f'(rate residual {report["rate_residual_rms_deg_s"]:.1f} deg/s RMS against '
-            f'{motion:.1f} deg/s of motion): the offset is beyond the search range, or the '
-            'poses are not of this IMU')
+    not_aligned = not_following(report, max_offset_s)
+    if not_aligned:
+        reasons.append(not_aligned)
     if report['imu_holes']:
         reasons.append(f'{report["imu_holes"]} IMU holes longer than {MAX_GAP_FACTOR:g} periods '
                        f'(longest {report["imu_longest_hole_s"]:.3g} s): split the recording '

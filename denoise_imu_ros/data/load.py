@@ -24,7 +24,7 @@ import dataclasses
 from pathlib import Path
 
 from .asl import read_asl
-from .pose_alignment import apply_pose_alignment, estimate_pose_alignment
+from .pose_alignment import apply_pose_alignment, estimate_pose_alignment, not_following
 from .timebase import onto_imu_stamps
 from ..core.errors import DatasetError
 from ..core.records import Recording, Sequence
@@ -72,6 +72,9 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     used = None
     if align_poses == 'auto':
         found = estimate_pose_alignment(rec)
+        why = not_following(found)
+        if why:  # no estimate to apply: say so rather than shift the poses by it
+            raise DatasetError(f'{path}: align auto: {why}')
         used = {k: found[k] for k in ('time_offset_s', 'time_offset_std_s',
                                       'imu_from_pose_rotation_xyzw',
                                       'imu_from_pose_rotation_std_deg')}

@@ -127,6 +127,22 @@ def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
     return float(found.x) if found.fun < costs.min() - TIE_RAD_S else best
 
 
+def not_following(found: dict[str, Any], max_offset_s: float = MAX_OFFSET_S) -> str | None:
+    """
+    Why the poses of an estimate do not follow the gyro at any offset searched, or None.
+
+    Then the estimate is no alignment: the offset lies beyond the search range, or the
+    poses are not of this IMU.
+    """
+    motion = float(np.sqrt(np.mean(np.square(found['excitation_rms_deg_s']))))
+    if found['time_offset_at_search_limit'] or found['rate_residual_rms_deg_s'] > 0.5 * motion:
+        return (f'the poses do not follow the gyro at any clock offset within '
+                f'+-{max_offset_s:g} s (rate residual {found["rate_residual_rms_deg_s"]:.1f} '
+                f'deg/s RMS against {motion:.1f} deg/s of motion): the offset is beyond the '
+                'search range, or the poses are not of this IMU')
+    return None
+
+
 def estimate_pose_alignment(rec: Recording,
                             max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     """

@@ -8,6 +8,7 @@ import math
 import re
 
 from denoise_imu_ros.cli import main
+from denoise_imu_ros.core.errors import DatasetError
 from denoise_imu_ros.data.asl import read_asl
 from denoise_imu_ros.data.check import check, ESTIMATES, label_noise, paper_increments, supervision
 from denoise_imu_ros.data.pose_alignment import estimate_pose_alignment
@@ -141,6 +142,11 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
     late = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns - 2_000_000_000)
     assert 'do not follow the gyro at any clock offset within +-0.5 s' in ' '.join(
         check(late)['reasons'])
+    # and align auto does not apply such an estimate (eval --align auto, training)
+    from denoise_imu_ros.data.load import load_sequence
+    write_bag(late, tmp_path / 'late')
+    with pytest.raises(DatasetError, match='late: align auto: the poses do not follow'):
+        load_sequence(tmp_path / 'late', align_poses='auto')
     # no overlap at all
     away = write_asl(tmp_path / 'away', n_imu=2000, gt_offset_s=20.0)
     assert main(['check-data', str(away)]) == 1
