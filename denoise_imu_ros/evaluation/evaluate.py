@@ -38,6 +38,7 @@ from ..core.metrics import (align_yaw, error_components, sequence_errors,
                             tilt_growth_deg_min)
 from ..core.modelfile import (fitting_note, scored_on_training_samples, shipped_models,
                               training_span)
+from ..core.records import Sequence
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..learn.model import correct_gyro
@@ -49,6 +50,23 @@ def default_baseline(meta: dict[str, Any], baseline: str | None) -> str | None:
         return baseline
     candidate = f'{meta.get("dataset")}_calibrated'
     return candidate if candidate in shipped_models() else None
+
+
+def recording_names(sequences: list[str]) -> list[str]:
+    """The names reports key recordings by; two of one name would overwrite each other."""
+    names = [Path(given).name for given in sequences]  # 'base/' or a path: its name
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise OptionError(f'--sequences: {", ".join(twice)} given twice (recordings are '
+                          'reported by name)')
+    return names
+
+
+def check_inputs(seq: Sequence, loaded: Any, name: str) -> None:
+    """Refuse a recording this model cannot score: another rate, unit, or IMU holes."""
+    check_rate(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
+    check_units(seq.imu, name, loaded.model.input_std.numpy())
+    check_gaps(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
 
 
 def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
@@ -86,13 +104,10 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     rows = eval_filters(loaded.meta, models['calibrated'].meta if 'calibrated' in models
                         else None)
     roe_all: dict[str, list[np.ndarray]] = {}
-    for given in sequences:
-        name = Path(given).name  # 'base/' (tab completion) or a path: the recording's name
+    for given, name in zip(sequences, recording_names(sequences)):
         seq = load_sequence(Path(data) / given, imu_topic, pose_topic,
                             min_samples=loaded.model.receptive_field, align_poses=align_poses)
-        check_rate(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
-        check_units(seq.imu, name, loaded.model.input_std.numpy())
-        check_gaps(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
+        check_inputs(seq, loaded, name)
         if start_sample >= len(seq) - 1:
             raise OptionError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')
         gyros = {'raw': seq.imu[:, :3]}

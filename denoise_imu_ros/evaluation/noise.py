@@ -251,7 +251,7 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     from ..data.load import load_sequence
     from ..learn.checkpoint import load_model
     from ..learn.model import correct_gyro
-    from .evaluate import default_baseline
+    from .evaluate import check_inputs, default_baseline, recording_names
     net = load_model(model_spec)
     baseline = default_baseline(net.meta, baseline)
     calib = load_model(baseline) if baseline is not None else None
@@ -260,9 +260,10 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     if note:
         print(f'warning: {note}', file=sys.stderr)
     seqs, gyros = [], {'raw': [], 'calibrated': [], 'corrected': []}
-    for name in sequences:
+    for name, short in zip(sequences, recording_names(sequences)):
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
                             min_samples=net.model.receptive_field)
+        check_inputs(seq, net, short)
         seqs.append(seq)
         gyros['raw'].append(seq.imu[:, :3])
         if calib is not None:

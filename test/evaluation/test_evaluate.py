@@ -91,3 +91,9 @@ def test_only_a_training_recordings_fitted_span_is_flagged():
     assert scored_on_training_samples({}, names, 0) == []
     assert scored_on_training_samples({'train_sequences': ['MH_02_easy']}, names,
                                       10 ** 6) == ['data/MH_02_easy']  # span unknown
+
+
+def test_one_recording_given_twice_is_refused_not_averaged_twice(model_file, tmp_path, capsys):
+    assert main(['eval', '--model', str(model_file), '--data', str(SAMPLE_DIR), '--sequences',
+                 SAMPLE.name, f'{SAMPLE.name}/', '--out', str(tmp_path / 'e')]) == 1
+    assert f'--sequences: {SAMPLE.name} given twice' in capsys.readouterr().err

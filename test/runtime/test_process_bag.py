@@ -93,7 +93,9 @@ def test_every_offline_tool_refuses_a_stream_at_another_rate(model_file, tmp_pat
                 ['correct', '--input', str(tmp_path / 'slow_bag'), '--output',
                  str(tmp_path / 'o.csv')],
                 ['eval', '--data', str(tmp_path), '--sequences', 'slow_bag', '--out',
-                 str(tmp_path / 'e'), '--no-plots']):
+                 str(tmp_path / 'e'), '--no-plots'],
+                ['noise', '--data', str(tmp_path), '--sequences', 'slow_bag', '--out',
+                 str(tmp_path / 'n')]):
         assert main(cmd + ['--model', str(model_file)]) == 1
         assert 'IMU rate 100.0 Hz, the model was trained at 200.0 Hz' in capsys.readouterr().err
     assert not (tmp_path / 'out').exists() and not (tmp_path / 'o.csv').exists()
