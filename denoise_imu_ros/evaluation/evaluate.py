@@ -53,8 +53,8 @@ def default_baseline(meta: dict[str, Any], baseline: str | None) -> str | None:
 
 
 def recording_names(sequences: list[str]) -> list[str]:
-    """The names reports key recordings by; two of one name would overwrite each other."""
     """Return the names reports key recordings by; two of one name would overwrite."""
+    names = [Path(given).name for given in sequences]  # 'base/' or a path: its name
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise OptionError(f'--sequences: {", ".join(twice)} given twice (recordings are '
