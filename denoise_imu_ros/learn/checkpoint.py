@@ -71,7 +71,9 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
                         for m in members], axis=0)
     meta = {
         'dataset': first.get('dataset'), 'sample_rate_hz': rate,
-        'train_sequences': first.get('train_sequences'),
+        # every member's (fold models trained on different ones): what eval warns about
+        'train_sequences': list(dict.fromkeys(
+            s for m in members for s in m.meta.get('train_sequences') or [])) or None,
         'train_config': first.get('train_config'),
         'validation': {'gyro_residual_std': residual.tolist()},
         'members': [{'file': str(m.path), 'seed': m.meta.get('train_config', {}).get('seed'),

@@ -127,6 +127,13 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
     save_model(tmp_path / 'e.safetensors', untrained_model(), {'sample_rate_hz': 100.0})
     with pytest.raises(ModelFileError, match='trained at different rates: 200.00 Hz, 100.00 Hz$'):
         save_ensemble(tmp_path / 'z.safetensors', [model_file, tmp_path / 'e.safetensors'])
+    # members trained on different recordings (fold models): the ensemble names them all
+    for name, seqs in (('f1', ['a', 'b']), ('f2', ['b', 'c'])):
+        save_model(tmp_path / f'{name}.safetensors', untrained_model(),
+                   {'sample_rate_hz': 200.0, 'train_sequences': seqs})
+    union = save_ensemble(tmp_path / 'u.safetensors', [tmp_path / 'f1.safetensors',
+                                                       tmp_path / 'f2.safetensors'])
+    assert union.meta['train_sequences'] == ['a', 'b', 'c']
 
 
 def test_model_files_are_readable_by_everyone(tmp_path):
