@@ -39,7 +39,7 @@ def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
     """
     if not path.is_file():
         raise DatasetError(f'{path}: file not found')
-    with path.open(encoding='utf-8', errors='strict') as f:
+    with path.open(encoding='utf-8-sig', errors='strict') as f:  # a BOM is no data
         lines = _lines(f, path)
     try:
         with warnings.catch_warnings():  # a file without data rows: said below
@@ -48,7 +48,7 @@ def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
                                 usecols=0, ndmin=1)
             values = np.loadtxt(lines, delimiter=',', comments='#', dtype=np.float64,
                                 usecols=range(1, ncols), ndmin=2)
-    except ValueError:
+    except (ValueError, OverflowError):  # OverflowError: a stamp beyond int64
         return _parse_lines(lines, path, ncols)
     if not len(stamps):
         raise DatasetError(f'{path}: no data rows')
@@ -71,6 +71,9 @@ def _parse_lines(lines: list[str], path: Path, ncols: int) -> tuple[np.ndarray, 
         except ValueError:
             raise DatasetError(
                 f'{path}:{lineno}: unparsable row {line.strip()[:60]!r}') from None
+        if not -2 ** 63 <= stamps[-1] < 2 ** 63:
+            raise DatasetError(f'{path}:{lineno}: stamp {parts[0].strip()[:30]} does not fit '
+                               'in 64-bit nanoseconds')
     if not stamps:
         raise DatasetError(f'{path}: no data rows')
     return np.array(stamps, dtype=np.int64), np.array(rows, dtype=np.float64)
