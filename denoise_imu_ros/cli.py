@@ -400,7 +400,7 @@ OPTION_RANGES = {
     'duration': (0.0, math.inf, False),  # s
     'rate': (0.0, math.inf, False),  # playback speed factor
     'wait': (0.0, 3600.0, True),  # s
-    'max_offset': (0.0, 60.0, False),  # s
+    'max_offset': (0.01, 60.0, True),  # s: the search's own resolution is ms
     'seed': (0, 2**32 - 1, True),  # numpy's and torch's seed range
     'seeds': (0, 2**32 - 1, True),
 }

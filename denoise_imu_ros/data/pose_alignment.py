@@ -36,6 +36,7 @@ from scipy.optimize import minimize_scalar
 from scipy.spatial.transform import Rotation
 
 from .timebase import poses_at
+from ..core.errors import DatasetError
 from ..core.records import Recording
 from ..core.rotation import conjugate_arrays, multiply_arrays
 
@@ -58,6 +59,10 @@ class Rates:
         grid_ns = t0 + np.arange(0, rec.gt_stamp_ns[-1] - t0, int(GRID_S * 1e9))
         quat, _, valid = poses_at(rec, grid_ns)
         w = max(1, int(round(window_s / GRID_S)))
+        if len(grid_ns) <= w + 1:
+            raise DatasetError(f'{rec.source}: the poses span {len(grid_ns) * GRID_S:.2f} s, '
+                               f'not more than the {window_s:.2f} s over which their rate is '
+                               'compared with the gyro (two pose periods at least)')
         self.pose_t = (grid_ns[:-w] - t0) * 1e-9                 # window starts, pose clock
         # q_n^-1 q_n+w by numpy's products: scipy's cost about 15 times more (core.rotation)
         relative = multiply_arrays(conjugate_arrays(quat[:-w]), quat[w:])

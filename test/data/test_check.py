@@ -188,7 +188,7 @@ def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_p
         assert main(cmd) == 1
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and 'stamps in microseconds or milliseconds?' in err
-    for bad in ('-1', '0', 'nan'):
+    for bad in ('-1', '0', 'nan', '0.002'):  # 2 ms: below the search's resolution
         assert main(['check-data', str(root), '--max-offset', bad]) == 1
         assert '--max-offset' in capsys.readouterr().err
 
@@ -247,3 +247,11 @@ def test_an_imu_hole_is_named_offline_as_the_node_treats_it(euroc, tmp_path, cap
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1
         assert re.search(r'IMU hole of 5.01 s after sample \d+ \(1 longer than 3 periods', err)
+
+
+def test_poses_too_sparse_to_give_a_rate_are_a_clear_error(tmp_path):
+    """Poses 3.3 s apart over 6.7 s: no window of their rate (two periods) fits inside."""
+    from helpers import write_asl
+    rec = read_asl(write_asl(tmp_path / 's', n_imu=1600, gt_rate=0.3))
+    with pytest.raises(DatasetError, match='over which their rate is compared'):
+        estimate_pose_alignment(rec)
