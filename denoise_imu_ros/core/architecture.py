@@ -31,6 +31,8 @@ IMU_CHANNELS = 6  # what every tool feeds the network: gyro xyz, accelerometer x
 MAX_WIDTH = 4096
 MAX_RECEPTIVE_FIELD = 1 << 16
 MAX_MEMBERS = 64
+MAX_STREAM_STATE = 1 << 26  # float32 values of the streaming engine's histories (256 MB)
+HISTORY_SLACK = 1024  # rows a streaming history grows by between two compactions
 
 
 def _counts(values: tuple[int, ...], upper: int | None = None) -> bool:
@@ -66,6 +68,8 @@ class ModelConfig:
                 and _counts(self.dilations)):
             raise ValueError(f'channels (at most {MAX_WIDTH}), kernels and dilations must be '
                              'positive integers')
+        if not self.calibration_only and not self.channels:
+            raise ValueError('a network needs at least one hidden layer (channels)')
         if self.receptive_field > MAX_RECEPTIVE_FIELD:
             raise ValueError(f'receptive field {self.receptive_field} samples: more than '
                              f'{MAX_RECEPTIVE_FIELD}')
@@ -77,6 +81,16 @@ class ModelConfig:
                 self.calibration_only and self.members > 1):
             raise ValueError(f'members must be an integer from 1 to {MAX_MEMBERS} (1 for '
                              'calibration_only)')
+        if self.stream_state() > MAX_STREAM_STATE:
+            raise ValueError(f'the streaming engine would hold {self.stream_state():,} values '
+                             f'of history: more than {MAX_STREAM_STATE:,}')
+
+    def stream_state(self) -> int:
+        """Count the float32 values of the streaming engine's input histories."""
+        if self.calibration_only:
+            return 0
+        return sum(c_in * ((k - 1) * d + 1 + HISTORY_SLACK)
+                   for c_in, _, k, d, _ in self.convolutions()[:-1])
 
     @property
     def receptive_field(self) -> int:

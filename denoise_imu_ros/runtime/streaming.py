@@ -37,7 +37,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..core.architecture import BLOCK, BN_EPS, ModelConfig
+from ..core.architecture import BLOCK, BN_EPS, HISTORY_SLACK, ModelConfig
 
 
 TINY_WEIGHT = 1e-15  # folded weights below this are 0 (see _layers)
@@ -250,9 +250,6 @@ class StreamingCorrector:
     def process(self, imu: np.ndarray) -> np.ndarray:
         """Run :meth:`step` over (N, 6) samples; returns (N, 3)."""
         return np.array([self.step(row) for row in imu]).reshape(-1, 3)
-
-
-HISTORY_SLACK = 1024  # rows a history grows by between two compactions
 
 
 class _Buffers:

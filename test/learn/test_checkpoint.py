@@ -188,6 +188,9 @@ def test_a_model_config_that_is_not_a_mapping_or_zero_input_std_is_refused(tmp_p
     ({'dilations': [1, 4, 16, 10 ** 9]}, 'receptive field'),  # a huge history allocation
     ({'in_channels': 3}, 'in_channels must be 6'),  # crashed at the first sample
     ({'members': 10 ** 6}, 'members must be an integer'),
+    ({'channels': [4096, 1], 'kernels': [1, 2], 'dilations': [1, 65535], 'members': 64},
+     'the streaming engine would hold'),  # 70 GB of history, from a 14 MB file
+    ({'channels': [], 'kernels': [], 'dilations': []}, 'at least one hidden layer'),
 ])
 def test_an_architecture_the_runtime_cannot_run_is_refused_on_reading(
         tmp_path, change, message):
