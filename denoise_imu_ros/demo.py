@@ -43,6 +43,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from scipy.spatial.transform import Rotation
 
+from .core.errors import DatasetError, DenoiseError, OptionError
 from .core.metrics import error_components, integrate
 from .core.modelfile import read_model_file, shipped_models
 from .core.msgs import stamp_ns
@@ -62,6 +63,9 @@ def _errors(seq: Sequence, stamps: np.ndarray, quats: np.ndarray,
     idx = np.searchsorted(seq.stamp_ns, stamps)
     keep = (idx < len(seq)) & (seq.stamp_ns[np.minimum(idx, len(seq) - 1)] == stamps)
     idx, quats = idx[keep], quats[keep]
+    if not len(idx):
+        raise DatasetError(f'{seq.name}: none of the attitudes received has a stamp of its '
+                           'IMU samples')
     gt = Rotation.from_quat(seq.gt_quat[idx])
     node = Rotation.from_quat(quats)
     node = (gt[0] * node[0].inv()) * node  # same start as the ground truth
@@ -87,7 +91,15 @@ def _calibrated(model: str, imu: np.ndarray) -> np.ndarray | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the live demo; returns the node's exit status or 0."""
+    """Run the live demo; returns the node's exit status, 1 on an error, or 0."""
+    try:
+        return _demo(argv)
+    except DenoiseError as err:
+        print(f'denoise-imu-demo: error: {err}', file=sys.stderr)
+        return 1
+
+
+def _demo(argv: list[str] | None) -> int:
     parser = argparse.ArgumentParser(prog='denoise-imu-demo', description=__doc__.split('\n')[1])
     parser.add_argument('--model', default='euroc')
     parser.add_argument('--bag', default=str(SAMPLE))
@@ -102,13 +114,11 @@ def main(argv: list[str] | None = None) -> int:
         t0 = stamp_ns(messages[0].header)
         messages = [m for m in messages
                     if (stamp_ns(m.header) - t0) * 1e-9 < args.seconds]
+    if not messages:
+        raise OptionError(f'--seconds {args.seconds:g}: no IMU message to play')
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
-    node_proc = subprocess.Popen(
-        [sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args', '-p',
-         f'model:={args.model}', '-p', 'fixed_frame:=world', '--log-level', 'warn'],
-        env=dict(os.environ))
     rclpy.init()
     received: list[tuple[int, tuple[float, ...]]] = []
     monitor = rclpy.create_node('attitude_monitor')
@@ -118,10 +128,15 @@ def main(argv: list[str] | None = None) -> int:
                                    (m.quaternion.x, m.quaternion.y, m.quaternion.z,
                                     m.quaternion.w))),
         QoSProfile(depth=5000, reliability=ReliabilityPolicy.RELIABLE))
-    player = Player(messages, rate=args.rate)
     executor = SingleThreadedExecutor()
     executor.add_node(monitor)
+    player = node_proc = None
     try:
+        player = Player(messages, rate=args.rate)  # a bad rate: before the node starts
+        node_proc = subprocess.Popen(
+            [sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args', '-p',
+             f'model:={args.model}', '-p', 'fixed_frame:=world', '--log-level', 'warn'],
+            env=dict(os.environ))
         print(f'waiting for gyro_denoiser (model {args.model}) ...', flush=True)
         while not player.has_subscribers() or monitor.count_publishers(
                 'imu/attitude') == 0:
@@ -151,10 +166,15 @@ def main(argv: list[str] | None = None) -> int:
                     print(f'{t[-1]:6.1f}s  ' + '  '.join(
                         f'{e[0][-1]:9.2f}' for e in errors.values()), flush=True)
                     next_report += 10.0
+            if node_proc.poll() is not None:
+                raise DenoiseError(f'gyro_denoiser stopped (exit {node_proc.returncode}) '
+                                   f'after {len(received)} attitudes')
             if done.is_set():
                 quiet_since = quiet_since or time.monotonic()
                 if len(received) >= len(messages) or time.monotonic() - quiet_since > 2.0:
                     break
+        if not received:
+            raise DenoiseError('no attitude received from gyro_denoiser')
         stamps, quats = map(np.array, zip(*received))
         t, valid, errors = _errors(seq, stamps, quats, calibrated)
         print(f'\n{len(received)}/{len(messages)} samples corrected live over DDS; '
@@ -166,13 +186,15 @@ def main(argv: list[str] | None = None) -> int:
                     f'{Path(args.bag).name}: live, against its ground truth', t, valid, errors)
         print(f'plot: {out / "live_attitude_error.png"}')
     finally:
-        node_proc.send_signal(signal.SIGINT)
-        try:
-            node_proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            node_proc.kill()
+        if node_proc is not None:
+            node_proc.send_signal(signal.SIGINT)
+            try:
+                node_proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                node_proc.kill()
         executor.shutdown()
-        player.destroy_node()
+        if player is not None:
+            player.destroy_node()
         monitor.destroy_node()
         shutdown_rclpy()
     return 0

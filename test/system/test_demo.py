@@ -18,3 +18,16 @@ def test_live_demo_runs_node_player_and_monitor(tmp_path, monkeypatch, capsys):
     assert rms['gyro_denoiser imu/attitude'] < rms['raw gyro'] / 10
     assert rms['calibrated IMU'] < rms['raw gyro'] / 10  # the baseline a user would use
     assert (tmp_path / 'live_attitude_error.png').read_bytes()[:4] == b'\x89PNG'
+
+
+def test_a_bad_rate_is_one_line_and_starts_no_node(tmp_path, monkeypatch, capsys):
+    import subprocess
+    from denoise_imu_ros import demo
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(DOMAIN))
+    started = []
+    monkeypatch.setattr(subprocess, 'Popen', lambda *a, **k: started.append(a))
+    for argv in (['--rate', '0'], ['--seconds', '0']):
+        assert demo.main(argv + ['--out', str(tmp_path)]) == 1
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and err.startswith('denoise-imu-demo: error:')
+    assert started == []  # nothing left running
