@@ -16,6 +16,9 @@
 
 Messages go out at their recorded pace (scaled by ``rate``), stamped as recorded; with
 ``clock`` a ``/clock`` message carrying each IMU stamp precedes it, for ``use_sim_time``.
+The pace follows the stamp intervals, each at most MAX_PAUSE_S (a stamp jump forward, a
+zero stamp, is no reason to wait for years) and none negative (after a jump back the
+messages keep their pace); such jumps are counted and said.
 """
 
 from __future__ import annotations
@@ -37,6 +40,8 @@ from ..core.msgs import stamp_ns
 from ..data.bags import CORRUPT, IMU_TYPE, open_bag, pick_connections
 
 RCLPY_TYPES = msgs.rclpy_types()
+MAX_PAUSE_S = 1.0  # the longest wait between two messages, in recorded seconds
+SLEEP_SLICE_S = 0.1  # a signal's shutdown is seen within this
 
 
 def read_imu_messages(path: str | Path, imu_topic: str | None = None) -> list[Imu]:
@@ -78,21 +83,36 @@ class Player(Node):
 
     def play(self) -> Iterator[Imu]:
         """Publish every message on schedule, yielding each one after it went out."""
-        if not self._messages:
-            return
-        stamp0 = stamp_ns(self._messages[0].header)
-        wall0 = time.monotonic()
+        due, last, jumps = time.monotonic(), None, 0
         for msg in self._messages:
-            due = wall0 + (stamp_ns(msg.header) - stamp0) * 1e-9 / self._rate
-            delay = due - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
-            if not self.context.ok():  # SIGTERM or SIGINT shut rclpy down: stop quietly
+            stamp = stamp_ns(msg.header)
+            if last is not None:
+                step = (stamp - last) * 1e-9
+                jumps += not 0.0 <= step <= MAX_PAUSE_S
+                due += min(max(step, 0.0), MAX_PAUSE_S) / self._rate
+            last = stamp
+            if not self._sleep_until(due):  # SIGTERM or SIGINT shut rclpy down: stop
                 return
-            if self._clock is not None:
-                self._clock.publish(Clock(clock=msg.header.stamp))
-            self._pub.publish(msg)
+            try:
+                if self._clock is not None:
+                    self._clock.publish(Clock(clock=msg.header.stamp))
+                self._pub.publish(msg)
+            except Exception:  # rclpy's RCLError, when a signal came since the check
+                if self.context.ok():
+                    raise
+                return
             yield msg
+        if jumps:
+            self.get_logger().warning(f'{jumps} stamp jumps (backwards, or more than '
+                                      f'{MAX_PAUSE_S:g} s ahead) played without their wait')
+
+    def _sleep_until(self, due: float) -> bool:
+        """Wait until ``due`` (time.monotonic) in slices; False once rclpy is shut down."""
+        while (left := due - time.monotonic()) > 0:
+            if not self.context.ok():
+                return False
+            time.sleep(min(left, SLEEP_SLICE_S))
+        return self.context.ok()
 
 
 def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,

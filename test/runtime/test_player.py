@@ -3,6 +3,7 @@
 """denoise-imu play: a bag's IMU published in real time."""
 
 from helpers import DOMAIN, SAMPLE
+import pytest
 
 
 def test_player_publishes_a_bag_in_order_with_clock(harness):
@@ -20,6 +21,23 @@ def test_player_publishes_a_bag_in_order_with_clock(harness):
     assert [m.header.stamp for m in h.corrected] == [m.header.stamp for m in messages]
     assert [c.clock for c in clocks] == [m.header.stamp for m in messages]
     assert h.node._denoiser.counts['accepted'] == 300
+
+
+def test_a_stamp_jump_is_no_reason_to_wait_for_it(harness, monkeypatch):
+    """A zero stamp first, an hour's jump ahead, a jump back: played at the pace around."""
+    from denoise_imu_ros.runtime import player as player_module
+    from denoise_imu_ros.runtime.player import Player
+    from helpers import imu_msg
+    waits = []
+    monkeypatch.setattr(player_module.time, 'sleep', waits.append)
+    monkeypatch.setattr(player_module.time, 'monotonic', lambda: sum(waits))  # waits only
+    stamps = [0, 10 ** 9, 10 ** 9 + 3600 * 10 ** 9, 2 * 10 ** 9, 2 * 10 ** 9 + 5_000_000]
+    messages = [imu_msg(t, [0.0, 0.0, 0.0], [0.0, 0.0, 9.81]) for t in stamps]
+    player = Player(messages, context=harness().ctx)
+    assert len(list(player.play())) == 5
+    assert sum(waits) == pytest.approx(1.0 + 1.0 + 0.0 + 0.005)  # each wait at most 1 s
+    assert max(waits) <= player_module.SLEEP_SLICE_S + 1e-12  # a signal is seen at once
+    player.destroy_node()
 
 
 def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, euroc):
