@@ -32,11 +32,13 @@ for seed in ${TUMVI_SEEDS:-0 1 2 3 4 5 6 7 8 9 10}; do
   run "tumvi_family_s$seed" --config config/train_tumvi_family.yaml --seed "$seed"
   family+=("$out/tumvi_family_s$seed.safetensors")
 done
+euroc=()
 for seed in ${seeds[@]}; do
   run "euroc_s$seed" --config config/train_euroc.yaml --seed "$seed"
+  euroc+=("$out/euroc_s$seed.safetensors")  # these seeds, not whatever else is in OUT_DIR
 done
-[ -f "$out/euroc_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble \
-  "$out"/euroc_s[0-9].safetensors --out "$out/euroc_ensemble.safetensors"
+[ -f "$out/euroc_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble "${euroc[@]}" \
+  --out "$out/euroc_ensemble.safetensors"
 [ -f "$out/tumvi_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble "${family[@]}" \
   --out "$out/tumvi_ensemble.safetensors"  # two seeds at least
 crossval() {  # name, recipe, folds, seeds ("" for the recipe's), models to attach to...
