@@ -28,6 +28,7 @@ convention of ``denoise-imu eval``.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 from pathlib import Path
 import signal
@@ -107,6 +108,10 @@ def _demo(argv: list[str] | None) -> int:
     parser.add_argument('--seconds', type=float, help='play only this much of the bag')
     parser.add_argument('--out', default='demo_out')
     args = parser.parse_args(argv)
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        raise OptionError(f'--rate {args.rate:g}: playback rate must be a positive number')
+    if args.seconds is not None and not (math.isfinite(args.seconds) and args.seconds > 0):
+        raise OptionError(f'--seconds {args.seconds:g}: must be a positive number')
     seq = load_sequence(args.bag)
     calibrated = _calibrated(args.model, seq.imu)
     messages = read_imu_messages(args.bag)
@@ -114,8 +119,6 @@ def _demo(argv: list[str] | None) -> int:
         t0 = stamp_ns(messages[0].header)
         messages = [m for m in messages
                     if (stamp_ns(m.header) - t0) * 1e-9 < args.seconds]
-    if not messages:
-        raise OptionError(f'--seconds {args.seconds:g}: no IMU message to play')
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
 
@@ -132,7 +135,7 @@ def _demo(argv: list[str] | None) -> int:
     executor.add_node(monitor)
     player = node_proc = None
     try:
-        player = Player(messages, rate=args.rate)  # a bad rate: before the node starts
+        player = Player(messages, rate=args.rate)
         node_proc = subprocess.Popen(
             [sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args', '-p',
              f'model:={args.model}', '-p', 'fixed_frame:=world', '--log-level', 'warn'],
