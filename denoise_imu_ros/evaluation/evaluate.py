@@ -40,7 +40,7 @@ from ..core.modelfile import (fitting_note, scored_on_training_samples, shipped_
                               training_span)
 from ..core.records import Sequence
 from ..data.load import load_sequence
-from ..learn.checkpoint import load_model
+from ..learn.checkpoint import load_model, LoadedModel
 from ..learn.model import correct_gyro
 
 
@@ -62,7 +62,7 @@ def recording_names(sequences: list[str]) -> list[str]:
     return names
 
 
-def check_inputs(seq: Sequence, loaded: Any, name: str) -> None:
+def check_inputs(seq: Sequence, loaded: LoadedModel, name: str) -> None:
     """Refuse a recording this model cannot score: another rate, unit, or IMU holes."""
     check_rate(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
     check_units(seq.imu, name, loaded.model.input_std.numpy())
@@ -82,6 +82,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     ``auto`` moves each recording's poses onto the IMU clock and frame first (as
     ``check-data`` estimates them); what was applied is in the report.
     """
+    names = recording_names(sequences)
     loaded = load_model(model_spec)
     models = {'network': loaded}
     baseline = default_baseline(loaded.meta, baseline)
@@ -104,7 +105,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     rows = eval_filters(loaded.meta, models['calibrated'].meta if 'calibrated' in models
                         else None)
     roe_all: dict[str, list[np.ndarray]] = {}
-    for given, name in zip(sequences, recording_names(sequences)):
+    for given, name in zip(sequences, names):
         seq = load_sequence(Path(data) / given, imu_topic, pose_topic,
                             min_samples=loaded.model.receptive_field, align_poses=align_poses)
         check_inputs(seq, loaded, name)

@@ -79,8 +79,8 @@ def stamp_order(stamps: np.ndarray, jump_ns: int) -> np.ndarray:
     """
     Return the order the pipeline takes IMU messages in: by stamp within each session.
 
-    A stamp more than ``jump_ns`` behind every one before it (in receive order) starts a
-    new session (a clock set back, a driver restarted): sorting across it would
+    A stamp more than ``jump_ns`` behind the newest of its session (in receive order)
+    starts a new session (a clock set back, a driver restarted): sorting across it would
     interleave two recordings; the pipeline resets there instead, as the node does.
     """
     session = np.zeros(len(stamps), dtype=np.int64)
