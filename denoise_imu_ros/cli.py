@@ -394,27 +394,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-# Every numeric option's range, (low, high, low allowed); a value must also be finite.
+# Every numeric option's range, (low, high, low allowed, unit); a value must also be finite.
 OPTION_RANGES = {
-    'start': (0.0, math.inf, True),  # s
-    'duration': (0.0, math.inf, False),  # s
-    'rate': (0.0, math.inf, False),  # playback speed factor
-    'wait': (0.0, 3600.0, True),  # s
-    'max_offset': (0.01, 60.0, True),  # s: the search's own resolution is ms
-    'seed': (0, 2**32 - 1, True),  # numpy's and torch's seed range
-    'seeds': (0, 2**32 - 1, True),
+    'start': (0.0, math.inf, True, ' s'),
+    'duration': (0.0, math.inf, False, ' s'),
+    'rate': (0.0, math.inf, False, ''),  # playback speed factor
+    'wait': (0.0, 3600.0, True, ' s'),
+    'max_offset': (0.01, 60.0, True, ' s'),  # the search's own resolution is ms
+    'seed': (0, 2**32 - 1, True, ''),  # numpy's and torch's seed range
+    'seeds': (0, 2**32 - 1, True, ''),
 }
 
 
 def _check_options(args: argparse.Namespace) -> None:
-    for name, (low, high, low_allowed) in OPTION_RANGES.items():
+    for name, (low, high, low_allowed, unit) in OPTION_RANGES.items():
         given = getattr(args, name, None)
         for value in given if isinstance(given, list) else [given]:
             if value is None or (math.isfinite(value) and value <= high
                                  and (low < value or low_allowed and value == low)):
                 continue
-            bound = f'{low:g} or more' if low_allowed else f'above {low:g}'
-            limit = '' if high == math.inf else f' and at most {high:g}'
+            bound = f'{low:g}{unit} or more' if low_allowed else f'above {low:g}{unit}'
+            limit = '' if high == math.inf else f' and at most {high:g}{unit}'
             raise OptionError(f'--{name.replace("_", "-")} {value:g}: must be a number '
                               f'{bound}{limit}')
 

@@ -132,12 +132,13 @@ def scored_on_training_samples(meta: dict[str, Any], names: list[str],
 def fitting_note(names: list[str], span: int | None) -> str:
     """Say that figures on a model's own training samples measure its fit."""
     which = ', '.join(Path(n).name for n in names)
+    verb = 'was' if len(names) == 1 else 'were'
     if span is None:
-        return (f'{which}: training recording(s) of this model: these figures measure its '
-                'fit, not what unseen recordings will show')
-    return (f'{which}: training recording(s) of this model, scored on the first {span} '
-            'samples it was fitted on: these figures measure its fit, not what unseen '
-            f'recordings will show (--start-sample {span} scores only the validation tails)')
+        return (f'{which} {verb} used to train this model: these figures include that fit, '
+                'not only what unseen recordings will show')
+    return (f'{which} {verb} used to train this model (samples 0-{span - 1}): these '
+            'whole-recording figures include that fit; --start-sample '
+            f'{span} scores only the unseen tail')
 
 
 def shipped_models() -> list[str]:

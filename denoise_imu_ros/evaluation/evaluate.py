@@ -162,6 +162,8 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     write_text(out_dir / 'results.json', jsonio.dumps(report, indent=2))
     table = (eval_table(results, average) + fused_table(fused, fused_average)
              + growth_table(results, fused))
+    if start_sample:
+        table += f'\nScored from sample {start_sample} on of every recording.\n'
     if note:
         table += f'\nNote: {note}\n'
     if 'crossval' in report:

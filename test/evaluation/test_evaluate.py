@@ -74,10 +74,10 @@ def test_eval_says_when_it_scores_a_recording_the_model_was_fitted_on(tmp_path, 
     assert main(['eval', '--model', str(model), '--data', str(SAMPLE_DIR), '--sequences',
                  SAMPLE.name, '--out', str(out), '--baseline', str(model), '--no-plots']) == 0
     warning = capsys.readouterr().err
-    assert f'warning: {SAMPLE.name}: training recording' in warning
+    assert f'warning: {SAMPLE.name} was used to train this model (samples 0-1031)' in warning
     assert '--start-sample 1032' in warning
     assert json.loads((out / 'results.json').read_text())['training_fit_note'] in warning
-    assert 'measure its fit' in (out / 'results.md').read_text()
+    assert 'include that fit' in (out / 'results.md').read_text()
 
 
 def test_only_a_training_recordings_fitted_span_is_flagged():
