@@ -44,7 +44,10 @@ def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, eur
     import threading
     from denoise_imu_ros.cli import main as cli
     monkeypatch.setenv('ROS_DOMAIN_ID', str(DOMAIN))
-    h = harness()
+    # a reliable input deep enough for the whole bag: on a loaded machine a best-effort
+    # one may lose what play sent (as CI once did), and the node is not under test here
+    h = harness(input_queue_depth=1000,
+                **{'qos_overrides./imu/data_raw.subscription.reliability': 'reliable'})
     bag = tmp_path / 'short'
     assert cli(['convert', str(euroc / 'V1_01_easy'), str(bag), '--duration', '2']) == 0
     result = []
