@@ -210,13 +210,17 @@ def _convert(args: argparse.Namespace) -> None:
     _guard_output(args.out_bag, [args.asl_dir], False, NEVER_OVER_A_BAG)
     rec = read_asl(args.asl_dir)
     rec = crop(overlap(rec) if args.overlap else rec, args.start, args.duration)
+    imu_topic, pose_topic = args.imu_topic or IMU_TOPIC, args.pose_topic or POSE_TOPIC
     write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress,
-              imu_topic=args.imu_topic or IMU_TOPIC, pose_topic=args.pose_topic or POSE_TOPIC)
-    print(f'wrote {args.out_bag}')
+              imu_topic=imu_topic, pose_topic=pose_topic)
+    span_s = (rec.imu_stamp_ns[-1] - rec.imu_stamp_ns[0]) * 1e-9
+    print(f'wrote {args.out_bag}: {len(rec.imu_stamp_ns)} IMU messages on {imu_topic}, '
+          f'{len(rec.gt_stamp_ns)} poses on {pose_topic}, {span_s:.1f} s')
 
 
 def _process_bag(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file
+    from .runtime.online import DROP_CAUSES
     from .runtime.process_bag import process_bag
     _guard_output(args.output, [args.input, read_model_file(args.model).path], False,
                   NEVER_OVER_A_BAG)
@@ -224,7 +228,9 @@ def _process_bag(args: argparse.Namespace) -> None:
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame,
                          compress=args.compress, namespace=args.namespace)
-    print(f'wrote {args.output}: ' + ', '.join(f'{k} {v}' for k, v in counts.items()))
+    dropped = ', '.join(f'{k} {v}' for k, v in counts.items() if k in DROP_CAUSES)
+    rest = ', '.join(f'{k} {v}' for k, v in counts.items() if k not in DROP_CAUSES)
+    print(f'wrote {args.output}: {rest}; dropped: {dropped}')
 
 
 def _play(args: argparse.Namespace) -> None:
