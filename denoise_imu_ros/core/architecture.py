@@ -81,9 +81,10 @@ class ModelConfig:
                 self.calibration_only and self.members > 1):
             raise ValueError(f'members must be an integer from 1 to {MAX_MEMBERS} (1 for '
                              'calibration_only)')
-        if self.stream_state() > MAX_STREAM_STATE:
-            raise ValueError(f'the streaming engine would hold {self.stream_state():,} values '
-                             f'of history: more than {MAX_STREAM_STATE:,}')
+        state = self.stream_state()
+        if state > MAX_STREAM_STATE:
+            raise ValueError(f'the streaming engine would hold {state:,} values of history: '
+                             f'more than {MAX_STREAM_STATE:,}')
 
     def stream_state(self) -> int:
         """Count the float32 values of the streaming engine's input histories."""

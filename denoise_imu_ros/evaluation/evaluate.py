@@ -96,7 +96,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     except OSError as err:
         raise OutputError(f'{out_dir}: cannot create the output folder ({err.strerror})'
                           ) from err
-    fitted_on = scored_on_training_samples(loaded.meta, sequences, start_sample)
+    fitted_on = scored_on_training_samples(loaded.meta, names, start_sample)
     note = fitting_note(fitted_on, training_span(loaded.meta)) if fitted_on else None
     if note:
         print(f'warning: {note}', file=sys.stderr)

@@ -252,15 +252,16 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     from ..learn.checkpoint import load_model
     from ..learn.model import correct_gyro
     from .evaluate import check_inputs, default_baseline, recording_names
+    names = recording_names(sequences)  # before the slow part: a name twice is refused
     net = load_model(model_spec)
     baseline = default_baseline(net.meta, baseline)
     calib = load_model(baseline) if baseline is not None else None
-    fitted_on = scored_on_training_samples(net.meta, sequences, 0)
+    fitted_on = scored_on_training_samples(net.meta, names, 0)
     note = fitting_note(fitted_on, None) if fitted_on else None  # no --start-sample here
     if note:
         print(f'warning: {note}', file=sys.stderr)
     seqs, gyros = [], {'raw': [], 'calibrated': [], 'corrected': []}
-    for name, short in zip(sequences, recording_names(sequences)):
+    for name, short in zip(sequences, names):
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
                             min_samples=net.model.receptive_field)
         check_inputs(seq, net, short)
