@@ -26,7 +26,7 @@ per message: the callback thread's, and that of the process's other threads (Fas
 with ``--publication-mode ASYNCHRONOUS`` a publish hands its send to one of them), so
 that a cost moved off the callback is still counted.
 Run: .venv/bin/python bench/fusion_cost.py [--model euroc] [--messages 3000] [--rounds 3]
-[--rate 1000] [--publication-mode SYNCHRONOUS|ASYNCHRONOUS]
+[--rate 1000] [--publication-mode SYNCHRONOUS|ASYNCHRONOUS] [--pin]
 """
 
 import argparse
@@ -54,6 +54,9 @@ def main() -> None:
     parser.add_argument('--messages', type=int, default=3000)
     parser.add_argument('--rounds', type=int, default=3)
     parser.add_argument('--rate', type=float, default=1000.0, help='Hz; 0: back to back')
+    parser.add_argument('--pin', action='store_true',
+                        help='this process on the first CPU, the reader on the others: '
+                             "the node's own cost, without the reader's work competing")
     parser.add_argument('--publication-mode', choices=('SYNCHRONOUS', 'ASYNCHRONOUS'),
                         help="rmw_fastrtps's RMW_FASTRTPS_PUBLICATION_MODE (default: the "
                              "environment's, else rmw_fastrtps's own)")
@@ -62,6 +65,11 @@ def main() -> None:
         os.environ['RMW_FASTRTPS_PUBLICATION_MODE'] = args.publication_mode
     print(f'RMW_FASTRTPS_PUBLICATION_MODE: '
           f'{os.environ.get("RMW_FASTRTPS_PUBLICATION_MODE", "(unset: SYNCHRONOUS)")}')
+    cpus = sorted(os.sched_getaffinity(0))
+    if args.pin and len(cpus) < 2:
+        sys.exit('fusion_cost: --pin needs two CPUs')
+    if args.pin:
+        os.sched_setaffinity(0, cpus[:1])  # before rclpy starts Fast DDS's threads
     rec = load_imu(DATA)
     types = msgs.rclpy_types()
     messages = [msgs.imu(types, msgs.header(types, int(t), 'imu0'), r[:3], r[3:])
@@ -71,7 +79,8 @@ def main() -> None:
                                                    Parameter('publish_fused', value=on)])
              for on in (True, False)}
     sink = start_reader([(Imu, 'imu/corrected'), (Imu, 'imu/data'),
-                         (QuaternionStamped, 'imu/attitude')])
+                         (QuaternionStamped, 'imu/attitude')],
+                        cpus=cpus[1:] if args.pin else None)
     deadline = time.monotonic() + 20
 
     def unread() -> list[str]:

@@ -14,6 +14,7 @@
 """Shared by the node benches: their child processes, and samples flowing through them."""
 
 import ctypes
+import os
 import signal
 import subprocess
 import sys
@@ -30,14 +31,19 @@ def _die_with_parent() -> None:
     ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG (Linux)
 
 
-def start(cmd: list[str]) -> subprocess.Popen:
+def start(cmd: list[str], cpus: list[int] | None = None) -> subprocess.Popen:
     """
     Start a process the bench talks to (node, relay, reader) that dies with the bench.
 
     A bench stopped by a signal or a timeout would otherwise leave it running, on the
-    same ROS domain: it answers the next bench's samples and takes its CPU.
+    same ROS domain: it answers the next bench's samples and takes its CPU. ``cpus``:
+    the only CPUs it and its threads run on.
     """
-    return subprocess.Popen(cmd, preexec_fn=_die_with_parent)
+    def before_exec() -> None:
+        _die_with_parent()
+        if cpus:
+            os.sched_setaffinity(0, cpus)
+    return subprocess.Popen(cmd, preexec_fn=before_exec)
 
 
 READER = """
@@ -58,8 +64,8 @@ except (KeyboardInterrupt, Exception):  # stopped by the bench, in whatever stat
 """
 
 
-def start_reader(topics: list[tuple[type, str]], reliability: str = 'RELIABLE'
-                 ) -> subprocess.Popen:
+def start_reader(topics: list[tuple[type, str]], reliability: str = 'RELIABLE',
+                 cpus: list[int] | None = None) -> subprocess.Popen:
     """
     Start a process that subscribes to every (message type, topic) and takes each message.
 
@@ -67,7 +73,7 @@ def start_reader(topics: list[tuple[type, str]], reliability: str = 'RELIABLE'
     node's publishes needs a reader on each, in a process of its own as on a robot.
     """
     specs = [f'{t.__module__}:{t.__name__}:{topic}' for t, topic in topics]
-    return start([sys.executable, '-c', READER, reliability.upper(), *specs])
+    return start([sys.executable, '-c', READER, reliability.upper(), *specs], cpus)
 
 
 def wait_until(due: float) -> None:

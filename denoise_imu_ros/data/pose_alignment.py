@@ -176,7 +176,8 @@ def estimate_pose_alignment(rec: Recording,
             angles.append(math.degrees((fit_frame(qi, qp)[0] * rot.inv()).magnitude()))
     return {
         'time_offset_s': offset,
-        'time_offset_std_s': float(np.std(offsets) / math.sqrt(len(offsets))),
+        # the standard error of their mean: the sample std (ddof 1; of four, ddof 0 is 13 % low)
+        'time_offset_std_s': float(np.std(offsets, ddof=1) / math.sqrt(len(offsets))),
         'time_offset_quarters_s': offsets,
         'time_offset_at_search_limit': bool(abs(offset) > max_offset_s - 2e-3),
         'imu_from_pose_rotation_xyzw': rot.as_quat().tolist(),
