@@ -157,8 +157,10 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
                     gt.append((q.x, q.y, q.z, q.w, p.x, p.y, p.z))
     except CORRUPT as err:
         raise DatasetError(f'{path}: cannot read bag: {" ".join(str(err).split())}') from err
-    if not imu or (with_pose and not gt):
+    if with_pose and (not imu or not gt):
         raise DatasetError(f'{path}: {len(imu)} IMU and {len(gt)} pose messages, need both')
+    if not imu:
+        raise DatasetError(f'{path}: no IMU messages on {imu_conns[0].topic}')
     imu_order = np.argsort(np.array(imu_t, dtype=np.int64), kind='stable')
     gt_order = np.argsort(np.array(gt_t, dtype=np.int64), kind='stable')
     gt_arr = np.array(gt, dtype=np.float64).reshape(-1, 7)[gt_order]

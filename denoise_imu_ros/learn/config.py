@@ -47,11 +47,14 @@ class LossConfig:
     skip_blocks: int = 5         # first blocks of a window are warm-up (padded input)
 
     def __post_init__(self) -> None:
-        """Check the increment lengths (user input through the training recipe)."""
-        levels = [math.log2(j) for j in self.increments]
-        if (len(self.weights) != len(self.increments) or not self.increments
-                or any(v != int(v) or v < 0 for v in levels) or sorted(set(levels)) != levels):
+        """Check the increments and their weights (user input through the training recipe)."""
+        j = self.increments
+        if (len(self.weights) != len(j) or not j
+                or any(n < 1 or n & (n - 1) for n in j) or sorted(set(j)) != list(j)):
             raise ValueError('increments must be rising powers of two, one weight each')
+        if not all(math.isfinite(w) and w > 0 for w in self.weights):
+            # a negative weight rewards error, a zero one learns nothing from its length
+            raise ValueError(f'increment_weights must be positive, not {list(self.weights)}')
 
     @property
     def span(self) -> int:
@@ -187,17 +190,24 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
     unknown = sorted(set(map(str, raw)) - set(types))
     if unknown:
         raise TrainingError(f'{path}: unknown keys {unknown}')
-    raw.update({k: v for k, v in overrides.items() if v is not None})
+    given = {k: v for k, v in overrides.items() if v is not None}
+    raw.update(given)
+
+    def source(key: str) -> str:
+        """Where a value came from: the command line's option, or the file."""
+        return f'--{key.replace("_", "-")}' if key in given else str(path)
     for key, value in raw.items():
+        if 'float' in types[key]:
+            raw[key] = value = _numbers(value)
         if not _is(value, types[key]):
-            raise TrainingError(f'{path}: {key} must be {types[key]}, not {value!r}')
+            raise TrainingError(f'{source(key)}: {key} must be {types[key]}, not {value!r}')
         if key in RANGES and value is not None:
             low, high, closed = RANGES[key]
             if value < low or (value == low and not closed) or (
                     high is not None and value >= high):
                 bound = ('at least' if closed else 'above') + f' {low}'
                 bound += f' and below {high}' if high is not None else ''
-                raise TrainingError(f'{path}: {key} must be {bound}, not {value!r}')
+                raise TrainingError(f'{source(key)}: {key} must be {bound}, not {value!r}')
     if 'gyro_std_deg' in raw and (len(raw['gyro_std_deg']) != 3
                                   or min(raw['gyro_std_deg']) <= 0):
         raise TrainingError(f'{path}: gyro_std_deg must be three positive values (deg/s)')
@@ -215,6 +225,12 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
                             f'(at most {cfg.window // longest - 1})')
     if not cfg.sequences:
         raise TrainingError(f'{path}: no training sequences')
+    repeated = sorted({s for s in cfg.sequences if cfg.sequences.count(s) > 1})
+    if repeated:  # it would weigh that recording twice, and fold it against itself
+        raise TrainingError(f'{path}: sequences listed more than once: {repeated}')
+    if cfg.lr_min > cfg.lr:  # the cosine schedule would raise the rate above lr
+        raise TrainingError(f'{source("lr_min")}: lr_min {cfg.lr_min:g} is above lr '
+                            f'{cfg.lr:g}')
     if not (cfg.align in ('none', 'auto') or _alignment(cfg.align)):
         raise TrainingError(f'{path}: align must be none, auto or a mapping with '
                             'time_offset_s (seconds, at most 60 either way) and '
@@ -226,7 +242,25 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
             cfg.select == 'swa' and cfg.swa_start <= 0):
         raise TrainingError(f'{path}: select must be best_validation, final or swa '
                             '(swa needs swa_start > 0)')
+    if cfg.swa_start > cfg.steps and 'steps' in given:
+        raise TrainingError(f"--steps {cfg.steps}: ends before the recipe's swa_start "
+                            f'{cfg.swa_start} (its weight average starts there): give more '
+                            'steps, or train a copy of the recipe with a lower swa_start')
     if cfg.swa_start > cfg.steps:
         raise TrainingError(f'{path}: swa_start {cfg.swa_start} is after the last step '
                             f'{cfg.steps}')
     return cfg
+
+
+def _numbers(value: Any) -> Any:
+    """
+    Read YAML 1.1's strings that are numbers (``1e-3``, without a point) as floats.
+
+    PyYAML takes ``1e-3`` for a string; a recipe author means the number.
+    """
+    if isinstance(value, list):
+        return [_numbers(v) for v in value]
+    if isinstance(value, str) and re.fullmatch(r'[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?',
+                                               value.strip()):
+        return float(value)
+    return value

@@ -21,7 +21,9 @@ module keeps the split exact, so that it changes speed only:
     so every process normalises with the statistics of the whole batch;
   - the loss divides by the whole batch's block count (``increment_loss(reduce_count=...)``)
     and gradients are summed (``all_reduce_grads``), giving the whole batch's gradient;
-  - every process then takes the same optimiser step, so the weights stay identical.
+  - every process then takes the same optimiser step, so the weights stay identical;
+  - every process draws the whole batch's window offsets, noise and biases from the
+    seed, as one process would, and keeps its own sequences' (``train.batch``).
 Only dropout masks differ from a one-process run (they are random either way).
 The processes are started here (``--workers``), or by ``torchrun``, PyTorch's own
 launcher, whose standard environment (``RANK``, ``WORLD_SIZE``, ``MASTER_ADDR``, ...)

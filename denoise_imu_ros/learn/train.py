@@ -53,7 +53,7 @@ from ..core.modelfile import code_version
 from ..core.records import Sequence
 from ..data.load import load_sequence
 
-RANK_SEED_STRIDE = 7919  # data-parallel process r draws its batches from seed + r * this
+RANK_SEED_STRIDE = 7919  # data-parallel process r draws its dropout masks from seed + r * this
 
 
 # ----------------------------------------------------------------------------------
@@ -124,6 +124,8 @@ class Split:
     Training windows' source arrays, stacked (S sequences of L samples).
 
     Shorter sequences are zero-padded at the end (padding is never drawn: valid=False).
+    ``mine``: the rows this process trains on (a data-parallel process holds every row,
+    so that its random draws are those of a one-process run, and keeps its own).
     """
 
     imu: torch.Tensor        # (S, L, 6) float32
@@ -131,10 +133,16 @@ class Split:
     quat: torch.Tensor       # (S, L, 4) float64
     valid: torch.Tensor      # (S, L) bool
     max_start: torch.Tensor  # (S,) int64: window starts are drawn in [0, max_start)
+    lengths: list[int]       # samples windows may be drawn from, per row (no padding)
+    mine: torch.Tensor       # (S_mine,) int64: this process's rows
 
 
-def training_split(seqs: list[Sequence], cfg: TrainConfig) -> Split:
-    """Stack the samples windows may be drawn from: the head of each sequence, or all."""
+def training_split(seqs: list[Sequence], cfg: TrainConfig, rank: int | None = None) -> Split:
+    """
+    Stack the samples windows may be drawn from: the head of each sequence, or all.
+
+    ``rank``: the data-parallel process whose rows are ``mine`` (None: every row).
+    """
     head = cfg.window + cfg.max_offset  # the window may end at sample head - 1
     lengths = [len(s) if cfg.whole_sequences else head for s in seqs]
     n = max(lengths)
@@ -150,20 +158,28 @@ def training_split(seqs: list[Sequence], cfg: TrainConfig) -> Split:
         dt=torch.tensor(stack([s.dt for s in seqs], n - 1)),
         quat=torch.tensor(stack([s.gt_quat for s in seqs], n)),
         valid=torch.tensor(stack([s.gt_valid[:m] for s, m in zip(seqs, lengths)], n)),
-        max_start=torch.tensor([m - cfg.window for m in lengths]))
+        max_start=torch.tensor([m - cfg.window for m in lengths]), lengths=lengths,
+        mine=torch.arange(len(seqs)) if rank is None else torch.arange(rank, len(seqs),
+                                                                       cfg.workers))
 
 
 def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.Tensor, ...]:
-    """One window per sequence at a random offset, with noise and bias augmentation."""
+    """
+    Draw this process's windows, one per sequence at a random offset, with noise and bias.
+
+    The draws are made for every sequence, in one order, whatever the process count:
+    the batch of a data-parallel run is that of a one-process run.
+    """
     s, w = split.imu.shape[0], cfg.window
     n0 = (torch.rand(s, generator=gen, dtype=torch.float64) * split.max_start).long()
-    idx = n0[:, None] + torch.arange(w + 1)[None]                 # (S, W + 1)
-    rows = torch.arange(s)[:, None]
-    u = split.imu[rows, idx[:, :-1]]                              # (S, W, 6)
     noise_std = torch.tensor([cfg.gyro_noise] * 3 + [cfg.accel_noise] * 3)
     bias_max = torch.tensor([cfg.gyro_bias] * 3 + [cfg.accel_bias] * 3)
     bias = (2 * torch.rand(s, 1, 6, generator=gen) - 1) * bias_max
-    u = u + noise_std * torch.randn(u.shape, generator=gen) + bias
+    noise = noise_std * torch.randn((s, w, 6), generator=gen)
+    mine = split.mine
+    idx = n0[mine, None] + torch.arange(w + 1)[None]              # (S_mine, W + 1)
+    rows = mine[:, None]
+    u = split.imu[rows, idx[:, :-1]] + noise[mine] + bias[mine]    # (S_mine, W, 6)
     return u, split.dt[rows, idx[:, :-1]], split.quat[rows, idx], split.valid[rows, idx]
 
 
@@ -172,17 +188,17 @@ def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.T
 
 def build_model(cfg: TrainConfig, seqs: list[Sequence],
                 rank: int) -> tuple[GyroNet, Split, torch.Generator]:
-    """Return the network, this process's training split and its batch generator."""
+    """Return the network, the training split with this process's rows, its generator."""
     model = GyroNet(cfg.model_config())
-    split = training_split(seqs, cfg)
-    flat = split.imu.reshape(-1, 6)
+    split = training_split(seqs, cfg, rank)
+    # the samples windows are drawn from, without the padding of shorter sequences
+    flat = torch.cat([row[:m] for row, m in zip(split.imu, split.lengths)])
     model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
     model.to(cfg.device)
     if cfg.workers > 1:
         parallel.sync_batch_norm(model)
-        split = training_split(seqs[rank::cfg.workers], cfg)
         torch.manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)  # its own dropout masks
-    return model, split, torch.Generator().manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)
+    return model, split, torch.Generator().manual_seed(cfg.seed)
 
 
 # ----------------------------------------------------------------------------------
@@ -345,6 +361,10 @@ def _run_torchrun(cfg: TrainConfig, progress: bool) -> TrainResult | None:
     seqs = load_sequences(cfg)
     rank, world = parallel.join_torchrun()
     try:
+        if world > len(seqs):  # every process says so, before any collective call
+            raise TrainingError(f'torchrun started {world} processes for {len(seqs)} '
+                                'training sequences: each process needs one (use '
+                                f'--nproc-per-node {len(seqs)} or fewer)')
         return _run(dataclasses.replace(cfg, workers=world), rank, seqs,
                     progress and rank == 0)
     finally:

@@ -137,3 +137,14 @@ def test_every_reader_takes_a_bag_in_header_stamp_order(tmp_path):
     for field in ('imu_stamp_ns', 'imu', 'gt_stamp_ns', 'gt_quat', 'gt_pos'):
         np.testing.assert_array_equal(getattr(got, field), getattr(rec, field), err_msg=field)
     assert main(['check-data', str(tmp_path / 'jittered')]) in (0, 1)  # judged, not refused
+
+
+def test_an_empty_imu_topic_is_named_when_only_the_imu_is_read(tmp_path):
+    from denoise_imu_ros.data.bags import IMU_TYPE, POSE_TYPES, read_bag, TYPESTORE
+    with Writer2(tmp_path / 'empty', version=9) as w:
+        w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        w.add_connection('/pose', POSE_TYPES[0], typestore=TYPESTORE)
+    with pytest.raises(DatasetError, match='no IMU messages on /imu0$'):
+        read_bag(tmp_path / 'empty', with_pose=False)
+    with pytest.raises(DatasetError, match='0 IMU and 0 pose messages, need both'):
+        read_bag(tmp_path / 'empty')

@@ -5,14 +5,17 @@
 from pathlib import Path
 
 from denoise_imu_ros.core.architecture import ModelConfig
+from denoise_imu_ros.core.errors import TrainingError
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn import parallel
+from denoise_imu_ros.learn import train as train_module
 from denoise_imu_ros.learn.config import load_config
 from denoise_imu_ros.learn.loss import increment_loss, LossConfig
 from denoise_imu_ros.learn.model import GyroNet
 from denoise_imu_ros.learn.train import train
 from helpers import ROOT
 import numpy as np
+import pytest
 import torch
 import torch.distributed as dist
 
@@ -94,6 +97,21 @@ def test_two_workers_train_on_synthetic_recordings_without_the_real_data(tmp_pat
     assert [h['step'] for h in result.meta['history']] == [0, 3, 6]
     assert all(np.isfinite(h['val_loss']) for h in result.meta['history'])
     assert not dist.is_initialized()
+
+
+def test_torchrun_with_more_processes_than_sequences_is_one_clear_error(
+        tmp_path, monkeypatch):
+    from helpers import write_asl
+    for i in range(2):
+        write_asl(tmp_path / f'rec{i}', n_imu=2400, yaw_rate=0.2, gyro_bias=0.01)
+    cfg = load_config(CONFIG, data=str(tmp_path), sequences=['rec0', 'rec1'], window=1024,
+                      steps=4, restart_period=4, swa_start=2)
+    monkeypatch.setattr(parallel, 'torchrun_rank', lambda: 2)
+    monkeypatch.setattr(parallel, 'join_torchrun', lambda: (2, 3))  # rank 2 of 3
+    monkeypatch.setattr(train_module.dist, 'destroy_process_group', lambda: None)
+    with pytest.raises(TrainingError, match='torchrun started 3 processes for 2 training '
+                                            'sequences'):
+        train(cfg, progress=False)
 
 
 def test_torchrun_trains_the_same_model_as_the_built_in_workers(tmp_path):

@@ -2,6 +2,7 @@
 # Licensed under the Apache License, Version 2.0
 """A few training steps on short real segments: the loss goes down, failures are clear."""
 
+import dataclasses
 from pathlib import Path
 
 from denoise_imu_ros.cli import main
@@ -10,7 +11,8 @@ from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn import train as train_module
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.config import load_config
-from denoise_imu_ros.learn.train import batch, resolve_device, train, training_split
+from denoise_imu_ros.learn.train import (batch, build_model, resolve_device, train,
+                                         training_split)
 from helpers import ROOT
 import numpy as np
 import pytest
@@ -126,6 +128,32 @@ def test_config_typos_and_bad_windows_are_refused(tmp_path):
         assert resolve_device(load_config(tmp_path / 'd.yaml').device) == 'cpu'  # no GPU
 
 
+def test_data_parallel_processes_draw_the_one_process_batch(euroc):
+    cfg = _short(euroc, workers=1)
+    seqs = [load_sequence(euroc / name) for name in cfg.sequences]
+    _, split, gen = build_model(cfg, seqs, 0)
+    one = batch(split, cfg, gen)
+    two = dataclasses.replace(cfg, workers=2)
+    for rank in (0, 1):
+        _, split, gen = build_model(two, seqs, rank)
+        for whole, part in zip(one, batch(split, two, gen)):
+            assert torch.equal(whole[rank::2], part)
+
+
+def test_whole_sequence_windows_are_normalised_without_the_padding(tmp_path):
+    from helpers import write_asl
+    for name, n, rate in (('short', 2400, 0.3), ('long', 6000, 0.6)):
+        write_asl(tmp_path / name, n_imu=n, yaw_rate=rate)
+    cfg = load_config(CONFIG, data=str(tmp_path), sequences=['short', 'long'], window=1024,
+                      whole_sequences=True, steps=4, restart_period=4, swa_start=2)
+    seqs = [load_sequence(tmp_path / name) for name in cfg.sequences]
+    model = build_model(cfg, seqs, 0)[0]
+    samples = np.concatenate([s.imu for s in seqs])
+    np.testing.assert_allclose(model.input_mean.numpy(), samples.mean(0), rtol=1e-5,
+                               atol=1e-6)
+    np.testing.assert_allclose(model.input_std[2].item(), samples[:, 2].std(), rtol=1e-4)
+
+
 @pytest.mark.parametrize('whole', [False, True])
 def test_windows_are_drawn_from_the_head_or_the_whole_of_each_sequence(euroc, whole):
     cfg = _short(euroc, whole_sequences=whole)
@@ -202,11 +230,30 @@ def test_align_auto_trains_on_poses_of_a_rotated_marker_on_a_late_clock(euroc, t
      'align must be none, auto or a mapping'),
     ('align: {time_offset_s: .nan, imu_from_pose_rotation_xyzw: [0, 0, 0, 1]}',
      'align must be none, auto or a mapping'),
+    ('increments: [0, 32]', 'increments must be rising powers of two'),
+    ('increments: [16, 24]', 'increments must be rising powers of two'),
+    ('increment_weights: [-1.0, -0.5]', r'increment_weights must be positive, not \[-1.0'),
+    ('increment_weights: [1.0, 0]', 'increment_weights must be positive'),
+    ('lr_min: 1.0', 'lr_min 1 is above lr 0.01'),
+    ('sequences: [a, b, a]', r"sequences listed more than once: \['a'\]"),
 ])
 def test_recipe_values_of_the_wrong_type_or_range_are_refused(tmp_path, text, message):
     (tmp_path / 'r.yaml').write_text(('sequences: [a]\n' if ':' in text else '') + text + '\n')
     with pytest.raises(TrainingError, match=message):
         load_config(tmp_path / 'r.yaml')
+
+
+def test_command_line_values_are_named_as_options_and_yaml_exponents_read_as_numbers(
+        tmp_path):
+    (tmp_path / 'r.yaml').write_text('sequences: [a]\nselect: swa\nswa_start: 1200\n'
+                                     'lr: 1e-2\nlr_min: 1E-4\ngyro_std_deg: [1e0, 2, 5.]\n')
+    cfg = load_config(tmp_path / 'r.yaml')  # YAML 1.1 reads 1e-2 as a string
+    assert (cfg.lr, cfg.lr_min, cfg.gyro_std_deg) == (0.01, 1e-4, [1.0, 2, 5.0])
+    with pytest.raises(TrainingError, match=r"^--steps 30: ends before the recipe's "
+                                            'swa_start 1200'):
+        load_config(tmp_path / 'r.yaml', steps=30)
+    with pytest.raises(TrainingError, match='^--seed: seed must be at least 0'):
+        load_config(tmp_path / 'r.yaml', seed=-3)
 
 
 def test_a_binary_recipe_is_a_clear_error(tmp_path):
