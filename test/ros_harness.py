@@ -58,7 +58,8 @@ class Harness:
             for msg in msgs[k:k + 50]:
                 self.pub.publish(msg)
             self.spin_until(lambda: self.processed() - start >= min(k + 50, len(msgs)))
-        self.spin_until(lambda: len(self.corrected) >= self.node._denoiser.counts['accepted'])
+        self.spin_until(lambda: len(self.corrected) >= self.node._denoiser.counts['accepted']
+                        - self.node.corrected_withheld)
         self.spin_until(lambda: len(self.attitude) >= self.node._denoiser.counts['accepted']
                         - self.node.attitude_withheld)
         if self.node._pub_fused is not None:

@@ -70,6 +70,7 @@ def _param(description: str, read_only: bool = False, floats: tuple | None = Non
 # Every parameter, in one place: (name, default, descriptor). config/gyro_denoiser.yaml
 # mirrors it.
 DRAIN_MAX = 50  # queued messages one callback takes after its own
+STALL_S = 2.0   # s without any input message after which diagnostics say the input stopped
 
 PARAMETERS = [
     ('model', 'euroc', _param(
@@ -175,8 +176,10 @@ class GyroDenoiser(Node):
 
         self._stamps: deque[int] = deque(maxlen=int(2 * self._model_rate) + 1)
         self._rate_error = False  # set by the diagnostics timer from the measured rate
+        self.corrected_withheld = 0  # accepted samples whose imu/corrected was not published
         self.attitude_withheld = 0  # accepted samples whose attitude was not published
         self.fused_withheld = 0  # accepted samples whose imu/data was not published
+        self._last_input: float | None = None  # time.monotonic() of the last message
         self._infer_s: deque[float] = deque(maxlen=1000)
         self._corrected: Imu | None = None  # the outgoing messages, refilled every sample
         self._attitude: QuaternionStamped | None = None
@@ -267,6 +270,7 @@ class GyroDenoiser(Node):
         if self._waiting_timer is not None:
             self._waiting_timer.cancel()
             self._waiting_timer = None
+        self._last_input = time.monotonic()
         t0 = time.perf_counter()
         out = self._denoiser.process_imu(msg)
         if isinstance(out, Drop):
@@ -282,15 +286,18 @@ class GyroDenoiser(Node):
                 throttle_duration_sec=5.0)
         self._stamps.append(out.stamp_ns)
 
-        # an attitude held across a gap, or integrated at a rate the model was not made
-        # for, is not published as if it were valid (nor a filter run at such a rate)
+        # an attitude held across a gap is not published as if it were valid; at a rate
+        # the model was not made for, neither are its corrections (nor a filter run on them)
         off_rate = self._rate_error or out.rate_suspect
         valid_attitude = out.event != Event.GAP and not off_rate
         embed = out.attitude if self._embed and valid_attitude else None
         corrected = self._corrected = msgs.corrected_imu(
             self._types, msg, out.gyro, self._gyro_cov, embed, self._orientation_cov,
             out.accel_cov, into=self._corrected)
-        self._pub_imu.publish(corrected)
+        if off_rate:
+            self.corrected_withheld += 1
+        else:
+            self._pub_imu.publish(corrected)
         if self._pub_fused is not None and not off_rate:
             self._pub_fused.publish(msgs.reorient(corrected, out.orientation, self._fused_cov))
         elif self._pub_fused is not None:
@@ -330,12 +337,23 @@ class GyroDenoiser(Node):
                                   hardware_id=self._imu_frame(), level=DiagnosticStatus.OK,
                                   message='ok')
         fill = min(self._denoiser.engine.samples, self._denoiser.engine.receptive_field)
-        self._rate_error = bool(rate) and abs(rate / self._model_rate - 1.0) > self._rate_tolerance
-        if self._rate_error:
+        silent_s = None if self._last_input is None else time.monotonic() - self._last_input
+        stalled = silent_s is not None and silent_s > STALL_S
+        if stalled:  # the last stamps held say nothing of now
+            rate = 0.0
+        else:
+            self._rate_error = bool(rate) and (abs(rate / self._model_rate - 1.0)
+                                               > self._rate_tolerance)
+        if stalled:
+            status.level = DiagnosticStatus.ERROR
+            status.message = (f'no input for {silent_s:.1f} s on '
+                              f'{self.resolve_topic_name("imu/data_raw")}')
+            self.get_logger().error(status.message, throttle_duration_sec=10.0)
+        elif self._rate_error:
             status.level = DiagnosticStatus.ERROR
             status.message = (f'input rate {rate:.1f} Hz differs from the model rate '
                               f'{self._model_rate:.1f} Hz: corrections are not valid, '
-                              'imu/attitude and imu/data not published')
+                              'imu/corrected, imu/attitude and imu/data not published')
             self.get_logger().error(status.message, throttle_duration_sec=10.0)
         elif counts['accepted'] == 0 and any(counts[c] for c in DROP_CAUSES):
             status.level = DiagnosticStatus.ERROR
@@ -350,10 +368,12 @@ class GyroDenoiser(Node):
             status.level, status.message = DiagnosticStatus.WARN, self._not_recommended
         infer = np.array(self._infer_s) if self._infer_s else np.zeros(1)
         values = {'input_rate_hz': f'{rate:.2f}', 'model_rate_hz': f'{self._model_rate:.2f}',
+                  'seconds_since_input': '' if silent_s is None else f'{silent_s:.1f}',
                   'buffer_fill': f'{fill}/{self._denoiser.engine.receptive_field}',
                   'callback_time_p50_us': f'{np.median(infer) * 1e6:.1f}',
                   'callback_time_max_us': f'{infer.max() * 1e6:.1f}'}
         values.update({k: str(v) for k, v in counts.items()})
+        values['corrected_withheld'] = str(self.corrected_withheld)
         values['attitude_withheld'] = str(self.attitude_withheld)
         values['fused_withheld'] = str(self.fused_withheld)
         status.values = [KeyValue(key=k, value=v) for k, v in values.items()]

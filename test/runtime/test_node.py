@@ -177,11 +177,32 @@ def test_rate_mismatch_is_a_diagnostics_error(harness):
                                                 'skipped_periods', 'attitude_withheld'}
     assert status.name == '/gyro_denoiser: gyro correction'  # the namespaced node name
     assert status.hardware_id == 'imu4'  # the device: its messages' frame_id
-    # from now on the corrected gyro flows, the attitude is not published as if valid
-    before = len(h.attitude)
+    assert 'imu/corrected, imu/attitude and imu/data not published' in status.message
+    # from now on no correction made at the wrong rate is published as if valid
+    before = len(h.attitude), len(h.corrected), len(h.fused)
     later = stamps[-1] + np.arange(1, 201) * 10_000_000
     h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(later, rec.imu[600:800])])
-    assert len(h.attitude) == before and len(h.corrected) == 800
+    assert (len(h.attitude), len(h.corrected), len(h.fused)) == before
+    assert h.node.corrected_withheld == 800 - before[1]
+
+
+def test_an_input_that_stops_is_a_diagnostics_error(harness):
+    h = harness()
+    h.send([imu_msg(10**9 + k * 5_000_000, [0, 0, 0], [0, 0, 9.81]) for k in range(400)])
+    h.diagnostics.clear()
+    h.spin_until(lambda: h.diagnostics, timeout=5.0)
+    assert h.diagnostics[-1].status[0].level != DiagnosticStatus.ERROR
+    h.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR for d in h.diagnostics
+                             for s in d.status), timeout=6.0)  # nothing sent since
+    status = [s for d in h.diagnostics for s in d.status][-1]
+    values = {kv.key: kv.value for kv in status.values}
+    assert status.message.startswith('no input for ') and status.message.endswith(
+        ' s on /imu/data_raw')
+    assert values['input_rate_hz'] == '0.00' and float(values['seconds_since_input']) > 2.0
+    h.send([imu_msg(10**9 + k * 5_000_000, [0, 0, 0], [0, 0, 9.81]) for k in range(400, 800)])
+    h.diagnostics.clear()
+    h.spin_until(lambda: h.diagnostics, timeout=5.0)
+    assert h.diagnostics[-1].status[0].level != DiagnosticStatus.ERROR  # flowing again
 
 
 def test_one_long_gap_is_not_a_slow_stream(harness):
