@@ -97,7 +97,8 @@ def read_asl(path: str | Path, with_gt: bool = True) -> Recording:
     root = Path(path)
     mav = root / 'mav0'
     if not mav.is_dir():
-        raise DatasetError(f'{root}: not an ASL sequence folder (no mav0/ inside)')
+        hint = f'; give its parent, {root.parent}' if root.name == 'mav0' else ''
+        raise DatasetError(f'{root}: not an ASL sequence folder (no mav0/ inside{hint})')
     imu_stamp, imu = read_csv(mav / 'imu0' / 'data.csv', 7)
     if not with_gt:
         rec = Recording(root.name, str(root), imu_stamp, imu, np.zeros(0, np.int64),

@@ -67,7 +67,11 @@ def pick_connections(reader: AnyReader, topic: str | None, types: tuple[str, ...
     listing = ', '.join(sorted({f'{c.topic} [{c.msgtype}]' for c in conns})) or 'none'
     if topic is None:
         cands = {c.topic for c in conns if c.msgtype in types}
-        if len(cands) != 1:
+        if not cands:  # nothing to name: the bag lacks what the command needs
+            raise DatasetError(f'{path}: no {what} topic ({" or ".join(types)}) in this bag'
+                               + (': this command needs ground-truth poses' if what == 'pose'
+                                  else '') + f' (topics: {listing})')
+        if len(cands) > 1:
             raise DatasetError(f'{path}: {len(cands)} candidate {what} topics, pass the '
                                f'topic name explicitly (topics: {listing})')
         topic = cands.pop()

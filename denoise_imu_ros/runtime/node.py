@@ -138,6 +138,9 @@ class GyroDenoiser(Node):
                 why += f' (write a decimal with a point: {given[1]}:={given[2]}.0)'
             raise DenoiseError(f'bad parameter: {why}') from err
         p = self.get_parameter
+        if not p('fixed_frame').value.strip():
+            raise DenoiseError('bad parameter: fixed_frame must name a frame (imu/attitude '
+                               'is stamped in it), not be empty')
         loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()
         settings = self._fusion_settings(loaded)  # its accelerometer bias: imu/attitude's too
         fusion = settings if p('publish_fused').value else None
@@ -247,7 +250,8 @@ class GyroDenoiser(Node):
             return switch
         options = ["'model'"] + ['on' if s else 'off' for s in switches]
         allowed = ', '.join(options[:-1]) + ' or ' + options[-1]
-        raise DenoiseError(f'bad parameter: {name} must be {allowed}, not {value!r}')
+        given = ('on' if value else 'off') if isinstance(value, bool) else repr(value)
+        raise DenoiseError(f'bad parameter: {name} must be {allowed}, not {given}')
 
     # -- data ---------------------------------------------------------------------
     def _on_imu(self, msg: Imu) -> None:

@@ -127,22 +127,26 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,
     except InvalidTopicNameException as err:
         raise DenoiseError(f'--topic {topic!r}: {" ".join(str(err).split()[:12])}') from err
     rclpy.init()
-    player = None
+    player, count, interrupted = None, 0, False
     try:
         player = Player(messages, topic=topic, rate=rate, clock=clock)
+        where = player.resolve_topic_name(topic)
         # Discovery can miss its first announcements on a loaded machine, and the next
         # ones come ~3 s later: 2 s of waiting lost 80 % of a test bag under load.
         if not player.wait_for_subscribers(timeout_s=wait_s):
-            player.get_logger().warning(f'no subscriber on {player.resolve_topic_name(topic)} '
-                                        f'after {wait_s:g} s; playing anyway')
+            player.get_logger().warning(f'no subscriber on {where} after {wait_s:g} s; '
+                                        'playing anyway')
         count = sum(1 for _ in player.play())
-        stopped = '' if count == len(messages) else f' (stopped: {count} of {len(messages)})'
-        print(f'published {count} IMU messages from {bag} on '
-              f'{player.resolve_topic_name(topic)}{stopped}')
-    except (KeyboardInterrupt, ExternalShutdownException):
+    except KeyboardInterrupt:  # Ctrl-C: after the clean-up, the command's one line and 130
+        interrupted = True
+    except ExternalShutdownException:
         pass
     finally:
         if player is not None:
             player.destroy_node()
         shutdown_rclpy()
+    if interrupted:
+        raise KeyboardInterrupt
+    stopped = '' if count == len(messages) else f' (stopped: {count} of {len(messages)})'
+    print(f'published {count} IMU messages from {bag} on {where}{stopped}')
     return 0

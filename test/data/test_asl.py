@@ -142,3 +142,11 @@ def test_no_time_overlap_and_too_short_sequences_are_refused(tmp_path):
         load_sequence(write_asl(tmp_path / 'a', gt_offset_s=100.0))
     with pytest.raises(DatasetError, match='need at least 511'):
         load_sequence(write_asl(tmp_path / 'b', n_imu=400), min_samples=511)
+
+
+def test_the_mav0_folder_itself_is_pointed_to_its_parent(tmp_path):
+    from denoise_imu_ros.data.asl import read_asl
+    from helpers import write_asl
+    write_asl(tmp_path / 'seq')
+    with pytest.raises(DatasetError, match=r'no mav0/ inside; give its parent, .*seq\)$'):
+        read_asl(tmp_path / 'seq' / 'mav0')

@@ -139,7 +139,7 @@ def test_every_reader_takes_a_bag_in_header_stamp_order(tmp_path):
     assert main(['check-data', str(tmp_path / 'jittered')]) in (0, 1)  # judged, not refused
 
 
-def test_an_empty_imu_topic_is_named_when_only_the_imu_is_read(tmp_path):
+def test_an_empty_imu_topic_or_no_pose_topic_is_named(tmp_path):
     from denoise_imu_ros.data.bags import IMU_TYPE, POSE_TYPES, read_bag, TYPESTORE
     with Writer2(tmp_path / 'empty', version=9) as w:
         w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
@@ -148,3 +148,8 @@ def test_an_empty_imu_topic_is_named_when_only_the_imu_is_read(tmp_path):
         read_bag(tmp_path / 'empty', with_pose=False)
     with pytest.raises(DatasetError, match='0 IMU and 0 pose messages, need both'):
         read_bag(tmp_path / 'empty')
+    with Writer2(tmp_path / 'imu_only', version=9) as w:
+        w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+    with pytest.raises(DatasetError, match='no pose topic .* in this bag: this command needs '
+                                           r'ground-truth poses \(topics: /imu0 '):
+        read_bag(tmp_path / 'imu_only')

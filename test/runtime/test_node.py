@@ -392,7 +392,8 @@ print('ok')
     (['-p', 'fusion_bias_estimation:=maybe'], "fusion_bias_estimation must be 'model', on"),
     (['-p', 'fusion_bias_estimation:=3'], "fusion_bias_estimation must be 'model', on"),
     (['-p', 'fusion_tau_acc:=-5.0'], 'fusion_tau_acc out of range'),
-    (['-p', 'fusion_accel_bias:=on'], "fusion_accel_bias must be 'model' or off, not True"),
+    (['-p', 'fusion_accel_bias:=on'], "fusion_accel_bias must be 'model' or off, not on"),
+    (['-p', "fixed_frame:=''"], 'fixed_frame must name a frame'),
 ])
 def test_a_bad_parameter_is_a_one_line_error_at_start_up(args, message, capsys):
     assert main(['--ros-args', *args]) == 1

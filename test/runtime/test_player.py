@@ -60,7 +60,8 @@ def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, eur
     assert 'published 400 IMU messages' in capsys.readouterr().out
 
 
-def test_sigterm_stops_play_quietly_and_says_how_far_it_got():
+@pytest.mark.parametrize('signame', ['SIGTERM', 'SIGINT'])
+def test_sigterm_stops_play_quietly_and_ctrl_c_is_an_interruption(signame):
     """A supervisor's SIGTERM (or a timeout) shut rclpy down: no traceback, exit 0."""
     import os
     import select
@@ -83,8 +84,12 @@ def test_sigterm_stops_play_quietly_and_says_how_far_it_got():
             err += chunk
     assert b'playing anyway' in err, err
     time.sleep(1)  # a second of the 90 s bag
-    play.send_signal(signal.SIGTERM)
+    play.send_signal(getattr(signal, signame))
     out, rest = play.communicate(timeout=30)
     out, err = out.decode(), (err + rest).decode()
-    assert play.returncode == 0 and 'Traceback' not in err, err
-    assert '(stopped: ' in out and ' of 18000)' in out, out
+    assert 'Traceback' not in err, err
+    if signame == 'SIGTERM':
+        assert play.returncode == 0 and '(stopped: ' in out and ' of 18000)' in out, out
+    else:  # Ctrl-C: as every command, one line and 130
+        assert play.returncode == 130 and out == '', out
+        assert err.rstrip().endswith('denoise-imu play: interrupted'), err
