@@ -26,7 +26,10 @@ slope -1), the gyro's angle random walk (N, slope -1/2), its bias instability (B
 and its rate random walk (K, slope +1/2). N and K are the figures OpenVINS, VINS-Fusion
 and Kalibr ask for: ``gyroscope_noise_density`` (rad/s/sqrt(Hz)) and
 ``gyroscope_random_walk`` (rad/s^2/sqrt(Hz)). Separating Q keeps the poses' noise out of
-N; a recording of a few minutes resolves K only roughly.
+N; a recording of a few minutes resolves K only roughly. Where the fitted K term is less
+than half of the Allan variance at the longest tau (the curve never rises: often K = 0,
+which a VIO would read as a bias that never moves), K is given as its upper bound from
+the same curve instead (sigma^2 >= K^2 tau / 3 at every tau), and said to be one.
 
 It also checks the covariance the node publishes: the fraction of errors within 1, 2 and
 3 of its standard deviations (68.3 / 95.4 / 99.7 % if Gaussian), per sample and over
@@ -93,12 +96,35 @@ def fit_noise_model(taus: np.ndarray, adev: np.ndarray) -> dict[str, float]:
             'bias_instability': math.sqrt(b2), 'random_walk': math.sqrt(k2)}
 
 
+def random_walk(taus: np.ndarray, adev: np.ndarray, fitted: float) -> tuple[float, bool]:
+    """
+    K of one Allan curve and whether it is only an upper bound.
+
+    The fitted K when its term is at least half the variance at the longest tau; else
+    the bound K^2 tau / 3 <= sigma^2(tau), tightest over the curve.
+    """
+    use = np.isfinite(adev) & (adev > 0)
+    if not use.any():
+        return 0.0, False
+    taus, adev = taus[use], adev[use]
+    if fitted ** 2 * taus[-1] / 3 >= 0.5 * adev[-1] ** 2:
+        return fitted, False
+    return float(np.min(adev * np.sqrt(3 / taus))), True
+
+
 def figures(err: np.ndarray, rate_hz: float) -> dict[str, Any]:
-    """Return Kalibr's two gyro figures of the worst axis, the fitted model, the Allan curve."""
+    """
+    Return Kalibr's two gyro figures of the worst axis, the fitted model, the Allan curve.
+
+    An axis whose fit does not resolve its random walk contributes its upper bound
+    instead (:func:`random_walk`; ``random_walk_is_bound``: whether the figure is one).
+    """
     taus, adev = allan(err, rate_hz)
     fits = [fit_noise_model(taus, adev[:, i]) for i in range(3)]
+    walk, bound = max(random_walk(taus, adev[:, i], f['random_walk'])
+                      for i, f in enumerate(fits))
     return {'gyroscope_noise_density': max(f['noise_density'] for f in fits),
-            'gyroscope_random_walk': max(f['random_walk'] for f in fits),
+            'gyroscope_random_walk': walk, 'random_walk_is_bound': bound and walk > 0,
             'per_axis': fits, 'taus_s': taus.tolist(), 'adev_rad_s': adev.tolist()}
 
 
@@ -132,10 +158,12 @@ def yaml_snippet(pooled: dict[str, dict[str, Any]], where: str) -> str:
     the keys, the other gyros' as comments for comparison (a key twice is not YAML).
     """
     def line(fig: dict[str, Any], comment: str = '') -> str:
+        bound = (', an upper bound: the recordings are too short to resolve it'
+                 if fig.get('random_walk_is_bound') else '')
         return (f'{comment}gyroscope_noise_density: {fig["gyroscope_noise_density"]:.3e}'
                 f'  # rad/s/sqrt(Hz)\n'
                 f'{comment}gyroscope_random_walk: {fig["gyroscope_random_walk"]:.3e}'
-                f'  # rad/s^2/sqrt(Hz)\n')
+                f'  # rad/s^2/sqrt(Hz){bound}\n')
     text = (f'# corrected gyro (imu/corrected), measured against ground truth on {where} '
             f'(denoise-imu noise)\n' + line(pooled['corrected']))
     for name, fig in pooled.items():
@@ -178,13 +206,20 @@ def write(out: Path, report: dict[str, Any]) -> None:
 
 
 def pooled(per_recording: dict[str, dict[str, Any]]) -> dict[str, Any]:
-    """Per gyro, the worst recording's figures (what a VIO should be configured with)."""
+    """
+    Per gyro, what a VIO should be configured with: the worst recording's figures.
+
+    The random walk: the largest of those the recordings resolve; if none does, the
+    tightest of their upper bounds (each is above the IMU's one value).
+    """
     gyros = next(iter(per_recording.values())).keys()
     out = {}
     for g in gyros:
         figs = [r[g]['figures'] for r in per_recording.values()]
-        out[g] = {k: max(f[k] for f in figs)
-                  for k in ('gyroscope_noise_density', 'gyroscope_random_walk')}
+        resolved = [f['gyroscope_random_walk'] for f in figs if not f['random_walk_is_bound']]
+        walk = max(resolved) if resolved else min(f['gyroscope_random_walk'] for f in figs)
+        out[g] = {'gyroscope_noise_density': max(f['gyroscope_noise_density'] for f in figs),
+                  'gyroscope_random_walk': walk, 'random_walk_is_bound': not resolved}
     return out
 
 
@@ -196,8 +231,9 @@ def markdown(report: dict[str, Any]) -> str:
         for g, r in gyros.items():
             f = r['figures']
             q = max(a['angle_noise_rad'] for a in f['per_axis'])
+            at_most = '≤ ' if f['random_walk_is_bound'] else ''
             lines.append(f'| {name} | {g} | {f["gyroscope_noise_density"]:.3e} | '
-                         f'{f["gyroscope_random_walk"]:.3e} | {q:.1e} |\n')
+                         f'{at_most}{f["gyroscope_random_walk"]:.3e} | {q:.1e} |\n')
     lines.append('\nThe covariance the node publishes (`angular_velocity_covariance`) against '
                  "the corrected gyro's real errors: fraction within 1 / 2 / 3 σ (Gaussian: "
                  "68.3 / 95.4 / 99.7 %), per axis pooled, per sample (the poses' noise "
@@ -240,7 +276,9 @@ def noise_report(seqs: list[Sequence], gyros: dict[str, list[np.ndarray]],
             'method': 'gyro minus the ground-truth body rate Log(R_k^T R_k+1)/dt_k at trusted '
                       'stamps; overlapping Allan deviation (allantools.oadev, octave taus) '
                       'fitted with 3Q^2/tau^2 + N^2/tau + B^2 2ln2/pi + K^2 tau/3 (NNLS, '
-                      'relative to each point); N and K of the worst axis'}
+                      'relative to each point); N and K of the worst axis, K as its upper '
+                      'bound min sigma(tau) sqrt(3 / tau) where its fitted term is under '
+                      'half the variance at the longest tau'}
 
 
 def noise(model_spec: str, data: str, sequences: list[str], out: str,

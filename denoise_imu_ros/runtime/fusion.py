@@ -33,8 +33,10 @@ gyro step: the yaw is held, as the attitude is, and gravity keeps correcting the
 :func:`fuse` (offline, one compiled batch) equals :meth:`GravityFilter.update` (online,
 per sample) bit for bit.
 
-Quaternions are xyzw, body (IMU) to an earth frame whose z axis points up; its yaw is
-that of the first sample's, arbitrary.
+Quaternions are xyzw, body (IMU) to an earth frame whose z axis points up. VQF's own
+earth frame starts at a heading of its choosing (the shortest rotation onto the first
+accelerometer reading); the output is turned about z so that the first orientation has
+yaw 0 as ``imu/attitude``'s (Rz(0) Ry(pitch) Rx(roll)): both topics start in one frame.
 """
 
 from __future__ import annotations
@@ -107,6 +109,24 @@ def _xyzw(wxyz: np.ndarray) -> np.ndarray:
     return wxyz.take(_XYZW, axis=-1)
 
 
+def level_heading(first: np.ndarray) -> tuple[float, float]:
+    """cos and sin of half the turn about z that gives the xyzw ``first`` ZYX yaw 0."""
+    x, y, z, w = (float(v) for v in first)
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return math.cos(-0.5 * yaw), math.sin(-0.5 * yaw)
+
+
+def turn_heading(q: np.ndarray, c: float, s: float) -> np.ndarray:
+    """
+    Rz ⊗ q for xyzw ``q`` (4,) or (N, 4), Rz the turn (0, 0, s, c) about the earth's z.
+
+    One expression for the online filter and the batch: the same float operations, so
+    the two stay equal bit for bit.
+    """
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.stack([c * x - s * y, c * y + s * x, c * z + s * w, c * w - s * z], axis=-1)
+
+
 class GravityFilter:
     """One sample at a time (the node, process-bag); see the module docstring."""
 
@@ -116,11 +136,13 @@ class GravityFilter:
         self._accel_bias = np.array(settings.accel_bias_m_s2)
         # preallocated: this runs on every IMU message
         self._gyro, self._step, self._accel = np.zeros(3), np.empty(3), np.empty(3)
+        self._heading: tuple[float, float] | None = None  # set by the first sample
 
     def reset(self) -> None:
         """Start again: the next sample's accelerometer sets the tilt, yaw 0."""
         self._vqf.resetState()
         self._gyro[:] = 0.0
+        self._heading = None
 
     def update(self, gyro: np.ndarray, accel: np.ndarray, periods: float = 1.0) -> np.ndarray:
         """
@@ -132,7 +154,10 @@ class GravityFilter:
         np.multiply(self._gyro, periods, out=self._step)  # the last sample's gyro, 0 at start
         self._vqf.update(self._step, self._accel)
         self._gyro[:] = gyro
-        return _xyzw(self._vqf.getQuat6D())
+        q = _xyzw(self._vqf.getQuat6D())
+        if self._heading is None:
+            self._heading = level_heading(q)
+        return turn_heading(q, *self._heading)
 
 
 def step_periods(stamp_ns: np.ndarray, rate_hz: float,
@@ -162,10 +187,10 @@ def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
     shifted[1:] = gyro[:-1]  # sample k - 1 drives the step to stamp k
     if periods is not None:
         shifted *= np.asarray(periods, dtype=np.float64)[:, None]
-    out = _vqf(rate_hz, settings).updateBatch(
+    out = _xyzw(_vqf(rate_hz, settings).updateBatch(
         np.ascontiguousarray(shifted),
-        np.asarray(accel, dtype=np.float64) - np.array(settings.accel_bias_m_s2))
-    return _xyzw(out['quat6D'])
+        np.asarray(accel, dtype=np.float64) - np.array(settings.accel_bias_m_s2))['quat6D'])
+    return turn_heading(out, *level_heading(out[0])) if len(out) else out
 
 
 DEFAULT_ORIENTATION_STD_RAD = 0.05  # used when a model file stores no fused-error figures

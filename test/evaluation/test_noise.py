@@ -2,8 +2,9 @@
 # Licensed under the Apache License, Version 2.0
 """Noise figures: the Allan fit recovers known noise, separates the poses' own noise."""
 
-from denoise_imu_ros.evaluation.noise import covariance_check, figures, yaml_snippet
+from denoise_imu_ros.evaluation.noise import covariance_check, figures, pooled, yaml_snippet
 import numpy as np
+import pytest
 import yaml
 
 
@@ -16,7 +17,7 @@ def test_the_fit_recovers_white_noise_and_random_walk_and_keeps_pose_noise_apart
     poses = np.diff(rng.normal(0, angle, (n + 1, 3)), axis=0) * rate  # differentiated angles
     fig = figures(white + drift + poses, rate)
     assert abs(fig['gyroscope_noise_density'] / density - 1) < 0.2
-    assert 0.5 < fig['gyroscope_random_walk'] / walk < 2.0
+    assert 0.5 < fig['gyroscope_random_walk'] / walk < 2.0 and not fig['random_walk_is_bound']
     assert all(abs(a['angle_noise_rad'] / angle - 1) < 0.2 for a in fig['per_axis'])
     raw = dict(fig, gyroscope_noise_density=5e-3, gyroscope_random_walk=7e-4)
     snippet = yaml_snippet({'raw': raw, 'corrected': fig}, 'a test')
@@ -25,6 +26,30 @@ def test_the_fit_recovers_white_noise_and_random_walk_and_keeps_pose_noise_apart
     assert keys == ['gyroscope_noise_density', 'gyroscope_random_walk'] == list(pasted)
     assert abs(pasted['gyroscope_noise_density'] / density - 1) < 0.2
     assert '# gyroscope_noise_density: 5.000e-03' in snippet  # the raw one, a comment
+
+
+def test_a_random_walk_too_slow_to_resolve_is_an_upper_bound_not_zero():
+    """A VIO told K = 0 takes the bias for a constant: the curve's bound, said to be one."""
+    rate, n = 200.0, 200 * 120  # two minutes of the poses' angle noise: no +1/2 slope
+    err = np.diff(np.random.default_rng(0).normal(0, 1e-4, (n + 1, 3)), axis=0) * rate
+    fig = figures(err, rate)
+    assert all(a['random_walk'] == 0.0 for a in fig['per_axis'])  # what the fit resolves
+    taus, adev = np.array(fig['taus_s']), np.array(fig['adev_rad_s'])
+    assert fig['random_walk_is_bound'] and fig['gyroscope_random_walk'] == pytest.approx(
+        max(np.min(adev[:, i] * np.sqrt(3 / taus)) for i in range(3)))
+    snippet = yaml_snippet({'corrected': fig}, 'a test')
+    assert yaml.safe_load(snippet)['gyroscope_random_walk'] > 0
+    assert 'an upper bound: the recordings are too short to resolve it' in snippet
+    # pooled over recordings: a resolved figure wins over bounds (each above the IMU's K)
+    resolved = dict(fig, gyroscope_random_walk=3e-5, random_walk_is_bound=False)
+    loose = dict(fig, gyroscope_random_walk=9e-5)
+    both = pooled({'a': {'corrected': {'figures': loose}},
+                   'b': {'corrected': {'figures': resolved}}})['corrected']
+    assert both['gyroscope_random_walk'] == 3e-5 and not both['random_walk_is_bound']
+    bounds = pooled({'a': {'corrected': {'figures': loose}},
+                     'b': {'corrected': {'figures': fig}}})['corrected']
+    assert bounds['random_walk_is_bound'] and bounds['gyroscope_random_walk'] == min(
+        9e-5, fig['gyroscope_random_walk'])
 
 
 def test_the_covariance_check_counts_samples_inside_one_two_three_sigma():

@@ -35,6 +35,20 @@ def test_online_equals_offline_bit_for_bit(imu, settings):
     assert np.array_equal(online.update(imu[0, :3], imu[0, 3:]), one_by_one[0])
 
 
+@pytest.mark.parametrize('accel', [(0.0, 0.0, 9.81), (9.2, 0.1, -3.3), (-2.0, 6.0, 7.0),
+                                   (0.5, -0.3, -9.7)])
+def test_the_fused_orientation_starts_where_the_attitude_does(accel):
+    """imu/data and imu/attitude in one earth frame: VQF's own heading turned to yaw 0."""
+    from denoise_imu_ros.core.rotation import from_gravity
+    first = GravityFilter(200.0).update(np.zeros(3), np.array(accel))
+    expected = np.array(from_gravity(*accel))
+    assert min(np.abs(first - expected).max(), np.abs(first + expected).max()) < 1e-9
+    gyro, acc = np.zeros((50, 3)), np.tile(accel, (50, 1))
+    batch = fuse(gyro, acc, 200.0)
+    assert np.array_equal(batch[0], first)
+    np.testing.assert_allclose(np.linalg.norm(batch, axis=1), 1.0, atol=1e-12)
+
+
 def test_sample_k_drives_the_step_to_stamp_k_plus_one():
     """About the vertical gravity says nothing: the yaw is the gyro's own integral."""
     rate = np.random.default_rng(0).uniform(-1.0, 1.0, 1000)
