@@ -110,7 +110,7 @@ def _xyzw(wxyz: np.ndarray) -> np.ndarray:
 
 
 def level_heading(first: np.ndarray) -> tuple[float, float]:
-    """cos and sin of half the turn about z that gives the xyzw ``first`` ZYX yaw 0."""
+    """Return cos and sin of half the turn about z that gives the xyzw ``first`` yaw 0."""
     x, y, z, w = (float(v) for v in first)
     yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
     return math.cos(-0.5 * yaw), math.sin(-0.5 * yaw)
