@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import math
 from pathlib import Path
 import signal
+import threading
 import time
 from typing import Any
 
@@ -374,6 +375,9 @@ def _run_torchrun(cfg: TrainConfig, progress: bool) -> TrainResult | None:
 def _worker(cfg: TrainConfig, rank: int, port: int) -> None:
     """Entry point of the data-parallel processes other than the first."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the first process's to handle
+    # tqdm's default lock is a multiprocessing semaphore: terminated with this process on
+    # Ctrl-C, it would be reported leaked at exit; this process shows no progress bar
+    tqdm.set_lock(threading.RLock())
     parallel.join(rank, cfg.workers, port)
     try:
         _run(cfg, rank, load_sequences(cfg), False)
@@ -419,7 +423,8 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
             history.append({'step': step, 'train_loss': loss.item() if step else None,
                             'val_loss': val['loss'],
                             'val_aoe_mean_deg': val['aoe_mean_deg']})
-            bar.write(f'step {step}: train {loss.item():.4g}  val {val["loss"]:.4g}  '
+            trained = f'{loss.item():.4g}' if step else '-'  # step 0: the untrained network
+            bar.write(f'step {step}: train {trained}  val {val["loss"]:.4g}  '
                       f'val AOE {val["aoe_mean_deg"]:.3f} deg')
             if step > 0 and val['loss'] < best['loss']:
                 best = dict(val, step=step, state=copy.deepcopy(model.state_dict()))
