@@ -15,6 +15,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from ..core.metrics import ROE_DISTANCES_M
@@ -33,9 +34,11 @@ def eval_table(results: dict[str, Any], average: dict[str, Any]) -> str:
         avg = f'**{average[m]["aoe_deg"]:.2f}/{average[m]["aoe_yaw_deg"]:.2f}**'
         lines.append(f'| {m} | ' + ' | '.join(cells) + f' | {avg} |\n')
     lines.append('\nAOE 3-D / yaw in degrees. Median ROE (deg) at '
-                 + '/'.join(f'{d:g}' for d in ROE_DISTANCES_M) + ' m:\n\n')
+                 + '/'.join(f'{d:g}' for d in ROE_DISTANCES_M) + ' m (–: the recording '
+                 'never travels that far):\n\n')
     for m in methods:
-        cells = ['/'.join(f'{v:.2f}' for v in results[s][m]['roe_median_deg'].values())
+        cells = ['/'.join('–' if v is None or math.isnan(v) else f'{v:.2f}'
+                          for v in results[s][m]['roe_median_deg'].values())
                  for s in results]
         lines.append(f'- {m}: ' + ', '.join(f'{s} {c}' for s, c in zip(results, cells)) + '\n')
     return ''.join(lines)

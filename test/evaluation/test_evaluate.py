@@ -59,6 +59,7 @@ def test_eval_of_a_short_recording_writes_strict_json_and_plots(model_file, tmp_
     report = json.loads(text)
     assert report['sequences']['base']['network']['roe_median_deg'] == {
         '7': None, '21': None, '35': None}
+    assert '- network: base –/–/–' in (out / 'results.md').read_text()  # not nan/nan/nan
     for png in ('base.png', 'roe.png'):
         assert (out / png).read_bytes()[:4] == b'\x89PNG'
     assert sorted(p.name for p in out.iterdir()) == ['base.png', 'results.json', 'results.md',
