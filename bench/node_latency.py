@@ -15,7 +15,10 @@
 gyro_denoiser over DDS loopback: added latency, CPU use, drops, highest sustained rate.
 
 Real EuRoC IMU samples are published on imu/data_raw at a fixed rate; imu/corrected is
-received in this process. Latency = receive time - publish time (same clock). The node
+received in this process. Their stamps step by the model's period whatever the rate they
+are sent at: the node checks the stamps' rate against its model's and withholds every
+output at a rate not its own, so a rate above the model's measures what a faster IMU
+would cost the node doing all its work (a model trained at that rate does the same). Latency = receive time - publish time (same clock). The node
 runs as its own process; a pass-through relay (same QoS, no processing) is measured in
 the same run as the transport floor, so the node's figures read as "floor + cost".
 With several --models (e.g. a single network and an ensemble file), each runs as the node
@@ -35,6 +38,7 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 os.environ.setdefault('FASTDDS_BUILTIN_TRANSPORTS', 'UDPv4')
 os.environ.setdefault('ROS_DOMAIN_ID', '57')
 
+from denoise_imu_ros.core.modelfile import read_model_file  # noqa: E402
 from denoise_imu_ros.core.msgs import stamp_ns  # noqa: E402
 from denoise_imu_ros.data.load import load_imu  # noqa: E402
 import numpy as np  # noqa: E402
@@ -73,6 +77,8 @@ def run(kind, rates, seconds, imu, model='euroc'):
     cmd = ([sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args',
             '-p', f'model:={model}', '--log-level', 'error'] if kind == 'node'
            else [sys.executable, '-c', RELAY])
+    step_ns = int(round(1e9 / (read_model_file(model).meta['sample_rate_hz'] if kind == 'node'
+                               else 200.0)))  # the stamps' step: the model's period
     proc = start(cmd)
     rclpy.init()
     bench = rclpy.create_node('latency_bench')
@@ -100,7 +106,7 @@ def run(kind, rates, seconds, imu, model='euroc'):
             while (now := time.perf_counter()) < due:
                 ex.spin_once(timeout_sec=0) if due - now > 2e-4 else None
             msg = Imu()
-            stamp += int(1e9 / rate)
+            stamp += step_ns
             msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp, 10**9)
             row = imu[k % len(imu)]
             (msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z) = row[:3]
