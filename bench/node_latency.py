@@ -18,9 +18,10 @@ Real EuRoC IMU samples are published on imu/data_raw at a fixed rate; imu/correc
 received in this process. Their stamps step by the model's period whatever the rate they
 are sent at: the node checks the stamps' rate against its model's and withholds every
 output at a rate not its own, so a rate above the model's measures what a faster IMU
-would cost the node doing all its work (a model trained at that rate does the same). Latency = receive time - publish time (same clock). The node
-runs as its own process; a pass-through relay (same QoS, no processing) is measured in
-the same run as the transport floor, so the node's figures read as "floor + cost".
+would cost the node doing all its work (a model trained at that rate does the same).
+Latency = receive time - publish time (same clock). The node runs as its own process; a
+pass-through relay (same QoS, no processing) is measured in the same run as the
+transport floor, so the node's figures read as "floor + cost".
 With several --models (e.g. a single network and an ensemble file), each runs as the node
 in turn, in the same run. The sweep rates are tried with the first model only.
 Run: .venv/bin/python bench/node_latency.py [--rates 200 1000] [--seconds 10]
