@@ -109,22 +109,22 @@ def _xyzw(wxyz: np.ndarray) -> np.ndarray:
     return wxyz.take(_XYZW, axis=-1)
 
 
-def level_heading(first: np.ndarray) -> tuple[float, float]:
+def level_heading(first: Any) -> tuple[float, float]:
     """Return cos and sin of half the turn about z that gives the xyzw ``first`` yaw 0."""
     x, y, z, w = (float(v) for v in first)
     yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
     return math.cos(-0.5 * yaw), math.sin(-0.5 * yaw)
 
 
-def turn_heading(q: np.ndarray, c: float, s: float) -> np.ndarray:
+def turn_heading(x: Any, y: Any, z: Any, w: Any, c: float, s: float) -> list[Any]:
     """
-    Rz ⊗ q for xyzw ``q`` (4,) or (N, 4), Rz the turn (0, 0, s, c) about the earth's z.
+    Rz ⊗ q for the xyzw components of q, Rz the turn (0, 0, s, c) about the earth's z.
 
-    One expression for the online filter and the batch: the same float operations, so
-    the two stay equal bit for bit.
+    One expression for the online filter (floats: numpy's calls on four values would
+    cost more than the filter) and the batch (arrays): the same IEEE operations in the
+    same order, so the two stay equal bit for bit.
     """
-    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack([c * x - s * y, c * y + s * x, c * z + s * w, c * w - s * z], axis=-1)
+    return [c * x - s * y, c * y + s * x, c * z + s * w, c * w - s * z]
 
 
 class GravityFilter:
@@ -154,10 +154,10 @@ class GravityFilter:
         np.multiply(self._gyro, periods, out=self._step)  # the last sample's gyro, 0 at start
         self._vqf.update(self._step, self._accel)
         self._gyro[:] = gyro
-        q = _xyzw(self._vqf.getQuat6D())
+        w, x, y, z = self._vqf.getQuat6D().tolist()
         if self._heading is None:
-            self._heading = level_heading(q)
-        return turn_heading(q, *self._heading)
+            self._heading = level_heading((x, y, z, w))
+        return np.array(turn_heading(x, y, z, w, *self._heading))
 
 
 def step_periods(stamp_ns: np.ndarray, rate_hz: float,
@@ -190,7 +190,9 @@ def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
     out = _xyzw(_vqf(rate_hz, settings).updateBatch(
         np.ascontiguousarray(shifted),
         np.asarray(accel, dtype=np.float64) - np.array(settings.accel_bias_m_s2))['quat6D'])
-    return turn_heading(out, *level_heading(out[0])) if len(out) else out
+    if not len(out):
+        return out
+    return np.stack(turn_heading(*out.T, *level_heading(out[0])), axis=-1)
 
 
 DEFAULT_ORIENTATION_STD_RAD = 0.05  # used when a model file stores no fused-error figures
