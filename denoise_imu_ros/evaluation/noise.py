@@ -121,10 +121,12 @@ def figures(err: np.ndarray, rate_hz: float) -> dict[str, Any]:
     """
     taus, adev = allan(err, rate_hz)
     fits = [fit_noise_model(taus, adev[:, i]) for i in range(3)]
-    walk, bound = max(random_walk(taus, adev[:, i], f['random_walk'])
-                      for i, f in enumerate(fits))
+    walks = [random_walk(taus, adev[:, i], f['random_walk']) for i, f in enumerate(fits)]
+    walk, bound = max(walks)
+    resolved = [k for k, is_bound in walks if not is_bound and k > 0]
     return {'gyroscope_noise_density': max(f['noise_density'] for f in fits),
             'gyroscope_random_walk': walk, 'random_walk_is_bound': bound and walk > 0,
+            'random_walk_resolved': max(resolved) if resolved else None,
             'per_axis': fits, 'taus_s': taus.tolist(), 'adev_rad_s': adev.tolist()}
 
 
@@ -209,14 +211,15 @@ def pooled(per_recording: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """
     Per gyro, what a VIO should be configured with: the worst recording's figures.
 
-    The random walk: the largest of those the recordings resolve; if none does, the
+    The random walk: the largest the recordings resolve on any axis; if none does, the
     tightest of their upper bounds (each is above the IMU's one value).
     """
     gyros = next(iter(per_recording.values())).keys()
     out = {}
     for g in gyros:
         figs = [r[g]['figures'] for r in per_recording.values()]
-        resolved = [f['gyroscope_random_walk'] for f in figs if not f['random_walk_is_bound']]
+        resolved = [f['random_walk_resolved'] for f in figs
+                    if f.get('random_walk_resolved') is not None]
         walk = max(resolved) if resolved else min(f['gyroscope_random_walk'] for f in figs)
         out[g] = {'gyroscope_noise_density': max(f['gyroscope_noise_density'] for f in figs),
                   'gyroscope_random_walk': walk, 'random_walk_is_bound': not resolved}

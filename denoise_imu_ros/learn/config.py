@@ -33,6 +33,7 @@ from ..core.architecture import ModelConfig
 from ..core.errors import TrainingError
 
 RUN_KEYS = ('data', 'threads', 'workers', 'device')  # where it runs, not what it learns
+OPTIONS = ('seed', 'data', 'steps', 'workers', 'device')  # keys train's options override
 DEVICE = re.compile(r'cpu|cuda(:\d+)?')             # the devices training supports
 
 
@@ -195,7 +196,7 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
 
     def source(key: str) -> str:
         """Where a value came from: the command line's option, or the file."""
-        return f'--{key.replace("_", "-")}' if key in given else str(path)
+        return f'--{key.replace("_", "-")}' if key in given and key in OPTIONS else str(path)
     for key, value in raw.items():
         if 'float' in types[key]:
             raw[key] = value = _numbers(value)
@@ -242,7 +243,7 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
             cfg.select == 'swa' and cfg.swa_start <= 0):
         raise TrainingError(f'{path}: select must be best_validation, final or swa '
                             '(swa needs swa_start > 0)')
-    if cfg.swa_start > cfg.steps and 'steps' in given:
+    if cfg.swa_start > cfg.steps and 'steps' in given and 'swa_start' not in given:
         raise TrainingError(f"--steps {cfg.steps}: ends before the recipe's swa_start "
                             f'{cfg.swa_start} (its weight average starts there): give more '
                             'steps, or train a copy of the recipe with a lower swa_start')

@@ -122,31 +122,39 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
 @dataclass
 class Split:
     """
-    Training windows' source arrays, stacked (S sequences of L samples).
+    Training windows' source arrays of this process's sequences, stacked (S_mine of L).
 
     Shorter sequences are zero-padded at the end (padding is never drawn: valid=False).
-    ``mine``: the rows this process trains on (a data-parallel process holds every row,
-    so that its random draws are those of a one-process run, and keeps its own).
+    ``max_start`` covers every sequence, so that a data-parallel process draws what a
+    one-process run draws, and keeps its own rows' draws (``mine``).
     """
 
-    imu: torch.Tensor        # (S, L, 6) float32
-    dt: torch.Tensor         # (S, L - 1) float64
-    quat: torch.Tensor       # (S, L, 4) float64
-    valid: torch.Tensor      # (S, L) bool
+    imu: torch.Tensor        # (S_mine, L, 6) float32
+    dt: torch.Tensor         # (S_mine, L - 1) float64
+    quat: torch.Tensor       # (S_mine, L, 4) float64
+    valid: torch.Tensor      # (S_mine, L) bool
     max_start: torch.Tensor  # (S,) int64: window starts are drawn in [0, max_start)
-    lengths: list[int]       # samples windows may be drawn from, per row (no padding)
-    mine: torch.Tensor       # (S_mine,) int64: this process's rows
+    mine: torch.Tensor       # (S_mine,) int64: this process's sequences, in the draws
+
+
+def window_lengths(seqs: list[Sequence], cfg: TrainConfig) -> list[int]:
+    """Samples windows may be drawn from, per sequence: its head, or all of it."""
+    head = cfg.window + cfg.max_offset  # the window may end at sample head - 1
+    return [len(s) if cfg.whole_sequences else head for s in seqs]
 
 
 def training_split(seqs: list[Sequence], cfg: TrainConfig, rank: int | None = None) -> Split:
     """
     Stack the samples windows may be drawn from: the head of each sequence, or all.
 
-    ``rank``: the data-parallel process whose rows are ``mine`` (None: every row).
+    ``rank``: the data-parallel process whose sequences are held (None: every one).
     """
-    head = cfg.window + cfg.max_offset  # the window may end at sample head - 1
-    lengths = [len(s) if cfg.whole_sequences else head for s in seqs]
-    n = max(lengths)
+    lengths = window_lengths(seqs, cfg)
+    mine = (torch.arange(len(seqs)) if rank is None
+            else torch.arange(rank, len(seqs), cfg.workers))
+    held = [seqs[i] for i in mine.tolist()]
+    held_lengths = [lengths[i] for i in mine.tolist()]
+    n = max(held_lengths)
 
     def stack(arrays: list[np.ndarray], length: int) -> np.ndarray:
         out = np.zeros((len(arrays), length) + arrays[0].shape[1:], arrays[0].dtype)
@@ -155,13 +163,11 @@ def training_split(seqs: list[Sequence], cfg: TrainConfig, rank: int | None = No
         return out
 
     return Split(
-        imu=torch.tensor(stack([s.imu for s in seqs], n), dtype=torch.float32),
-        dt=torch.tensor(stack([s.dt for s in seqs], n - 1)),
-        quat=torch.tensor(stack([s.gt_quat for s in seqs], n)),
-        valid=torch.tensor(stack([s.gt_valid[:m] for s, m in zip(seqs, lengths)], n)),
-        max_start=torch.tensor([m - cfg.window for m in lengths]), lengths=lengths,
-        mine=torch.arange(len(seqs)) if rank is None else torch.arange(rank, len(seqs),
-                                                                       cfg.workers))
+        imu=torch.tensor(stack([s.imu for s in held], n), dtype=torch.float32),
+        dt=torch.tensor(stack([s.dt for s in held], n - 1)),
+        quat=torch.tensor(stack([s.gt_quat for s in held], n)),
+        valid=torch.tensor(stack([s.gt_valid[:m] for s, m in zip(held, held_lengths)], n)),
+        max_start=torch.tensor([m - cfg.window for m in lengths]), mine=mine)
 
 
 def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.Tensor, ...]:
@@ -171,7 +177,7 @@ def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.T
     The draws are made for every sequence, in one order, whatever the process count:
     the batch of a data-parallel run is that of a one-process run.
     """
-    s, w = split.imu.shape[0], cfg.window
+    s, w = len(split.max_start), cfg.window
     n0 = (torch.rand(s, generator=gen, dtype=torch.float64) * split.max_start).long()
     noise_std = torch.tensor([cfg.gyro_noise] * 3 + [cfg.accel_noise] * 3)
     bias_max = torch.tensor([cfg.gyro_bias] * 3 + [cfg.accel_bias] * 3)
@@ -179,7 +185,7 @@ def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.T
     noise = noise_std * torch.randn((s, w, 6), generator=gen)
     mine = split.mine
     idx = n0[mine, None] + torch.arange(w + 1)[None]              # (S_mine, W + 1)
-    rows = mine[:, None]
+    rows = torch.arange(len(mine))[:, None]
     u = split.imu[rows, idx[:, :-1]] + noise[mine] + bias[mine]    # (S_mine, W, 6)
     return u, split.dt[rows, idx[:, :-1]], split.quat[rows, idx], split.valid[rows, idx]
 
@@ -192,8 +198,10 @@ def build_model(cfg: TrainConfig, seqs: list[Sequence],
     """Return the network, the training split with this process's rows, its generator."""
     model = GyroNet(cfg.model_config())
     split = training_split(seqs, cfg, rank)
-    # the samples windows are drawn from, without the padding of shorter sequences
-    flat = torch.cat([row[:m] for row, m in zip(split.imu, split.lengths)])
+    # every sequence's samples windows are drawn from (not the padding of shorter ones)
+    flat = torch.tensor(np.concatenate([s.imu[:m] for s, m in
+                                        zip(seqs, window_lengths(seqs, cfg))]),
+                        dtype=torch.float32)
     model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
     model.to(cfg.device)
     if cfg.workers > 1:

@@ -38,7 +38,8 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
 - RATE_RUN consecutive stamp intervals more than ``rate_tolerance`` off the model's
   period (gaps included: a stream slower than the gap limit is all gaps) make
   :attr:`rate_suspect` true until an interval is on time again: the node withholds its
-  attitudes from that sample on, without waiting for its rate check.
+  corrections, attitudes and orientations from that sample on, without waiting for its
+  rate check (and process-bag does not write them).
 """
 
 from __future__ import annotations

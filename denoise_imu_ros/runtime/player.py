@@ -127,7 +127,7 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,
     except InvalidTopicNameException as err:
         raise DenoiseError(f'--topic {topic!r}: {" ".join(str(err).split()[:12])}') from err
     rclpy.init()
-    player, count, interrupted = None, 0, False
+    player, count, interrupted, where = None, 0, False, topic
     try:
         player = Player(messages, topic=topic, rate=rate, clock=clock)
         where = player.resolve_topic_name(topic)
@@ -136,7 +136,8 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,
         if not player.wait_for_subscribers(timeout_s=wait_s):
             player.get_logger().warning(f'no subscriber on {where} after {wait_s:g} s; '
                                         'playing anyway')
-        count = sum(1 for _ in player.play())
+        for _ in player.play():
+            count += 1
     except KeyboardInterrupt:  # Ctrl-C: after the clean-up, the command's one line and 130
         interrupted = True
     except ExternalShutdownException:

@@ -181,10 +181,10 @@ def _write_outputs(wr: Writer, topics: tuple[Any, Any, Any], stamp: int, msg: An
                    fixed_frame: str) -> None:
     """Write one sample's corrected IMU, orientation and attitude at ``stamp``, as the node."""
     corr, fused, att = topics
-    corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov, accel_cov=res.accel_cov)
-    wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
     if res.rate_suspect:  # what the node withholds is not written either (node.py)
         return
+    corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov, accel_cov=res.accel_cov)
+    wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
     oriented = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov, res.orientation, fused_cov,
                                   res.accel_cov)
     wr.write(fused, stamp, TYPESTORE.serialize_cdr(oriented, IMU_TYPE))

@@ -41,11 +41,16 @@ def test_a_random_walk_too_slow_to_resolve_is_an_upper_bound_not_zero():
     assert yaml.safe_load(snippet)['gyroscope_random_walk'] > 0
     assert 'an upper bound: the recordings are too short to resolve it' in snippet
     # pooled over recordings: a resolved figure wins over bounds (each above the IMU's K)
-    resolved = dict(fig, gyroscope_random_walk=3e-5, random_walk_is_bound=False)
+    resolved = dict(fig, gyroscope_random_walk=3e-5, random_walk_is_bound=False,
+                    random_walk_resolved=3e-5)
     loose = dict(fig, gyroscope_random_walk=9e-5)
     both = pooled({'a': {'corrected': {'figures': loose}},
                    'b': {'corrected': {'figures': resolved}}})['corrected']
     assert both['gyroscope_random_walk'] == 3e-5 and not both['random_walk_is_bound']
+    # one axis resolved under another's looser bound: the resolved one still counts
+    mixed = dict(fig, gyroscope_random_walk=9e-5, random_walk_resolved=2e-5)
+    assert pooled({'a': {'corrected': {'figures': mixed}}})['corrected'][
+        'gyroscope_random_walk'] == 2e-5
     bounds = pooled({'a': {'corrected': {'figures': loose}},
                      'b': {'corrected': {'figures': fig}}})['corrected']
     assert bounds['random_walk_is_bound'] and bounds['gyroscope_random_walk'] == min(

@@ -48,6 +48,36 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     assert bags['/imu/data'][0][-9] > 0  # orientation provided (REP-145)
 
 
+def test_process_bag_withholds_what_the_node_withholds_on_a_jittered_stretch(
+        harness, model_file, tmp_path):
+    """Stamps 4.6 / 5.4 ms apart for a while: the median rate passes, the samples are suspect."""
+    from denoise_imu_ros.data.bags import imu_message, IMU_TYPE, TYPESTORE
+    from denoise_imu_ros.data.load import load_imu
+    from helpers import imu_msg
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag2 import Writer
+    rec = load_imu(SAMPLE)
+    steps = np.full(800, 5_000_000)
+    steps[400:460] += np.where(np.arange(60) % 2, 400_000, -400_000)
+    stamps = rec.imu_stamp_ns[0] + np.concatenate([[0], np.cumsum(steps[1:])])
+    with Writer(tmp_path / 'jittered', version=9) as w:
+        conn = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        for t, row in zip(stamps, rec.imu):
+            w.write(conn, int(t), TYPESTORE.serialize_cdr(
+                imu_message(int(t), row[:3], row[3:]), IMU_TYPE))
+    assert main(['process-bag', str(tmp_path / 'jittered'), str(tmp_path / 'out'),
+                 '--model', str(model_file)]) == 0
+    with AnyReader([tmp_path / 'out']) as reader:
+        written = {c.topic: sorted(t for _, t, _ in reader.messages(connections=[c]))
+                   for c in reader.connections}
+    h = harness()
+    h.send([imu_msg(t, r[:3], r[3:]) for t, r in zip(stamps, rec.imu)])
+    assert h.node.corrected_withheld > 40  # the stretch is suspect
+    published = [m.header.stamp.sec * 10**9 + m.header.stamp.nanosec for m in h.corrected]
+    assert written['/imu/corrected'] == published
+    assert len(written['/imu/data']) == len(h.fused)
+
+
 def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path, model_file):
     from rosbags.highlevel import AnyReader
     path = write_ros1_bag(tmp_path / 'in.bag')
