@@ -138,7 +138,7 @@ class Split:
 
 
 def window_lengths(seqs: list[Sequence], cfg: TrainConfig) -> list[int]:
-    """Samples windows may be drawn from, per sequence: its head, or all of it."""
+    """Return how many samples windows may be drawn from, per sequence: its head, or all."""
     head = cfg.window + cfg.max_offset  # the window may end at sample head - 1
     return [len(s) if cfg.whole_sequences else head for s in seqs]
 
