@@ -111,8 +111,8 @@ def _check_writable(folder: str | Path | None) -> None:
 
 
 def _crossval(args: argparse.Namespace) -> None:
-    from .core.modelfile import add_metadata
-    from .evaluation.crossval import crossval
+    from .core.modelfile import add_metadata, read_model_file
+    from .evaluation.crossval import attach_mismatches, crossval
     from .evaluation.reports import crossval_table
     report = crossval(args.config, args.folds, args.out, progress=not args.quiet,
                       only_fold=args.fold, seeds=args.seeds, seed=args.seed, data=args.data,
@@ -125,6 +125,9 @@ def _crossval(args: argparse.Namespace) -> None:
         return
     sys.stdout.write(crossval_table(report))
     for path in args.attach or []:
+        for why in attach_mismatches(report, read_model_file(path).meta):
+            print(f'denoise-imu crossval: warning: {path}: the verdict stored is not that of '
+                  f'how this model was trained: {why}', file=sys.stderr)
         add_metadata(path, crossval=report)
         print(f'stored the cross-recording figures in {path}')
 

@@ -128,6 +128,24 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     return report
 
 
+def attach_mismatches(report: dict[str, Any], meta: dict[str, Any]) -> list[str]:
+    """
+    Return what makes a cross-recording report not that of a model's own training.
+
+    The folds must hold out the model's training recordings and train as long as it did:
+    folds of a shortened recipe (``--steps``) judge a network that was never shipped.
+    """
+    why = []
+    held_out = sorted(name for fold in report.get('folds', []) for name in fold)
+    trained_on = sorted(meta.get('train_sequences') or [])
+    if trained_on and held_out != trained_on:
+        why.append(f'its folds hold out {held_out}, the model was trained on {trained_on}')
+    steps = (meta.get('train_config') or {}).get('steps')
+    if steps is not None and report.get('steps') not in (None, steps):
+        why.append(f'its folds trained {report["steps"]} steps, the model {steps}')
+    return why
+
+
 def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
                  progress: bool) -> tuple[Any, Any]:
     """Return a fold's network and calibration: from ``folder`` if there, else trained."""

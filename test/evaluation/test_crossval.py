@@ -6,7 +6,7 @@ import json
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import TrainingError
-from denoise_imu_ros.evaluation.crossval import folds, summarize
+from denoise_imu_ros.evaluation.crossval import attach_mismatches, folds, summarize
 from denoise_imu_ros.learn.checkpoint import load_model
 from helpers import write_asl
 import pytest
@@ -42,6 +42,16 @@ def test_verdict_follows_the_figures():
     plain = summarize({'a': _figures(1.2, 3.0, 1.0), 'b': _figures(1.1, 3.0, 1.0)})
     assert plain['verdict'].startswith('the network does not beat plain integration')
     assert plain['verdict'].endswith('deploy no correction') and plain['deploy'] == 'none'
+
+
+def test_attaching_a_report_of_other_recordings_or_a_shorter_training_is_named():
+    report = {'folds': [['b'], ['a']], 'steps': 30}
+    assert attach_mismatches(report, {'train_sequences': ['a', 'b'],
+                                      'train_config': {'steps': 30}}) == []
+    assert attach_mismatches(report, {'train_sequences': ['a', 'c'],
+                                      'train_config': {'steps': 1800}}) == [
+        "its folds hold out ['a', 'b'], the model was trained on ['a', 'c']",
+        'its folds trained 30 steps, the model 1800']
 
 
 def test_crossval_command_trains_folds_scores_and_stores_the_report(
