@@ -114,6 +114,14 @@ def _crossval(args: argparse.Namespace) -> None:
     from .core.modelfile import add_metadata, read_model_file
     from .evaluation.crossval import attach_mismatches, crossval
     from .evaluation.reports import crossval_table
+    from .learn.config import load_config
+    recipe = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps)
+    for path in args.attach or []:  # before the folds train, not after
+        why = attach_mismatches({'folds': [recipe.sequences], 'steps': recipe.steps},
+                                read_model_file(path).meta)
+        if why:
+            raise DenoiseError(f'--attach {path}: this cross-validation is not of how that '
+                               f'model was trained ({"; ".join(why)})')
     report = crossval(args.config, args.folds, args.out, progress=not args.quiet,
                       only_fold=args.fold, seeds=args.seeds, seed=args.seed, data=args.data,
                       steps=args.steps, workers=args.workers, device=args.device)
@@ -125,9 +133,6 @@ def _crossval(args: argparse.Namespace) -> None:
         return
     sys.stdout.write(crossval_table(report))
     for path in args.attach or []:
-        for why in attach_mismatches(report, read_model_file(path).meta):
-            print(f'denoise-imu crossval: warning: {path}: the verdict stored is not that of '
-                  f'how this model was trained: {why}', file=sys.stderr)
         add_metadata(path, crossval=report)
         print(f'stored the cross-recording figures in {path}')
 

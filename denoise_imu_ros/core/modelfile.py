@@ -79,7 +79,7 @@ def gyro_covariance(loaded: Described, stddev: float = -1.0) -> list[float]:
     Diagonal, from ``stddev`` (rad/s) when >= 0, else from the per-axis residual std the
     model measured on its validation data (zero if the file has none).
     """
-    std = loaded.meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3)
+    std = (loaded.meta.get('validation') or {}).get('gyro_residual_std', [0.0] * 3)
     std = [stddev] * 3 if stddev >= 0 else [float(v) for v in std]
     return [std[i] ** 2 if i == j else 0.0 for i in range(3) for j in range(3)]
 
@@ -108,10 +108,11 @@ def training_span(meta: dict[str, Any]) -> int | None:
 
     The recipe draws its windows from the first ``window + max_offset`` samples of every
     training recording; what follows is its validation tail. None when the file does not
-    say (an older or hand-made file).
+    say (an older or hand-made file), or when it drew windows from whole recordings
+    (``whole_sequences``: no sample of them is unseen).
     """
     cfg = meta.get('train_config')
-    if not isinstance(cfg, dict) or 'window' not in cfg:
+    if not isinstance(cfg, dict) or 'window' not in cfg or cfg.get('whole_sequences'):
         return None
     return int(cfg['window']) + int(cfg.get('max_offset', 0))
 
@@ -246,10 +247,14 @@ def _check_meta(meta: dict[str, Any], path: Path) -> None:
     if rate is not None and not (number(rate) and 0 < rate <= MAX_RATE_HZ):
         raise ModelFileError(f'{path}: inconsistent model file (sample_rate_hz {rate!r} is '
                              f'not a rate from 0 to {MAX_RATE_HZ:g} Hz)')
-    validation = meta.get('validation', {})
-    std = validation.get('gyro_residual_std') if isinstance(validation, dict) else None
-    if not isinstance(validation, dict) or (std is not None and not (
+    for key in ('train_config', 'validation'):
+        if meta.get(key) is not None and not isinstance(meta[key], dict):
+            raise ModelFileError(f'{path}: inconsistent model file ({key} {meta[key]!r} is '
+                                 'not a mapping)')
+    validation = meta.get('validation') or {}
+    std = validation.get('gyro_residual_std', [])
+    if 'gyro_residual_std' in validation and not (
             isinstance(std, list) and len(std) == 3 and all(number(v) and v >= 0
-                                                            for v in std))):
+                                                            for v in std)):
         raise ModelFileError(f'{path}: inconsistent model file (validation.gyro_residual_std '
                              f'{std!r} is not three non-negative numbers)')

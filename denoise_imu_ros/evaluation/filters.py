@@ -27,6 +27,7 @@ used. Scores follow :func:`denoise_imu_ros.core.metrics.fused_errors`: yaw align
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 from typing import Any
 
 import ahrs
@@ -34,10 +35,10 @@ import imufusion
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..core.errors import DatasetError
+from ..core.errors import DatasetError, ModelFileError
 from ..core.limits import GRAVITY_M_S2
 from ..core.metrics import fused_errors, FusedErrors
-from ..core.modelfile import read_model_file, training_span
+from ..core.modelfile import read_model_file, sample_rate, training_span
 from ..core.records import Sequence
 from ..core.rotation import from_gravity
 from ..data.load import load_sequence
@@ -84,15 +85,24 @@ class Filter:
                 'accel_bias_m_s2': list(self.accel_bias_m_s2)}
 
     @classmethod
-    def from_dict(cls, stored: dict[str, Any]) -> Filter:
-        """Rebuild a filter from :meth:`as_dict`'s mapping."""
-        if stored.get('filter', 'vqf') == 'vqf':
-            settings = FusionSettings(**stored.get('settings', {}))
-            return cls('vqf', settings.tau_acc_s, settings.bias_estimation,
-                       accel_bias_m_s2=settings.accel_bias_m_s2)
-        bias = FusionSettings(accel_bias_m_s2=stored.get('accel_bias_m_s2', NO_BIAS))
-        return cls(stored['filter'], gain=float(stored['gain']),
-                   accel_bias_m_s2=bias.accel_bias_m_s2)
+    def from_dict(cls, stored: Any, where: str = 'model file') -> Filter:
+        """Rebuild a filter from :meth:`as_dict`'s mapping (a model file's: checked)."""
+        try:
+            kind = stored.get('filter', 'vqf')
+            if kind == 'vqf':
+                settings = FusionSettings(**stored.get('settings', {}))
+                return cls('vqf', settings.tau_acc_s, settings.bias_estimation,
+                           accel_bias_m_s2=settings.accel_bias_m_s2)
+            if kind not in LABELS:
+                raise ValueError(f'unknown filter {kind!r}')
+            gain = float(stored['gain'])
+            if not (math.isfinite(gain) and gain >= 0):
+                raise ValueError(f'gain {gain!r}')
+            bias = FusionSettings(accel_bias_m_s2=stored.get('accel_bias_m_s2', NO_BIAS))
+        except (AttributeError, KeyError, TypeError, ValueError) as err:
+            raise ModelFileError(f'{where}: inconsistent filter settings {stored!r} '
+                                 f'({err})') from err
+        return cls(kind, gain=gain, accel_bias_m_s2=bias.accel_bias_m_s2)
 
 
 def grid(kind: str, accel_bias: tuple[float, float, float] | None = None) -> list[Filter]:
@@ -245,6 +255,9 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
     names = net.meta.get('train_sequences') or []
     folder = data or (net.meta.get('run') or {}).get('data')
     start = training_span(net.meta)
+    if (net.meta.get('train_config') or {}).get('whole_sequences'):
+        raise DatasetError(f'{net.path}: trained on whole recordings (whole_sequences): it '
+                           'has no validation tail to choose filter settings on')
     if not names or folder is None or start is None:
         raise DatasetError(f'{net.path}: the model file does not name its training '
                            'recordings, their folder and its window (pass --data)')
@@ -270,7 +283,7 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
         print('accelerometer bias from the poses before the tails: ' + (
             'none usable' if fitted is None else
             f'{np.round(fitted[0], 4).tolist()} m/s^2 ({fitted[1]} samples)'), flush=True)
-    report = tune(tails, gyros, float(net.meta['sample_rate_hz']), KINDS, bias)
+    report = tune(tails, gyros, sample_rate(net), KINDS, bias)
     return {'chosen_on': f'validation tails of {", ".join(names)} (from sample {start} on)',
             'accel_bias': None if fitted is None else {
                 'm_s2': list(bias), 'samples': fitted[1],
@@ -323,7 +336,7 @@ def eval_filters(net_meta: dict[str, Any], calib_meta: dict[str, Any] | None
 
     def chosen(source: str, kind: str) -> Filter:
         if f'{source} {kind}' in stored:
-            return Filter.from_dict(stored[f'{source} {kind}'])
+            return Filter.from_dict(stored[f'{source} {kind}'], f'fusion.filters.{source} {kind}')
         return DEFAULTS.get(kind, Filter('vqf'))
 
     def own(meta: dict[str, Any]) -> Filter:  # a model file's settings for its own gyro

@@ -46,6 +46,13 @@ def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:
                                           for k, v in model.state_dict().items()}, meta)
 
 
+def _recipe(meta: dict[str, Any]) -> dict[str, Any]:
+    """Return a member's dataset and recipe, less what trainings of one recipe differ in."""
+    cfg = {k: v for k, v in (meta.get('train_config') or {}).items()
+           if k not in ('seed', 'sequences')}
+    return cfg | ({'dataset': meta['dataset']} if meta.get('dataset') else {})
+
+
 def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
     """
     Write one model file averaging the outputs of trained model files (see model.merge).
@@ -67,16 +74,23 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
     except ValueError as err:
         raise ModelFileError(f'cannot average {", ".join(map(str, specs))}: {err}') from err
     first = members[0].meta
-    residual = np.mean([m.meta.get('validation', {}).get('gyro_residual_std', [0.0] * 3)
-                        for m in members], axis=0)
+    for m in members[1:]:  # the file describes every member with the first one's recipe
+        differ = sorted(k for k in set(_recipe(first)) & set(_recipe(m.meta))
+                        if _recipe(first)[k] != _recipe(m.meta)[k])
+        if differ:
+            raise ModelFileError(f'ensemble members {members[0].path} and {m.path} are not '
+                                 f'trainings of one recipe (they differ in {", ".join(differ)})')
+    stds = [(m.meta.get('validation') or {}).get('gyro_residual_std') for m in members]
+    residual = (np.mean(stds, axis=0).tolist() if all(v is not None for v in stds)
+                else None)  # a member that measured none: no figure, not a zero in the mean
     meta = {
         'dataset': first.get('dataset'), 'sample_rate_hz': rate,
         # every member's (fold models trained on different ones): what eval warns about
         'train_sequences': list(dict.fromkeys(
             s for m in members for s in m.meta.get('train_sequences') or [])) or None,
         'train_config': first.get('train_config'),
-        'validation': {'gyro_residual_std': residual.tolist()},
-        'members': [{'file': str(m.path), 'seed': m.meta.get('train_config', {}).get('seed'),
+        'validation': {} if residual is None else {'gyro_residual_std': residual},
+        'members': [{'file': str(m.path), 'seed': (m.meta.get('train_config') or {}).get('seed'),
                      'validation': m.meta.get('validation'),
                      'code_version': m.meta.get('code_version')} for m in members],
         'code_version': code_version(),

@@ -54,6 +54,22 @@ def test_attaching_a_report_of_other_recordings_or_a_shorter_training_is_named()
         'its folds trained 30 steps, the model 1800']
 
 
+def test_crossval_refuses_to_attach_to_a_model_of_another_training_before_training(
+        tmp_path, capsys):
+    from helpers import write_untrained_model
+    recipe = {'dataset': 'synthetic', 'data': str(tmp_path), 'sequences': ['rec0', 'rec1'],
+              'window': 1024, 'steps': 1800}
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
+    model = write_untrained_model(tmp_path / 'm.safetensors', {
+        'sample_rate_hz': 200.0, 'train_sequences': ['rec0', 'rec1'],
+        'train_config': {'steps': 1800}})
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--steps', '30', '--quiet',
+                 '--attach', str(model)]) == 1  # the recordings do not even exist: not read
+    err = capsys.readouterr().err
+    assert 'this cross-validation is not of how that model was trained (its folds trained ' \
+        '30 steps, the model 1800)' in err
+
+
 def test_crossval_command_trains_folds_scores_and_stores_the_report(
         tmp_path, model_file, capsys):
     data = tmp_path / 'data'

@@ -120,3 +120,15 @@ def test_every_filter_removes_the_stored_accelerometer_bias(flt):
     assert 'accel bias removed' in with_bias.label and 'accel' not in flt.label
     np.testing.assert_allclose(run(with_bias, gyro, seq.imu[:, 3:] + bias, 200.0),
                                run(flt, gyro, seq.imu[:, 3:], 200.0), atol=1e-9)
+
+
+@pytest.mark.parametrize('stored, message', [
+    ({'filter': 'vqf', 'settings': {'tau_acc_s': -1}}, 'tau_acc_s'),
+    ({'filter': 'kalman', 'gain': 0.1}, "unknown filter 'kalman'"),
+    ({'filter': 'madgwick'}, "'gain'"),
+])
+def test_stored_filter_settings_out_of_range_are_one_line(stored, message):
+    from denoise_imu_ros.core.errors import ModelFileError
+    from denoise_imu_ros.evaluation.filters import Filter
+    with pytest.raises(ModelFileError, match=f'^fusion.filters.x: inconsistent .*{message}'):
+        Filter.from_dict(stored, 'fusion.filters.x')

@@ -6,7 +6,7 @@ import json
 
 from denoise_imu_ros.core.architecture import ModelConfig
 from denoise_imu_ros.core.errors import ModelFileError
-from denoise_imu_ros.learn.checkpoint import load_model, save_model
+from denoise_imu_ros.learn.checkpoint import load_model, save_ensemble, save_model
 from denoise_imu_ros.learn.model import GyroNet
 import numpy as np
 import pytest
@@ -116,6 +116,8 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
     mean = (correct_gyro(load_model(model_file).model, u) + correct_gyro(other, u)) / 2
     np.testing.assert_allclose(correct_gyro(load_model(tmp_path / 'x.safetensors').model, u),
                                mean, rtol=0, atol=1e-6)
+    # a member without a residual figure: none stored, not a zero in the mean
+    assert load_model(tmp_path / 'x.safetensors').meta['validation'] == {}
     # another architecture cannot be averaged in
     save_model(tmp_path / 'd.safetensors', GyroNet(ModelConfig(channels=(8, 16, 32, 64))),
                {'sample_rate_hz': 200.0})
@@ -123,7 +125,6 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
                  '--out', str(tmp_path / 'y.safetensors')]) == 1
     assert not (tmp_path / 'y.safetensors').exists()
     # nor a model of another rate (a NaN rate is refused on reading already)
-    from denoise_imu_ros.learn.checkpoint import save_ensemble
     save_model(tmp_path / 'e.safetensors', untrained_model(), {'sample_rate_hz': 100.0})
     with pytest.raises(ModelFileError, match='trained at different rates: 200.00 Hz, 100.00 Hz$'):
         save_ensemble(tmp_path / 'z.safetensors', [model_file, tmp_path / 'e.safetensors'])
@@ -134,6 +135,15 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
     union = save_ensemble(tmp_path / 'u.safetensors', [tmp_path / 'f1.safetensors',
                                                        tmp_path / 'f2.safetensors'])
     assert union.meta['train_sequences'] == ['a', 'b', 'c']
+    # trainings of two recipes: the file could describe only the first one's
+    save_model(tmp_path / 'r1.safetensors', second, {
+        'dataset': 'tumvi', 'sample_rate_hz': 200.0, 'train_config': {'seed': 1, 'window': 4000}})
+    save_model(tmp_path / 'r2.safetensors', second, {
+        'dataset': 'test', 'sample_rate_hz': 200.0, 'train_config': {'seed': 2, 'window': 16000}})
+    with pytest.raises(ModelFileError, match='not trainings of one recipe .they differ in '
+                                             r'dataset, window\)'):
+        save_ensemble(tmp_path / 'r.safetensors', [str(tmp_path / 'r1.safetensors'),
+                                                   str(tmp_path / 'r2.safetensors')])
 
 
 def test_model_files_are_readable_by_everyone(tmp_path):
@@ -155,7 +165,9 @@ def test_copied_metadata_never_overrides_the_architecture(tmp_path):
     ({'sample_rate_hz': 0}, 'sample_rate_hz 0 is not a rate from 0 to 100000 Hz'),
     ({'sample_rate_hz': 1e20}, 'sample_rate_hz 1e[+]20 is not a rate'),  # no deque of 2e20
     ({'validation': {'gyro_residual_std': ['a', 1, 2]}}, 'gyro_residual_std'),
-    ({'validation': [1, 2]}, 'gyro_residual_std'),
+    ({'validation': [1, 2]}, r'validation \[1, 2\] is not a mapping'),
+    ({'validation': {'gyro_residual_std': None}}, 'gyro_residual_std None is not three'),
+    ({'train_config': 3}, 'train_config 3 is not a mapping'),
 ])
 def test_malformed_metadata_is_refused_on_reading(tmp_path, meta, message):
     save_model(tmp_path / 'm.safetensors', _model().eval(), meta)
@@ -221,3 +233,13 @@ def test_a_negative_batchnorm_variance_is_refused_on_reading(tmp_path):
     write_model_file(tmp_path / 'a.safetensors', model.config, arrays, {})
     with pytest.raises(ModelFileError, match='negative BatchNorm variance'):
         read_model_file(tmp_path / 'a.safetensors')
+
+
+def test_a_model_trained_on_whole_recordings_has_no_unseen_tail():
+    from denoise_imu_ros.core.modelfile import scored_on_training_samples, training_span
+    head = {'train_config': {'window': 16000, 'max_offset': 32}, 'train_sequences': ['a']}
+    whole = {'train_config': dict(head['train_config'], whole_sequences=True),
+             'train_sequences': ['a']}
+    assert training_span(head) == 16032 and training_span(whole) is None
+    assert scored_on_training_samples(head, ['a'], 16032) == []
+    assert scored_on_training_samples(whole, ['a'], 16032) == ['a']
