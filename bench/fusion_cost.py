@@ -68,8 +68,9 @@ def main() -> None:
     cpus = sorted(os.sched_getaffinity(0))
     if args.pin and len(cpus) < 2:
         sys.exit('fusion_cost: --pin needs two CPUs')
-    if args.pin:
-        os.sched_setaffinity(0, cpus[:1])  # before rclpy starts Fast DDS's threads
+    if args.pin:  # every thread running already (numpy's BLAS pool), and those to come
+        for tid in os.listdir('/proc/self/task'):
+            os.sched_setaffinity(int(tid), cpus[:1])
     rec = load_imu(DATA)
     types = msgs.rclpy_types()
     messages = [msgs.imu(types, msgs.header(types, int(t), 'imu0'), r[:3], r[3:])

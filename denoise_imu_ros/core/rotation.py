@@ -44,8 +44,13 @@ def exp(rx: float, ry: float, rz: float) -> Quat:
     return rx * k, ry * k, rz * k, math.cos(0.5 * angle)
 
 
-def _hamilton(p: Any, q: Any) -> tuple[Any, Any, Any, Any]:
-    """Return the Hamilton product's components, of floats or of arrays alike."""
+def hamilton(p: Any, q: Any) -> tuple[Any, Any, Any, Any]:
+    """
+    Return the Hamilton product's components, of floats or of arrays alike.
+
+    Not renormalised: the same operations on floats (online) and on arrays (a batch)
+    give the same numbers bit for bit.
+    """
     px, py, pz, pw = p
     qx, qy, qz, qw = q
     return (pw * qx + px * qw + py * qz - pz * qy,
@@ -56,7 +61,7 @@ def _hamilton(p: Any, q: Any) -> tuple[Any, Any, Any, Any]:
 
 def multiply(p: Quat, q: Quat) -> Quat:
     """Hamilton product p q (rotation q, then p), renormalised against drift."""
-    x, y, z, w = _hamilton(p, q)
+    x, y, z, w = hamilton(p, q)
     n = math.sqrt(x * x + y * y + z * z + w * w)
     return x / n, y / n, z / n, w / n
 
@@ -68,7 +73,7 @@ def conjugate_arrays(q: np.ndarray) -> np.ndarray:
 
 def multiply_arrays(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Products p q of (..., 4) xyzw quaternion arrays (broadcast), renormalised."""
-    out = np.stack(_hamilton(np.moveaxis(p, -1, 0), np.moveaxis(q, -1, 0)), axis=-1)
+    out = np.stack(hamilton(np.moveaxis(p, -1, 0), np.moveaxis(q, -1, 0)), axis=-1)
     return out / np.linalg.norm(out, axis=-1, keepdims=True)
 
 
@@ -79,3 +84,14 @@ def from_gravity(ax: float, ay: float, az: float) -> Quat:
     cr, sr = math.cos(0.5 * roll), math.sin(0.5 * roll)
     cp, sp = math.cos(0.5 * pitch), math.sin(0.5 * pitch)
     return sr * cp, cr * sp, -sr * sp, cr * cp  # Rz(0) Ry(pitch) Rx(roll)
+
+
+def level_heading(q: Any) -> Quat:
+    """
+    Return the turn about z that gives the xyzw ``q`` yaw 0, as :func:`from_gravity`'s.
+
+    Its product with ``q`` has q's tilt and the ZYX yaw 0 (pitch within +-90 deg).
+    """
+    x, y, z, w = (float(v) for v in q)
+    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+    return 0.0, 0.0, math.sin(-0.5 * yaw), math.cos(-0.5 * yaw)

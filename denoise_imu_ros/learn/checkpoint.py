@@ -74,9 +74,10 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
     except ValueError as err:
         raise ModelFileError(f'cannot average {", ".join(map(str, specs))}: {err}') from err
     first = members[0].meta
+    recipe = _recipe(first)
     for m in members[1:]:  # the file describes every member with the first one's recipe
-        differ = sorted(k for k in set(_recipe(first)) & set(_recipe(m.meta))
-                        if _recipe(first)[k] != _recipe(m.meta)[k])
+        other = _recipe(m.meta)
+        differ = sorted(k for k in set(recipe) & set(other) if recipe[k] != other[k])
         if differ:
             raise ModelFileError(f'ensemble members {members[0].path} and {m.path} are not '
                                  f'trainings of one recipe (they differ in {", ".join(differ)})')

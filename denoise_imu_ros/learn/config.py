@@ -37,6 +37,15 @@ OPTIONS = ('seed', 'data', 'steps', 'workers', 'device')  # keys train's options
 DEVICE = re.compile(r'cpu|cuda(:\d+)?')             # the devices training supports
 
 
+class _RecipeLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, reading ``1e-3`` as YAML 1.2 does: a float (1.1: a string)."""
+
+
+_RecipeLoader.add_implicit_resolver(
+    'tag:yaml.org,2002:float', re.compile(r'^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$'),
+    list('-+0123456789.'))
+
+
 @dataclass(frozen=True)
 class LossConfig:
     """Reference values: Huber 0.005 rad, scale 1e6, L16 + 0.5 * L32, skip 5 blocks."""
@@ -179,7 +188,7 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
     wrong type (``steps: 3.7``, ``calibration_only: "no"``) or out of range.
     """
     try:
-        raw = yaml.safe_load(Path(path).read_text(encoding='utf-8'))
+        raw = yaml.load(Path(path).read_text(encoding='utf-8'), Loader=_RecipeLoader)
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
         raise TrainingError(f'{path}: cannot read training config '
                             f'({" ".join(str(err).split())})') from err
@@ -198,8 +207,6 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         """Where a value came from: the command line's option, or the file."""
         return f'--{key.replace("_", "-")}' if key in given and key in OPTIONS else str(path)
     for key, value in raw.items():
-        if 'float' in types[key]:
-            raw[key] = value = _numbers(value)
         if not _is(value, types[key]):
             raise TrainingError(f'{source(key)}: {key} must be {types[key]}, not {value!r}')
         if key in RANGES and value is not None:
@@ -251,17 +258,3 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: swa_start {cfg.swa_start} is after the last step '
                             f'{cfg.steps}')
     return cfg
-
-
-def _numbers(value: Any) -> Any:
-    """
-    Read YAML 1.1's strings that are numbers (``1e-3``, without a point) as floats.
-
-    PyYAML takes ``1e-3`` for a string; a recipe author means the number.
-    """
-    if isinstance(value, list):
-        return [_numbers(v) for v in value]
-    if isinstance(value, str) and re.fullmatch(r'[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?',
-                                               value.strip()):
-        return float(value)
-    return value

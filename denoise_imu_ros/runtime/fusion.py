@@ -50,6 +50,7 @@ from vqf import VQF
 
 from ..core.errors import ModelFileError
 from ..core.limits import MAX_GAP_FACTOR
+from ..core.rotation import hamilton, level_heading, Quat
 
 
 MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
@@ -109,24 +110,6 @@ def _xyzw(wxyz: np.ndarray) -> np.ndarray:
     return wxyz.take(_XYZW, axis=-1)
 
 
-def level_heading(first: Any) -> tuple[float, float]:
-    """Return cos and sin of half the turn about z that gives the xyzw ``first`` yaw 0."""
-    x, y, z, w = (float(v) for v in first)
-    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    return math.cos(-0.5 * yaw), math.sin(-0.5 * yaw)
-
-
-def turn_heading(x: Any, y: Any, z: Any, w: Any, c: float, s: float) -> list[Any]:
-    """
-    Rz ⊗ q for the xyzw components of q, Rz the turn (0, 0, s, c) about the earth's z.
-
-    One expression for the online filter (floats: numpy's calls on four values would
-    cost more than the filter) and the batch (arrays): the same IEEE operations in the
-    same order, so the two stay equal bit for bit.
-    """
-    return [c * x - s * y, c * y + s * x, c * z + s * w, c * w - s * z]
-
-
 class GravityFilter:
     """One sample at a time (the node, process-bag); see the module docstring."""
 
@@ -136,7 +119,7 @@ class GravityFilter:
         self._accel_bias = np.array(settings.accel_bias_m_s2)
         # preallocated: this runs on every IMU message
         self._gyro, self._step, self._accel = np.zeros(3), np.empty(3), np.empty(3)
-        self._heading: tuple[float, float] | None = None  # set by the first sample
+        self._heading: Quat | None = None  # the turn to yaw 0, set by the first sample
 
     def reset(self) -> None:
         """Start again: the next sample's accelerometer sets the tilt, yaw 0."""
@@ -154,10 +137,10 @@ class GravityFilter:
         np.multiply(self._gyro, periods, out=self._step)  # the last sample's gyro, 0 at start
         self._vqf.update(self._step, self._accel)
         self._gyro[:] = gyro
-        w, x, y, z = self._vqf.getQuat6D().tolist()
+        w, x, y, z = self._vqf.getQuat6D().tolist()  # floats: numpy on four costs more
         if self._heading is None:
             self._heading = level_heading((x, y, z, w))
-        return np.array(turn_heading(x, y, z, w, *self._heading))
+        return np.array(hamilton(self._heading, (x, y, z, w)))
 
 
 def step_periods(stamp_ns: np.ndarray, rate_hz: float,
@@ -192,7 +175,7 @@ def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
         np.asarray(accel, dtype=np.float64) - np.array(settings.accel_bias_m_s2))['quat6D'])
     if not len(out):
         return out
-    return np.stack(turn_heading(*out.T, *level_heading(out[0])), axis=-1)
+    return np.stack(hamilton(level_heading(out[0]), out.T), axis=-1)  # as update's, on arrays
 
 
 DEFAULT_ORIENTATION_STD_RAD = 0.05  # used when a model file stores no fused-error figures

@@ -343,12 +343,11 @@ class GyroDenoiser(Node):
         fill = min(self._denoiser.engine.samples, self._denoiser.engine.receptive_field)
         silent_s = None if self._last_input is None else time.monotonic() - self._last_input
         stalled = silent_s is not None and silent_s > STALL_S
-        if stalled:  # the last stamps held say nothing of now
-            rate = 0.0
-        else:
+        if not stalled:  # a stalled input's last stamps say nothing of its rate now
             self._rate_error = bool(rate) and (abs(rate / self._model_rate - 1.0)
                                                > self._rate_tolerance)
         if stalled:
+            rate = 0.0
             status.level = DiagnosticStatus.ERROR
             status.message = (f'no input for {silent_s:.1f} s on '
                               f'{self.resolve_topic_name("imu/data_raw")}')

@@ -49,3 +49,11 @@ def test_from_gravity_equals_scipy_euler():
         tilt = Rotation.from_euler('ZYX', [0.0, pitch, roll])
         accel = tilt.inv().apply([0.0, 0.0, 9.81])
         assert _same(rotation.from_gravity(*accel), tilt) < 1e-12
+
+
+def test_level_heading_removes_the_scipy_zyx_yaw_and_keeps_the_tilt():
+    for yaw, pitch, roll in np.random.default_rng(5).uniform(-3.1, 3.1, (100, 3)) * [
+            1.0, 0.45, 1.0]:
+        q = Rotation.from_euler('ZYX', [yaw, pitch, roll])
+        turned = rotation.hamilton(rotation.level_heading(q.as_quat()), q.as_quat())
+        assert _same(turned, Rotation.from_euler('ZYX', [0.0, pitch, roll])) < 1e-12
