@@ -32,6 +32,10 @@ from .core.errors import DenoiseError, OptionError, OutputError
 # convert, init-recipe, correct --engine streaming) never import torch.
 TORCH_COMMANDS = ('train', 'crossval', 'eval', 'ensemble', 'tune-fusion', 'noise')
 NEVER_OVER_A_BAG = 'a bag is never written over: remove it or choose another name'
+REST_BIAS_OPTION = {  # the node's rest_bias parameter, for the offline tools
+    'choices': ('model', 'on', 'off'), 'default': 'model',
+    'help': "remove the gyro's turn-on bias, estimated from stillness, before the model: "
+            "model (as the model was trained, the default), on, off"}
 
 
 def _train(args: argparse.Namespace) -> None:
@@ -207,7 +211,7 @@ def _correct(args: argparse.Namespace) -> None:
     _guard_output(args.output, [args.input, read_model_file(args.model).path], args.overwrite)
     _warn_if_not_recommended(args.model)
     n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic,
-                       engine=args.engine)
+                       engine=args.engine, rest=args.rest_bias)
     print(f'wrote {n} corrected gyro samples to {args.output}')
 
 
@@ -235,7 +239,8 @@ def _process_bag(args: argparse.Namespace) -> None:
     _warn_if_not_recommended(args.model)
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame,
-                         compress=args.compress, namespace=args.namespace)
+                         compress=args.compress, namespace=args.namespace,
+                         rest=args.rest_bias)
     dropped = ', '.join(f'{k} {v}' for k, v in counts.items() if k in DROP_CAUSES)
     rest = ', '.join(f'{k} {v}' for k, v in counts.items() if k not in DROP_CAUSES)
     print(f'wrote {args.output}: {rest}; dropped: {dropped}')
@@ -376,6 +381,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--output', required=True, help='CSV: timestamp_ns,wx,wy,wz')
     p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',
                    help='whole-recording torch network, or the per-sample numpy engine')
+    p.add_argument('--rest-bias', **REST_BIAS_OPTION)
     p.add_argument('--overwrite', action='store_true', help='replace an existing --output')
     p.set_defaults(func=_correct)
 
@@ -392,6 +398,7 @@ def build_parser() -> argparse.ArgumentParser:
                         '/imu/data, /imu/attitude; /denoised: /denoised/imu/corrected, ...)')
     p.add_argument('--compress', action=argparse.BooleanOptionalAction,
                    help='zstd compression (default: as the input bag says it is compressed)')
+    p.add_argument('--rest-bias', **REST_BIAS_OPTION)
     p.set_defaults(func=_process_bag)
 
     p = sub.add_parser('play', parents=[topics],

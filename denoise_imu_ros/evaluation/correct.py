@@ -28,12 +28,20 @@ from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
 from ..core.limits import check_gaps, check_rate, check_units
 from ..core.modelfile import ModelFile, read_model_file
+from ..data import rest_bias
 from ..data.load import load_imu
 from ..runtime.streaming import StreamingCorrector
 
 
-def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch') -> np.ndarray:
-    """Corrected gyro (N, 3) rad/s of raw samples (N, 6) by either engine."""
+def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch',
+                   rest: str = 'model') -> np.ndarray:
+    """
+    Corrected gyro (N, 3) rad/s of raw samples (N, 6) by either engine.
+
+    ``rest`` (``model``, ``on``, ``off``): whether the turn-on bias is removed from the
+    gyro first, as the node's ``rest_bias`` parameter.
+    """
+    imu = rest_bias.model_input(mf.meta, imu, rest, str(mf.path))
     if engine == 'streaming':
         return StreamingCorrector(mf.config, mf.arrays).process(imu)
     from ..learn.checkpoint import load_model  # torch: the batch engine only
@@ -42,7 +50,8 @@ def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch') -> np.
 
 
 def correct_to_csv(model_spec: str, source: str, output: str,
-                   imu_topic: str | None = None, engine: str = 'batch') -> int:
+                   imu_topic: str | None = None, engine: str = 'batch',
+                   rest: str = 'model') -> int:
     """
     Write ``timestamp_ns,wx,wy,wz`` for every IMU sample of an ASL folder or bag.
 
@@ -58,7 +67,7 @@ def correct_to_csv(model_spec: str, source: str, output: str,
     check_rate(rec.imu_stamp_ns, loaded.meta.get('sample_rate_hz'), source)
     check_units(rec.imu, source, loaded.arrays['input_std'])
     check_gaps(rec.imu_stamp_ns, loaded.meta.get('sample_rate_hz'), source)
-    omega = corrected_gyro(loaded, rec.imu, engine)
+    omega = corrected_gyro(loaded, rec.imu, engine, rest)
     with atomic_output(output, overwrite=True) as tmp, open(tmp, 'w') as f:
         f.write('timestamp_ns,wx,wy,wz\n')
         for t, w in zip(rec.imu_stamp_ns, omega):

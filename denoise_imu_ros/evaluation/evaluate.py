@@ -39,6 +39,7 @@ from ..core.metrics import (align_yaw, error_components, sequence_errors,
 from ..core.modelfile import (fitting_note, scored_on_training_samples, shipped_models,
                               training_span)
 from ..core.records import Sequence
+from ..data import rest_bias
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model, LoadedModel
 from ..learn.model import correct_gyro
@@ -60,6 +61,32 @@ def recording_names(sequences: list[str]) -> list[str]:
         raise OptionError(f'--sequences: {", ".join(twice)} given twice (recordings are '
                           'reported by name)')
     return names
+
+
+def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndarray]:
+    """
+    The gyro of every method: raw, rest bias (raw less the turn-on bias), then each model's.
+
+    Each model is fed as it runs online (its rest-bias settings, if it has them). The
+    rest-bias row uses the network's settings, with their prior, or the defaults.
+    """
+    net = models['network']
+    rest = rest_bias.resolve(net.meta, 'on', str(net.path))
+    gyros = {'raw': seq.imu[:, :3],
+             'rest bias': rest_bias.remove_rest_bias(
+                 seq.imu, float(net.meta['sample_rate_hz']), rest)[:, :3]}
+    gyros.update({m: correct_gyro(lm.model, rest_bias.model_input(lm.meta, seq.imu,
+                                                                  where=str(lm.path)))
+                  for m, lm in models.items()})
+    return gyros
+
+
+def rest_note(rest_input: dict[str, bool]) -> str:
+    """Say which models were fed the gyro less its turn-on bias (trained so)."""
+    said = [f'{m}: {"the gyro less its turn-on bias" if on else "the raw gyro"}'
+            for m, on in rest_input.items()]
+    return ('\nRest bias: the raw gyro less its turn-on bias, estimated causally from '
+            'stillness (data/rest_bias.py). Models fed ' + '; '.join(said) + '.\n')
 
 
 def check_inputs(seq: Sequence, loaded: LoadedModel, name: str) -> None:
@@ -111,8 +138,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         check_inputs(seq, loaded, name)
         if start_sample >= len(seq) - 1:
             raise OptionError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')
-        gyros = {'raw': seq.imu[:, :3]}
-        gyros.update({m: correct_gyro(lm.model, seq.imu) for m, lm in models.items()})
+        gyros = gyros_of(seq, models)
         seq = seq.tail(start_sample)
         gyros = {m: g[start_sample:] for m, g in gyros.items()}
         estimates, results[name], fused[name] = {}, {}, {}
@@ -144,7 +170,9 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     fused_average = {m: {k: float(np.mean([fused[s][m][k] for s in fused]))
                          for k in ('aoe_deg', 'tilt_deg', 'aoe_yaw_deg')} for m in rows}
     report = {'model': str(loaded.path), 'model_code_version': loaded.meta.get('code_version'),
-              'baseline': baseline, 'data': str(data), 'start_sample': start_sample,
+              'baseline': baseline,
+              'rest_bias_input': {m: rest_bias.settings_of(lm.meta, str(lm.path)) is not None
+                                  for m, lm in models.items()}, 'data': str(data), 'start_sample': start_sample,
               'training_fit_note': note,
               'sequences': results,
               'average': average,
@@ -162,6 +190,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     write_text(out_dir / 'results.json', jsonio.dumps(report, indent=2))
     table = (eval_table(results, average) + fused_table(fused, fused_average)
              + growth_table(results, fused))
+    table += rest_note(report['rest_bias_input'])
     if start_sample:
         table += f'\nScored from sample {start_sample} on of every recording.\n'
     if note:

@@ -344,7 +344,8 @@ def eval_filters(net_meta: dict[str, Any], calib_meta: dict[str, Any] | None
         return Filter('vqf', settings.tau_acc_s, settings.bias_estimation,
                       accel_bias_m_s2=settings.accel_bias_m_s2)
 
-    rows = {'raw + VQF': ('raw', chosen('raw', 'vqf'))}
+    rows = {'raw + VQF': ('raw', chosen('raw', 'vqf')),
+            'rest bias + VQF': ('rest bias', chosen('raw', 'vqf'))}
     if calib_meta is not None:
         rows['calibrated + VQF'] = ('calibrated', own(calib_meta))
         rows.update({f'calibrated + {LABELS[k]}': ('calibrated', chosen('calibrated', k))

@@ -94,6 +94,10 @@ class TrainConfig:
     gyro_std_deg: list[float] = field(default_factory=lambda: [1.0, 2.0, 5.0])  # sigma_g
     dropout: float = 0.1
     calibration_only: bool = False     # the 12-parameter "calibrated IMU" baseline
+    # True: the model's input gyro is each recording's own gyro less its turn-on bias,
+    # estimated causally from stillness (data/rest_bias.py), in training and wherever
+    # the model runs; what is learnt then holds across power-ons
+    rest_bias: bool = False
     steps: int = 1800                  # one step = one batch of every sequence
     lr: float = 0.01                   # Adam
     weight_decay: float = 0.1          # L2 added to the gradient (not AdamW)

@@ -52,8 +52,10 @@ from ..core.metrics import (increment_residuals, RESIDUAL_BLOCK, sequence_errors
                             trusted_blocks)
 from ..core.modelfile import code_version
 from ..core.records import Sequence
+from ..data import rest_bias
 from ..data.load import load_sequence
 
+WIDE_BIAS_CLIP_DEG_S = 10.0  # the clip that finds a training set's rest biases
 RANK_SEED_STRIDE = 7919  # data-parallel process r draws its dropout masks from seed + r * this
 
 
@@ -117,6 +119,33 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
         seqs.append(seq)
     common_rate({s.name: s.rate_hz for s in seqs}, cfg.data)
     return seqs
+
+
+def remove_rest_bias(cfg: TrainConfig, seqs: list[Sequence]
+                     ) -> tuple[list[Sequence], rest_bias.RestBiasSettings | None]:
+    """
+    With ``cfg.rest_bias``: every sequence's gyro less its causal turn-on bias estimate.
+
+    The estimate starts from a prior, the mean rest bias of the training sequences that
+    are ever still: a recording that starts moving (and a robot that does) is corrected
+    with it until its first stillness, in training as online. The bias clip (the largest
+    bias, and the slowest steady turn taken for motion) is VQF's 2 deg/s, or twice the
+    largest training rest bias where that is more (found with a 10 deg/s clip). Returns
+    the settings the model file records, None without ``cfg.rest_bias``.
+    """
+    if not cfg.rest_bias:
+        return seqs, None
+    rate = float(np.median([s.rate_hz for s in seqs]))
+    settings = rest_bias.RestBiasSettings()
+    prior, _ = rest_bias.nominal_bias(
+        (s.imu for s in seqs), rate,
+        dataclasses.replace(settings, bias_clip_deg_s=WIDE_BIAS_CLIP_DEG_S))
+    if prior is not None:
+        clip = max(settings.bias_clip_deg_s, 2 * math.degrees(max(map(abs, prior))))
+        settings = dataclasses.replace(settings, prior_rad_s=prior, bias_clip_deg_s=clip)
+    seqs = [dataclasses.replace(s, imu=rest_bias.remove_rest_bias(s.imu, rate, settings))
+            for s in seqs]
+    return seqs, settings
 
 
 @dataclass
@@ -288,7 +317,8 @@ class TrainResult:
 
 
 def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[str, Any]],
-            history: list[dict[str, Any]], t_start: float) -> TrainResult:
+            history: list[dict[str, Any]], t_start: float,
+            rest: rest_bias.RestBiasSettings | None) -> TrainResult:
     """Rebuild every candidate as a plain eval-mode network; select one; its metadata."""
     models = {}
     for name, figures in candidates.items():
@@ -301,6 +331,7 @@ def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[s
         'sample_rate_hz': float(np.median([s.rate_hz for s in seqs])),
         'train_sequences': cfg.sequences,
         'train_config': cfg.recipe(),
+        'rest_bias': None if rest is None else rest.to_dict(),
         'pose_alignment': {s.name: s.pose_alignment for s in seqs
                            if s.pose_alignment is not None},
         'run': cfg.run_environment(),
@@ -398,6 +429,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     """Train as process ``rank`` of ``cfg.workers``; the first one returns the result."""
     t_start = time.monotonic()
     _setup_process(cfg, rank)
+    seqs, rest = remove_rest_bias(cfg, seqs)
     model, split, gen = build_model(cfg, seqs, rank)
     optimizer, scheduler, swa = build_optimiser(cfg, model)
     loss_cfg = cfg.loss_config()
@@ -451,4 +483,4 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
         candidates['swa'] = dict(val, step=cfg.steps, state=swa.module.state_dict())
         bar.write(f'SWA from step {cfg.swa_start}: val {val["loss"]:.4g}  '
                   f'val AOE {val["aoe_mean_deg"]:.3f} deg')
-    return _finish(cfg, seqs, candidates, history, t_start)
+    return _finish(cfg, seqs, candidates, history, t_start, rest)

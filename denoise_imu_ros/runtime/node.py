@@ -117,6 +117,10 @@ PARAMETERS = [
         "tilt: 'model' (the one the model file fitted on its training poses, if it chose "
         'to) or off (none).', read_only=True,
         dynamic=True)),
+    ('rest_bias', 'model', _param(
+        "The gyro's turn-on bias, estimated from stillness (at start and later) and removed "
+        "before the model: 'model' (as the model was trained), on or off.", read_only=True,
+        dynamic=True)),
     ('fused_orientation_stddev', -1.0, _param(
         'rad; imu/data orientation covariance diagonal; < 0: the fused errors the model '
         'file stores (0.05 rad without them).', floats=(-1.0, math.pi))),
@@ -144,8 +148,10 @@ class GyroDenoiser(Node):
         loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()
         settings = self._fusion_settings(loaded)  # its accelerometer bias: imu/attitude's too
         fusion = settings if p('publish_fused').value else None
-        self._denoiser = OnlineDenoiser.from_model_file(loaded, fusion,
-                                                        accel_bias=settings.accel_bias_m_s2)
+        rest = self._model_or_switch('rest_bias', (True, False))
+        self._denoiser = OnlineDenoiser.from_model_file(
+            loaded, fusion, 'model' if rest is None else ('on' if rest else 'off'),
+            accel_bias=settings.accel_bias_m_s2)
         self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
         self._not_recommended = deployment_warning(loaded)  # kept as a diagnostics WARN
@@ -379,10 +385,23 @@ class GyroDenoiser(Node):
         values['corrected_withheld'] = str(self.corrected_withheld)
         values['attitude_withheld'] = str(self.attitude_withheld)
         values['fused_withheld'] = str(self.fused_withheld)
+        values.update(self._rest_values())
         status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()
         self._pub_diag.publish(array)
+
+    def _rest_values(self) -> dict[str, str]:
+        """The turn-on bias estimate for /diagnostics: applied, seconds still, value."""
+        rest = self._denoiser.rest
+        if rest is None:
+            return {'rest_bias_applied': 'False'}
+        bias, sigma = rest.estimate()
+        return {'rest_bias_applied': 'True',
+                'rest_bias_seconds_still': f'{rest.seconds_still:.1f}',
+                'rest_bias_source': 'stillness' if rest.still_samples else 'prior',
+                'rest_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
+                'rest_bias_sigma_rad_s': f'{sigma:.6f}'}
 
     def _still_waiting(self) -> None:
         sub = self.resolve_topic_name('imu/data_raw')

@@ -40,6 +40,11 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
   :attr:`rate_suspect` true until an interval is on time again: the node withholds its
   corrections, attitudes and orientations from that sample on, without waiting for its
   rate check (and process-bag does not write them).
+
+With a :class:`~denoise_imu_ros.data.rest_bias.RestBias`, the gyro the model sees is the
+raw gyro less the turn-on bias estimated from stillness up to that sample (the model's
+training input); a full reset starts the estimate again from its prior (another run,
+perhaps another power-on), a gap does not (the same run).
 """
 
 from __future__ import annotations
@@ -56,6 +61,7 @@ from ..core import rotation
 from ..core.limits import in_range, MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import ModelFile, sample_rate
 from ..core.msgs import finite_covariance, imu_fields, UNKNOWN_COVARIANCE
+from ..data import rest_bias
 
 
 class Drop(str, Enum):
@@ -107,6 +113,7 @@ class OnlineDenoiser:
     rate_tolerance: float = RATE_TOLERANCE  # relative interval error of an off-rate stream
     # the accelerometer's constant bias (m/s^2), removed before the initial tilt is read
     accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rest: rest_bias.RestBias | None = None  # the turn-on bias removed before the model
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
          'skipped_input_periods', 'non_finite_covariance'), 0))
@@ -120,19 +127,24 @@ class OnlineDenoiser:
 
     @classmethod
     def from_model_file(cls, model: ModelFile, fusion: FusionSettings | None = None,
-                        **options: Any) -> OnlineDenoiser:
+                        rest_choice: str = 'model', **options: Any) -> OnlineDenoiser:
         """
         Build the pipeline of a model file (node and process-bag): numpy only, no torch.
 
         With ``fusion`` settings, the gravity-aided orientation is computed too, and the
         accelerometer bias they remove is removed from the open-loop attitude's initial
-        tilt as well (unless ``accel_bias`` is given).
+        tilt as well (unless ``accel_bias`` is given). ``rest_choice`` (``model``, ``on``,
+        ``off``) says whether the turn-on bias is estimated and removed
+        (:func:`denoise_imu_ros.data.rest_bias.resolve`).
         """
         rate = sample_rate(model)
         if fusion is not None:
             options.setdefault('accel_bias', fusion.accel_bias_m_s2)
+        settings = rest_bias.resolve(model.meta, rest_choice, str(model.path))
         return cls(StreamingCorrector(model.config, model.arrays), rate,
-                   fusion=None if fusion is None else GravityFilter(rate, fusion), **options)
+                   fusion=None if fusion is None else GravityFilter(rate, fusion),
+                   rest=None if settings is None else rest_bias.RestBias(settings, rate),
+                   **options)
 
     def _count_input_periods(self, interval_ns: int) -> None:
         """Count the periods of the stream's own recent rate that went without a sample."""
@@ -207,6 +219,10 @@ class OnlineDenoiser:
 
         if event is not None:
             self.engine.reset()
+        if self.rest is not None:
+            if event in (Event.START, Event.TIME_JUMP):
+                self.rest.reset()
+            gyro = gyro - self.rest.update(gyro, accel)
         corrected = self.engine.step(np.concatenate([gyro, accel]))
         if not np.isfinite(corrected).all():  # never published: dropped as if lost
             return self._drop(Drop.NON_FINITE_OUTPUT)

@@ -97,7 +97,7 @@ def stamp_order(stamps: np.ndarray, jump_ns: int) -> np.ndarray:
 def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
                 fixed_frame: str = 'odom', compress: bool | None = None,
-                namespace: str = '/') -> dict[str, int]:
+                namespace: str = '/', rest: str = 'model') -> dict[str, int]:
     """
     Copy a bag, add the corrected IMU, orientation and attitude; return the counts.
 
@@ -109,14 +109,14 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     set back starts a new session, :func:`stamp_order`). Copied
     topics keep their recorded QoS; ``compress`` (zstd) defaults to the input's compression.
     The outputs are the node's topics in ``namespace``; a bag that has one already is
-    refused (the two would mix on one topic).
+    refused (the two would mix on one topic). ``rest`` is the node's ``rest_bias``.
     """
     src = Path(src)
     if not src.exists():
         raise DatasetError(f'{src}: bag not found')
     names = output_topics(namespace)
     loaded = read_model_file(model_spec)
-    den = OnlineDenoiser.from_model_file(loaded, settings_of(loaded.meta, loaded.path))
+    den = OnlineDenoiser.from_model_file(loaded, settings_of(loaded.meta, loaded.path), rest)
     cov = np.array(gyro_covariance(loaded))
     fused_cov = np.array(orientation_covariance(loaded.meta))
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3

@@ -243,3 +243,29 @@ def test_a_correction_that_is_not_finite_is_dropped_never_output(tmp_path, seq):
             for k in range(20)]
     assert outs == ['non_finite_output'] * 20 and den.counts['accepted'] == 0
     assert den.counts['non_finite_output'] == 20
+
+
+
+def test_with_a_rest_bias_the_model_sees_what_the_batch_path_feeds_it(seq, model):
+    from denoise_imu_ros.data.rest_bias import (model_input, rest_bias_batch, RestBias,
+                                                RestBiasSettings, remove_rest_bias)
+    n, settings = 3000, RestBiasSettings(prior_rad_s=(0.002, -0.01, 0.03))
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0,
+                         rest=RestBias(settings, 200.0))
+    outs = _run(den, seq.stamp_ns[:n], seq.imu[:n])
+    fed = remove_rest_bias(seq.imu[:n], 200.0, settings)
+    meta = {'sample_rate_hz': 200.0, 'rest_bias': settings.to_dict()}
+    assert np.array_equal(model_input(meta, seq.imu[:n]), fed)
+    assert not np.array_equal(fed, seq.imu[:n])
+    np.testing.assert_allclose(np.array([o.gyro for o in outs]), correct_gyro(model, fed),
+                               atol=1e-6)
+    # a gap is the same run: the estimate goes on over both stretches
+    later = _run(den, seq.stamp_ns[n + 1000:n + 1100], seq.imu[n + 1000:n + 1100])
+    both = rest_bias_batch(np.vstack([seq.imu[:n], seq.imu[n + 1000:n + 1100]]), 200.0,
+                           settings)
+    assert later[0].event == Event.GAP
+    np.testing.assert_array_equal(den.rest.estimate()[0], both['bias'][-1])
+    # a time jump is a new run (perhaps a new power-on): from the prior again
+    _run(den, seq.stamp_ns[:10], seq.imu[:10])
+    np.testing.assert_array_equal(den.rest.estimate()[0],
+                                  rest_bias_batch(seq.imu[:10], 200.0, settings)['bias'][-1])

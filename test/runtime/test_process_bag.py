@@ -6,6 +6,7 @@ from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError
 from helpers import N, SAMPLE, write_ros1_bag
 import numpy as np
+import pytest
 
 
 def _fields(m) -> list[float]:
@@ -15,14 +16,19 @@ def _fields(m) -> list[float]:
             *m.linear_acceleration_covariance, o.x, o.y, o.z, o.w, *m.orientation_covariance]
 
 
-def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path):
+@pytest.mark.parametrize('rest', [False, True])
+def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path,
+                                                            rest):
+    """With the model's filter settings, and with a turn-on bias removed (a model so trained)."""
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core.modelfile import add_metadata
+    from denoise_imu_ros.data.rest_bias import RestBiasSettings
     from denoise_imu_ros.runtime.fusion import FusionSettings
     from rosbags.highlevel import AnyReader
     # settings stored as tune-fusion stores them: both paths must apply all of them
     add_metadata(model_file, fusion={'settings': FusionSettings(
-        4.0, False, (0.02, -0.1, 0.05)).as_dict(), 'orientation_std_rad': [0.01, 0.02, 0.03]})
+        4.0, False, (0.02, -0.1, 0.05)).as_dict(), 'orientation_std_rad': [0.01, 0.02, 0.03]},
+        rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict() if rest else None)
     assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
                 str(model_file)]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
@@ -46,6 +52,13 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     # the gravity-aided orientation, bit for bit, with its covariance
     assert np.array_equal(np.array([_fields(m) for m in h.fused]), np.array(bags['/imu/data']))
     assert bags['/imu/data'][0][-9] > 0  # orientation provided (REP-145)
+    h.diagnostics.clear()
+    h.spin_until(lambda: h.diagnostics, timeout=5.0)
+    diagnostics = {v.key: v.value for v in h.diagnostics[-1].status[0].values}
+    assert diagnostics['rest_bias_applied'] == str(rest)
+    if rest:  # the bundled sample starts moving: the model's prior, said so
+        assert diagnostics['rest_bias_source'] == 'prior'
+        assert diagnostics['rest_bias_rad_s'] == '0.010000 -0.020000 0.030000'
 
 
 def test_process_bag_withholds_what_the_node_withholds_on_a_jittered_stretch(

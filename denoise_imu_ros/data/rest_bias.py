@@ -1,0 +1,218 @@
+# Copyright 2026 denoise_imu_ros authors
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The gyro's turn-on bias, estimated causally from the stillness a run starts with.
+
+A consumer MEMS gyro's bias changes at every power-on and holds within one: a model
+file cannot carry it, the recording itself must measure it. VQF's rest detection
+(Laidig & Seel 2023, the ``vqf`` package) says when the IMU is still (gyro and
+accelerometer within thresholds of their low-passed values for ``rest_min_s``, the
+low-passed gyro under ``bias_clip_deg_s``), and its rest bias estimator (a Kalman filter
+on the low-passed gyro while still; its motion bias estimation is off) gives the bias and
+its standard deviation at every sample, from that sample and the ones before it only.
+Later still periods refine it. Before the first stillness the estimate is the
+``prior``: the mean rest bias of the model's training recordings (0 without a model).
+
+Every path uses it identically: the model's input gyro is the raw gyro minus the
+estimate at that sample (:func:`remove_rest_bias` over arrays for training, ``eval``,
+``correct``; :class:`RestBias` per sample for the node and ``process-bag``; both run
+VQF's one C++ update, equal bit for bit). A model trained that way records its settings
+under the ``rest_bias`` metadata key (:func:`settings_of`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields, replace
+import math
+from typing import Any, Iterable
+
+import numpy as np
+from vqf import VQF
+
+from ..core.errors import ModelFileError
+
+__all__ = ['CHOICES', 'RestBias', 'RestBiasSettings', 'model_input', 'nominal_bias',
+           'rest_bias_batch', 'remove_rest_bias', 'resolve', 'settings_of']
+
+CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
+
+
+@dataclass(frozen=True)
+class RestBiasSettings:
+    """
+    The stillness detector and the estimate's start, as VQF's parameters name them.
+
+    The thresholds were chosen on BROAD's session-B training trials (docs/results.md):
+    0.5 s of stillness and a 0.25 s low-pass start the estimate earlier than VQF's
+    defaults (1.5 s, 0.5 s), which lowered the open-loop error of the rest-bias gyro;
+    the gyro and accelerometer thresholds are VQF's. ``bias_clip_deg_s`` also bounds
+    what counts as still: a steady turn faster than it is never taken for a bias.
+    """
+
+    rest_min_s: float = 0.5               # stillness lasting this long is rest
+    filter_tau_s: float = 0.25            # low-pass of the rest detector and estimate
+    gyro_threshold_deg_s: float = 2.0     # gyro deviation from its low-pass
+    accel_threshold_m_s2: float = 0.5     # accelerometer deviation from its low-pass
+    bias_clip_deg_s: float = 2.0          # largest bias estimated; faster is motion
+    prior_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the estimate before rest
+    prior_sigma_rad_s: float = math.radians(0.5)  # its standard deviation (VQF's default)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the settings as the model file stores them (JSON types)."""
+        return dict(asdict(self), prior_rad_s=list(self.prior_rad_s))
+
+    @classmethod
+    def from_dict(cls, value: Any, where: str) -> RestBiasSettings:
+        """Read stored settings; anything malformed is a ModelFileError naming ``where``."""
+        names = {f.name for f in fields(cls)}
+        if not isinstance(value, dict) or not set(value) <= names:
+            raise ModelFileError(f'{where}: rest_bias {value!r} is not a mapping of '
+                                 f'{", ".join(sorted(names))}')
+        prior = value.get('prior_rad_s', [0.0] * 3)
+        scalars = [v for k, v in value.items() if k != 'prior_rad_s']
+        if not (isinstance(prior, list) and len(prior) == 3
+                and all(_number(v) for v in [*prior, *scalars])):
+            raise ModelFileError(f'{where}: rest_bias {value!r} holds a value that is not a '
+                                 'finite number (prior_rad_s: three)')
+        settings = cls(**dict(value, prior_rad_s=tuple(float(v) for v in prior)))
+        if min(settings.rest_min_s, settings.filter_tau_s, settings.gyro_threshold_deg_s,
+               settings.accel_threshold_m_s2, settings.bias_clip_deg_s,
+               settings.prior_sigma_rad_s) <= 0:
+            raise ModelFileError(f'{where}: rest_bias {value!r}: its thresholds, time '
+                                 'constants and prior_sigma_rad_s must be positive')
+        return settings
+
+    def filter(self, rate_hz: float) -> VQF:
+        """Return a VQF that estimates the rest bias alone, started at the prior."""
+        vqf = VQF(1.0 / rate_hz, motionBiasEstEnabled=False, restBiasEstEnabled=True,
+                  restMinT=self.rest_min_s, restFilterTau=self.filter_tau_s,
+                  restThGyr=self.gyro_threshold_deg_s, restThAcc=self.accel_threshold_m_s2,
+                  biasClip=self.bias_clip_deg_s)
+        vqf.setBiasEstimate(np.array(self.prior_rad_s, dtype=float), self.prior_sigma_rad_s)
+        return vqf
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def settings_of(meta: dict[str, Any], where: str = 'model file') -> RestBiasSettings | None:
+    """Return the rest-bias settings a model was trained with, or None (raw gyro input)."""
+    value = meta.get('rest_bias')
+    return None if value is None else RestBiasSettings.from_dict(value, where)
+
+
+def resolve(meta: dict[str, Any], choice: str, where: str = 'model file'
+            ) -> RestBiasSettings | None:
+    """
+    Return the settings to run with, given ``model``, ``on`` or ``off``.
+
+    ``model``: the model file's (None for a model trained on the raw gyro); ``on``: the
+    model file's, or the defaults with a prior of 0 for a model that has none; ``off``:
+    None, the raw gyro into the model whatever it was trained on.
+    """
+    if choice not in CHOICES:
+        raise ValueError(f'rest_bias {choice!r}: must be one of {", ".join(CHOICES)}')
+    stored = settings_of(meta, where)
+    if choice == 'off' or (choice == 'model' and stored is None):
+        return None
+    return stored or RestBiasSettings()
+
+
+class RestBias:
+    """The estimate one sample at a time (the node, process-bag), with what it has seen."""
+
+    def __init__(self, settings: RestBiasSettings, rate_hz: float) -> None:
+        self.settings = settings
+        self._rate_hz = rate_hz
+        self._vqf = settings.filter(rate_hz)
+        self._gyro = np.zeros(3)
+        self._accel = np.zeros(3)
+        self.still_samples = 0  # samples detected still since the last reset
+
+    def reset(self) -> None:
+        """Start again from the prior (a new run: another power-on, a bag loop)."""
+        self._vqf = self.settings.filter(self._rate_hz)
+        self.still_samples = 0
+
+    def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
+        """Take one sample (rad/s, m/s^2); return the bias estimate after it (3,)."""
+        self._gyro[:] = gyro
+        self._accel[:] = accel
+        self._vqf.update(self._gyro, self._accel)
+        self.still_samples += bool(self._vqf.getRestDetected())
+        return self._vqf.getBiasEstimate()[0]
+
+    @property
+    def seconds_still(self) -> float:
+        """Seconds of detected stillness since the last reset."""
+        return self.still_samples / self._rate_hz
+
+    def estimate(self) -> tuple[np.ndarray, float]:
+        """Return the bias estimate (3,) rad/s and its standard deviation, rad/s."""
+        bias, sigma = self._vqf.getBiasEstimate()
+        return bias, float(sigma)
+
+
+def rest_bias_batch(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings
+                    ) -> dict[str, np.ndarray]:
+    """
+    Run the estimator over a recording (N, 6): ``bias`` (N, 3), ``sigma`` (N,), ``rest``.
+
+    Equal to :meth:`RestBias.update` sample by sample (one C++ update, the same order).
+    """
+    out = settings.filter(rate_hz).updateBatch(np.ascontiguousarray(imu[:, :3], dtype=float),
+                                               np.ascontiguousarray(imu[:, 3:], dtype=float))
+    return {'bias': out['bias'], 'sigma': out['biasSigma'],
+            'rest': out['restDetected'].astype(bool)}
+
+
+def remove_rest_bias(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings | None
+                     ) -> np.ndarray:
+    """Return ``imu`` with each gyro sample less the estimate at it (a copy; None: as is)."""
+    if settings is None:
+        return imu
+    out = np.array(imu, dtype=np.float64)
+    out[:, :3] -= rest_bias_batch(imu, rate_hz, settings)['bias']
+    return out
+
+
+def model_input(meta: dict[str, Any], imu: np.ndarray, choice: str = 'model',
+                where: str = 'model file') -> np.ndarray:
+    """Return what a model is fed for a recording's raw samples (N, 6), at its own rate."""
+    settings = resolve(meta, choice, where)
+    if settings is None:
+        return imu
+    return remove_rest_bias(imu, float(meta['sample_rate_hz']), settings)
+
+
+def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,
+                 settings: RestBiasSettings) -> tuple[tuple[float, float, float] | None, int]:
+    """
+    Return the mean rest bias of recordings, and how many were still at some point.
+
+    Each recording's figure is the estimate at its last still sample (prior-free: VQF's
+    own start of 0); recordings never still give none. None when no recording was still.
+    """
+    start = replace(settings, prior_rad_s=(0.0, 0.0, 0.0),
+                    prior_sigma_rad_s=RestBiasSettings.prior_sigma_rad_s)
+    found = []
+    for imu in imus:
+        est = rest_bias_batch(imu, rate_hz, start)
+        if est['rest'].any():
+            found.append(est['bias'][np.flatnonzero(est['rest'])[-1]])
+    if not found:
+        return None, 0
+    mean = np.mean(found, axis=0)
+    return (float(mean[0]), float(mean[1]), float(mean[2])), len(found)

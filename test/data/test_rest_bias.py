@@ -1,0 +1,110 @@
+# Copyright 2026 denoise_imu_ros authors
+# Licensed under the Apache License, Version 2.0
+"""The turn-on bias from stillness: causal, equal online and offline, refused when malformed."""
+
+import math
+
+from denoise_imu_ros.core.errors import ModelFileError
+from denoise_imu_ros.data import rest_bias
+from denoise_imu_ros.data.rest_bias import RestBias, RestBiasSettings
+import numpy as np
+import pytest
+
+RATE = 200.0
+BIAS = np.array([0.009, -0.004, 0.006])  # rad/s, a consumer MEMS gyro's turn-on bias
+
+
+def _imu(still_s: float, moving_s: float, seed: int = 0, turn: float | None = None):
+    """Gravity and a constant bias with white noise: still, then moving (or turning)."""
+    rng = np.random.default_rng(seed)
+    n_still, n_move = int(still_s * RATE), int(moving_s * RATE)
+    t = np.arange(n_move) / RATE
+    motion = (np.full((n_move, 3), [0.0, 0.0, turn]) if turn is not None
+              else np.stack([np.sin(2 * t), np.cos(3 * t), 0.5 * np.sin(t)], 1))
+    gyro = np.vstack([np.zeros((n_still, 3)), motion]) + BIAS
+    gyro += rng.normal(0, 0.002, gyro.shape)
+    accel = np.tile([0.0, 0.0, 9.81], (len(gyro), 1))
+    accel[n_still:] += 2.0 * np.sin(np.arange(n_move) / RATE * 5)[:, None]
+    accel += rng.normal(0, 0.02, accel.shape)
+    return np.hstack([gyro, accel])
+
+
+def test_online_equals_batch_bit_for_bit():
+    imu = _imu(3.0, 5.0)
+    settings = RestBiasSettings(prior_rad_s=(0.001, 0.002, 0.003))
+    batch = rest_bias.rest_bias_batch(imu, RATE, settings)
+    online = RestBias(settings, RATE)
+    step = np.array([online.update(s[:3], s[3:]) for s in imu])
+    assert np.array_equal(step, batch['bias'])
+    assert online.still_samples == batch['rest'].sum() > 0
+    online.reset()  # a new run: the prior again
+    assert np.array_equal(online.update(imu[0, :3], imu[0, 3:]), batch['bias'][0])
+
+
+def test_the_estimate_at_a_sample_depends_on_no_later_sample():
+    imu = _imu(3.0, 5.0)
+    k = int(4.0 * RATE)
+    changed = imu.copy()
+    changed[k + 1:, :3] += 0.5
+    a = rest_bias.rest_bias_batch(imu, RATE, RestBiasSettings())['bias']
+    b = rest_bias.rest_bias_batch(changed, RATE, RestBiasSettings())['bias']
+    assert np.array_equal(a[:k + 1], b[:k + 1])
+
+
+def test_a_still_start_finds_the_bias_and_a_moving_start_keeps_the_prior():
+    est = rest_bias.rest_bias_batch(_imu(3.0, 5.0), RATE, RestBiasSettings())
+    assert np.abs(est['bias'][-1] - BIAS).max() < 6e-4
+    still_end = int(3.0 * RATE) - 1
+    assert est['sigma'][still_end] < 1e-3 < est['sigma'][0]
+    assert est['sigma'][-1] > est['sigma'][still_end]  # less certain as motion goes on
+    prior = (0.005, 0.005, 0.005)
+    moving = rest_bias.rest_bias_batch(_imu(0.0, 5.0), RATE,
+                                       RestBiasSettings(prior_rad_s=prior))
+    assert not moving['rest'].any()
+    assert np.array_equal(moving['bias'], np.tile(prior, (len(moving['bias']), 1)))
+
+
+def test_a_steady_turn_faster_than_the_clip_is_never_taken_for_a_bias():
+    turn = math.radians(5.0)  # a robot turning in place at 5 deg/s: gyro and accel steady
+    est = rest_bias.rest_bias_batch(_imu(0.0, 10.0, turn=turn), RATE, RestBiasSettings())
+    assert not est['rest'][int(2 * RATE):].any()
+    assert np.abs(est['bias']).max() == 0.0
+
+
+def test_removing_it_subtracts_the_estimate_from_the_gyro_only():
+    imu = _imu(3.0, 2.0)
+    out = rest_bias.remove_rest_bias(imu, RATE, RestBiasSettings())
+    est = rest_bias.rest_bias_batch(imu, RATE, RestBiasSettings())['bias']
+    assert np.array_equal(out[:, :3], imu[:, :3] - est)
+    assert np.array_equal(out[:, 3:], imu[:, 3:])
+    assert rest_bias.remove_rest_bias(imu, RATE, None) is imu
+
+
+def test_the_nominal_bias_is_the_mean_of_the_recordings_that_were_still():
+    prior, still = rest_bias.nominal_bias([_imu(3.0, 2.0, 0), _imu(0.0, 3.0, 1),
+                                           _imu(3.0, 2.0, 2)], RATE, RestBiasSettings())
+    assert still == 2
+    assert np.abs(np.array(prior) - BIAS).max() < 6e-4
+    assert rest_bias.nominal_bias([_imu(0.0, 3.0)], RATE, RestBiasSettings()) == (None, 0)
+
+
+def test_the_model_file_choice_and_the_switches():
+    stored = RestBiasSettings(prior_rad_s=(0.001, 0.0, 0.0))
+    meta = {'rest_bias': stored.to_dict()}
+    assert rest_bias.resolve(meta, 'model') == stored
+    assert rest_bias.resolve(meta, 'on') == stored
+    assert rest_bias.resolve(meta, 'off') is None
+    assert rest_bias.resolve({}, 'model') is None
+    assert rest_bias.resolve({'rest_bias': None}, 'on') == RestBiasSettings()
+    with pytest.raises(ValueError, match='must be one of model, on, off'):
+        rest_bias.resolve(meta, 'sometimes')
+
+
+@pytest.mark.parametrize('value', [
+    [1, 2], {'rest_min_s': 'long'}, {'prior_rad_s': [0.0, 0.0]}, {'threshold': 1.0},
+    {'prior_rad_s': [0.0, float('nan'), 0.0]}, {'rest_min_s': 0.0},
+    {'bias_clip_deg_s': True}])
+def test_malformed_stored_settings_are_refused_in_one_line(value):
+    with pytest.raises(ModelFileError, match='m.safetensors: rest_bias') as err:
+        rest_bias.settings_of({'rest_bias': value}, 'm.safetensors')
+    assert '\n' not in str(err.value)
