@@ -96,7 +96,7 @@ def deployment_warning(loaded: ModelFile) -> str | None:
     report = loaded.meta.get('crossval')
     deploy = report.get('deploy') if isinstance(report, dict) else None
     kind = 'calibration' if loaded.config.calibration_only else 'network'
-    if deploy not in ('network', 'calibration', 'none') or deploy == kind:
+    if deploy not in ('network', 'calibration', 'rest bias', 'none') or deploy == kind:
         return None
     return (f'{loaded.path.name} is a {kind} model, but the cross-recording validation of '
             f'its recipe says: {report.get("verdict")}')

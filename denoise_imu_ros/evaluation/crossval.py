@@ -19,7 +19,8 @@ does on a recording it never saw (another bias, another temperature). Here the r
 recordings are split into folds by recording; each fold trains the network and the
 12-parameter calibrated-IMU baseline on the other recordings and scores the held-out
 ones whole (AOE from the ground truth at their first stamp), against plain integration
-of the input gyro too. The verdict says which of the three to deploy.
+of the input gyro and of the input gyro less its turn-on bias (estimated from stillness,
+``data/rest_bias.py``). The verdict says which of the four to deploy.
 """
 
 from __future__ import annotations
@@ -38,9 +39,9 @@ from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..data.load import load_sequence
 from ..learn import parallel
-from ..learn.checkpoint import load_model
+from ..data import rest_bias
+from ..learn.checkpoint import load_model, LoadedModel
 from ..learn.config import load_config
-from ..learn.model import correct_gyro
 from ..learn.train import train
 
 
@@ -106,17 +107,19 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
             return None
         for name in held_out:  # read as the recipe reads its recordings
             seq = load_sequence(Path(recipe.data) / name, recipe.imu_topic, recipe.pose_topic,
-                                recipe.max_gt_gap_s, min_samples=models[0][0].receptive_field,
+                                recipe.max_gt_gap_s,
+                                min_samples=models[0][0].model.receptive_field,
                                 align_poses=recipe.align)
-            raw = score(seq, seq.imu[:, :3])
-            gyros = [{'calibrated': correct_gyro(calib, seq.imu),
-                      'network': correct_gyro(net, seq.imu)} for net, calib in models]
-            per_recording[name] = {'raw': raw, **{
+            raw = {'raw': score(seq, seq.imu[:, :3]),
+                   'rest bias': score(seq, _rest_bias_gyro(models[0][0], seq.imu))}
+            gyros = [{'calibrated': calib.correct(seq.imu), 'network': net.correct(seq.imu)}
+                     for net, calib in models]
+            per_recording[name] = {**raw, **{
                 m: score(seq, np.mean([g[m] for g in gyros], axis=0))
                 for m in ('calibrated', 'network')}}
             if seeds is not None:
                 for seed, g in zip(runs, gyros):
-                    per_seed[seed][name] = {'raw': raw, **{m: score(seq, g[m]) for m in g}}
+                    per_seed[seed][name] = {**raw, **{m: score(seq, g[m]) for m in g}}
     report = summarize(per_recording)
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
                   **({'seed': recipe.seed} if seeds is None else {
@@ -126,6 +129,12 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
         out.mkdir(parents=True, exist_ok=True)
         write_text(out / 'crossval.json', jsonio.dumps(report, indent=2))
     return report
+
+
+def _rest_bias_gyro(net: LoadedModel, imu: np.ndarray) -> np.ndarray:
+    """The raw gyro less its turn-on bias: the fold network's settings, or the defaults."""
+    settings = rest_bias.resolve(net.meta, 'on', str(net.path))
+    return rest_bias.remove_rest_bias(imu, float(net.meta['sample_rate_hz']), settings)[:, :3]
 
 
 def attach_mismatches(report: dict[str, Any], meta: dict[str, Any]) -> list[str]:
@@ -147,7 +156,7 @@ def attach_mismatches(report: dict[str, Any], meta: dict[str, Any]) -> list[str]
 
 
 def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
-                 progress: bool) -> tuple[Any, Any]:
+                 progress: bool) -> tuple[LoadedModel, LoadedModel]:
     """Return a fold's network and calibration: from ``folder`` if there, else trained."""
     kept = _trained_fold(folder, cfg, calib_cfg) if folder is not None else None
     if kept is not None:
@@ -158,10 +167,12 @@ def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
     if folder is not None:
         net.save(folder / 'network.safetensors')
         calib.save(folder / 'calibrated.safetensors')
-    return net.model, calib.model
+    return (LoadedModel(net.model, net.meta, Path(f'{label}, network')),
+            LoadedModel(calib.model, calib.meta, Path(f'{label}, calibration')))
 
 
-def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any) -> tuple[Any, Any] | None:
+def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any
+                  ) -> tuple[LoadedModel, LoadedModel] | None:
     """
     Return a fold's network and calibration from ``folder`` if this recipe trained them.
 
@@ -177,14 +188,15 @@ def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any) -> tuple[Any, Any] | N
         if loaded.meta.get('train_config') != json.loads(jsonio.dumps(want.recipe())):
             raise TrainingError(f'{path}: trained by another recipe than this fold uses '
                                 '(remove it, or use another --out)')
-        models.append(loaded.model)
+        models.append(loaded)
     return models[0], models[1]
 
 
 def summarize(per_recording: dict[str, dict[str, dict[str, float]]]) -> dict[str, Any]:
     """Means per method and the verdict, from AOE figures per held-out recording."""
     mean = {m: {key: float(np.mean([r[m][key] for r in per_recording.values()]))
-                for key in ('aoe_deg', 'aoe_yaw_deg')} for m in CROSSVAL_METHODS}
+                for key in ('aoe_deg', 'aoe_yaw_deg')} for m in CROSSVAL_METHODS
+            if all(m in r for r in per_recording.values())}
     deploy, line = verdict(per_recording, mean)
     return {'recordings': per_recording, 'mean': mean, 'deploy': deploy, 'verdict': line}
 
@@ -192,21 +204,26 @@ def summarize(per_recording: dict[str, dict[str, dict[str, float]]]) -> dict[str
 def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
             mean: dict[str, dict[str, float]]) -> tuple[str, str]:
     """
-    Return what to deploy (``network``, ``calibration`` or ``none``) and the verdict line.
+    Return what to deploy (``network``, ``calibration``, ``rest bias`` or ``none``), and why.
 
     The network only if it beats the baseline on most recordings and on average. The
-    baseline is the better of the calibrated IMU and plain integration on average, so a
-    calibration that hurts new recordings (an already calibrated IMU) is not the bar.
+    baseline is the best on average of the calibrated IMU, the raw gyro less its turn-on
+    bias and plain integration, so a calibration that hurts new recordings (an already
+    calibrated IMU) is not the bar, nor is a raw gyro that a still start would fix.
     """
-    base = min(('calibrated', 'raw'), key=lambda m: mean[m]['aoe_deg'])
-    label = {'calibrated': 'the calibrated IMU', 'raw': 'plain integration'}[base]
+    base = min((m for m in ('calibrated', 'rest bias', 'raw') if m in mean),
+               key=lambda m: mean[m]['aoe_deg'])
+    label = {'calibrated': 'the calibrated IMU', 'raw': 'plain integration',
+             'rest bias': 'the raw gyro less its turn-on bias'}[base]
     n = len(per_recording)
     wins = sum(r['network']['aoe_deg'] < r[base]['aoe_deg'] for r in per_recording.values())
     gain = 100 * (1 - mean['network']['aoe_deg'] / mean[base]['aoe_deg'])
     if wins > n / 2 and gain > 0:
         return 'network', (f'the network beats {label} on {wins} of {n} unseen recordings, '
                            f'by {gain:.0f} % in mean AOE: deploy the network')
-    deploy = 'calibration' if base == 'calibrated' else 'none'
+    deploy = {'calibrated': 'calibration', 'rest bias': 'rest bias', 'raw': 'none'}[base]
     return deploy, (f'the network does not beat {label} on unseen recordings ({wins} of {n}, '
                     f'{gain:+.0f} % in mean AOE): deploy '
-                    + ('the calibration' if deploy == 'calibration' else 'no correction'))
+                    + {'calibration': 'the calibration', 'rest bias': 'no learnt correction, '
+                       'only the turn-on bias removed (rest_bias)',
+                       'none': 'no correction'}[deploy])

@@ -42,7 +42,6 @@ from ..core.records import Sequence
 from ..data import rest_bias
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model, LoadedModel
-from ..learn.model import correct_gyro
 
 
 def default_baseline(meta: dict[str, Any], baseline: str | None) -> str | None:
@@ -75,9 +74,7 @@ def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndar
     gyros = {'raw': seq.imu[:, :3],
              'rest bias': rest_bias.remove_rest_bias(
                  seq.imu, float(net.meta['sample_rate_hz']), rest)[:, :3]}
-    gyros.update({m: correct_gyro(lm.model, rest_bias.model_input(lm.meta, seq.imu,
-                                                                  where=str(lm.path)))
-                  for m, lm in models.items()})
+    gyros.update({m: lm.correct(seq.imu) for m, lm in models.items()})
     return gyros
 
 

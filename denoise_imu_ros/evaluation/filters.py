@@ -267,8 +267,8 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
                             cfg.get('max_gt_gap_s'), align_poses=cfg.get('align', 'none'))
         if len(seq) - start < 2:
             continue
-        whole = {'raw': seq.imu[:, :3], 'calibrated': correct_gyro(calib.model, seq.imu),
-                 'network': correct_gyro(net.model, seq.imu)}  # the tail's causal context
+        whole = {'raw': seq.imu[:, :3], 'calibrated': calib.correct(seq.imu),
+                 'network': net.correct(seq.imu)}  # the tail's causal context
         tails.append(seq.tail(start))
         seqs.append(seq)
         for source, gyro in whole.items():

@@ -309,8 +309,8 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
         seqs.append(seq)
         gyros['raw'].append(seq.imu[:, :3])
         if calib is not None:
-            gyros['calibrated'].append(correct_gyro(calib.model, seq.imu))
-        gyros['corrected'].append(correct_gyro(net.model, seq.imu))
+            gyros['calibrated'].append(calib.correct(seq.imu))
+        gyros['corrected'].append(net.correct(seq.imu))
     gyros = {g: v for g, v in gyros.items() if v}
     std = np.sqrt(np.diag(np.reshape(gyro_covariance(net), (3, 3))))
     report = noise_report(seqs, gyros, std if std.any() else None)

@@ -27,9 +27,10 @@ from typing import Any, NamedTuple
 import numpy as np
 import torch
 
-from .model import GyroNet, merge
+from .model import correct_gyro, GyroNet, merge
 from ..core.errors import ModelFileError
 from ..core.modelfile import code_version, read_model_file, sample_rate, write_model_file
+from ..data import rest_bias
 
 
 class LoadedModel(NamedTuple):
@@ -38,6 +39,11 @@ class LoadedModel(NamedTuple):
     model: GyroNet
     meta: dict[str, Any]
     path: Path
+
+    def correct(self, imu: np.ndarray) -> np.ndarray:
+        """Corrected gyro (N, 3) of a recording's raw samples (N, 6), fed as online."""
+        return correct_gyro(self.model, rest_bias.model_input(self.meta, imu,
+                                                              where=str(self.path)))
 
 
 def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:
@@ -81,6 +87,12 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
         if differ:
             raise ModelFileError(f'ensemble members {members[0].path} and {m.path} are not '
                                  f'trainings of one recipe (they differ in {", ".join(differ)})')
+    rests = [rest_bias.settings_of(m.meta, str(m.path)) for m in members]
+    for m, rest in zip(members[1:], rests[1:]):  # one input for all: each was trained on its own
+        if rest != rests[0]:
+            raise ModelFileError(f'ensemble members {members[0].path} and {m.path} remove '
+                                 'different turn-on biases (rest_bias settings, or priors of '
+                                 'other training recordings)')
     stds = [(m.meta.get('validation') or {}).get('gyro_residual_std') for m in members]
     residual = (np.mean(stds, axis=0).tolist() if all(v is not None for v in stds)
                 else None)  # a member that measured none: no figure, not a zero in the mean
@@ -90,6 +102,7 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
         'train_sequences': list(dict.fromkeys(
             s for m in members for s in m.meta.get('train_sequences') or [])) or None,
         'train_config': first.get('train_config'),
+        'rest_bias': None if rests[0] is None else rests[0].to_dict(),
         'validation': {} if residual is None else {'gyro_residual_std': residual},
         'members': [{'file': str(m.path), 'seed': (m.meta.get('train_config') or {}).get('seed'),
                      'validation': m.meta.get('validation'),

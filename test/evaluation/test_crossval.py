@@ -42,6 +42,16 @@ def test_verdict_follows_the_figures():
     plain = summarize({'a': _figures(1.2, 3.0, 1.0), 'b': _figures(1.1, 3.0, 1.0)})
     assert plain['verdict'].startswith('the network does not beat plain integration')
     assert plain['verdict'].endswith('deploy no correction') and plain['deploy'] == 'none'
+    # another power-on: the raw gyro less its turn-on bias is the bar when it is the best
+    rest = {'raw': {'aoe_deg': 40.0, 'aoe_yaw_deg': 20.0},
+            'rest bias': {'aoe_deg': 3.0, 'aoe_yaw_deg': 2.0}}
+    after = summarize({'a': dict(_figures(3.5, 30.0, 40.0), **rest),
+                       'b': dict(_figures(2.0, 30.0, 40.0), **rest)})
+    assert after['mean']['rest bias']['aoe_deg'] == 3.0
+    assert after['verdict'].startswith('the network does not beat the raw gyro less its '
+                                       'turn-on bias on unseen recordings (1 of 2, +8 %')
+    assert after['deploy'] == 'rest bias'
+    assert after['verdict'].endswith('only the turn-on bias removed (rest_bias)')
 
 
 def test_attaching_a_report_of_other_recordings_or_a_shorter_training_is_named():

@@ -51,11 +51,12 @@ def test_eval_uses_the_settings_the_model_files_store():
     calib = {'fusion': {'settings': {'tau_acc_s': 4.0, 'bias_estimation': True}}}
     rows = eval_filters(net, calib)
     assert rows == {'raw + VQF': ('raw', Filter('vqf', 1.0)),
+                    'rest bias + VQF': ('rest bias', Filter('vqf', 1.0)),
                     'calibrated + VQF': ('calibrated', Filter('vqf', 4.0, True)),
                     'calibrated + imufusion': ('calibrated', Filter('imufusion', gain=0.5)),
                     'calibrated + Madgwick': ('calibrated', Filter('madgwick', gain=0.1)),
                     'network + VQF': ('network', Filter('vqf', 7.0))}
-    assert set(eval_filters({}, None)) == {'raw + VQF', 'network + VQF'}
+    assert set(eval_filters({}, None)) == {'raw + VQF', 'rest bias + VQF', 'network + VQF'}
 
 
 def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):

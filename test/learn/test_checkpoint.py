@@ -243,3 +243,20 @@ def test_a_model_trained_on_whole_recordings_has_no_unseen_tail():
     assert training_span(head) == 16032 and training_span(whole) is None
     assert scored_on_training_samples(head, ['a'], 16032) == []
     assert scored_on_training_samples(whole, ['a'], 16032) == ['a']
+
+
+def test_an_ensemble_keeps_its_members_turn_on_bias_settings_or_refuses_two(tmp_path):
+    from denoise_imu_ros.data.rest_bias import RestBiasSettings, settings_of
+    from helpers import untrained_model
+    paths = []
+    for name, prior in (('a', 0.01), ('b', 0.01), ('c', 0.02)):
+        paths.append(tmp_path / f'{name}.safetensors')
+        save_model(paths[-1], untrained_model(), {'sample_rate_hz': 200.0, 'rest_bias': (
+            RestBiasSettings(prior_rad_s=(prior, 0.0, 0.0)).to_dict())})
+    ens = save_ensemble(tmp_path / 'ab.safetensors', paths[:2])
+    assert settings_of(ens.meta) == RestBiasSettings(prior_rad_s=(0.01, 0.0, 0.0))
+    with pytest.raises(ModelFileError, match='remove different turn-on biases'):
+        save_ensemble(tmp_path / 'ac.safetensors', [paths[0], paths[2]])
+    save_model(tmp_path / 'raw.safetensors', untrained_model(), {'sample_rate_hz': 200.0})
+    with pytest.raises(ModelFileError, match='remove different turn-on biases'):
+        save_ensemble(tmp_path / 'ar.safetensors', [paths[0], tmp_path / 'raw.safetensors'])

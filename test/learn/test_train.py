@@ -299,3 +299,24 @@ def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path, capsys, monkeypa
     assert main(['train', '--config', str(CONFIG), '--out', str(tmp_path / 'm.safetensors')]) \
         == 130
     assert capsys.readouterr().err.strip() == 'denoise-imu train: interrupted'
+
+
+def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc, tmp_path):
+    from denoise_imu_ros.data import rest_bias
+    cfg = _short(euroc, rest_bias=True, steps=12, val_every=12, swa_start=0, select='final')
+    raw = train_module.load_sequences(cfg)
+    seqs, settings = train_module.remove_rest_bias(cfg, raw)
+    wide = dataclasses.replace(rest_bias.RestBiasSettings(), bias_clip_deg_s=10.0)
+    rate = float(np.median([s.rate_hz for s in raw]))  # the model file's rate
+    prior, still = rest_bias.nominal_bias([s.imu for s in raw], rate, wide)
+    assert still >= 1 and settings.prior_rad_s == prior
+    # EuRoC's ADIS16448 has a 4.6 deg/s turn-on bias about z: the clip follows it
+    assert settings.bias_clip_deg_s == pytest.approx(2 * np.degrees(np.abs(prior).max()))
+    for s, r in zip(seqs, raw):
+        assert np.array_equal(s.imu, rest_bias.remove_rest_bias(r.imu, rate, settings))
+    assert train_module.remove_rest_bias(dataclasses.replace(cfg, rest_bias=False), raw) == (
+        raw, None)
+    result = train(cfg, progress=False)
+    result.save(tmp_path / 'rest.safetensors')
+    stored = rest_bias.settings_of(load_model(tmp_path / 'rest.safetensors').meta)
+    assert stored == settings

@@ -205,6 +205,26 @@ def test_an_input_that_stops_is_a_diagnostics_error(harness):
     assert h.diagnostics[-1].status[0].level != DiagnosticStatus.ERROR  # flowing again
 
 
+def test_rest_bias_on_estimates_the_turn_on_bias_of_a_still_start_and_says_so(harness):
+    bias = [0.004, -0.003, 0.002]
+    noise = np.random.default_rng(0).normal(0, 1e-3, (600, 3))
+    h = harness(rest_bias='on')  # a model trained on the raw gyro: the defaults, prior 0
+    h.send([imu_msg(10**9 + k * 5_000_000, bias + noise[k], [0, 0, 9.81]) for k in range(600)])
+    h.diagnostics.clear()
+    h.spin_until(lambda: h.diagnostics, timeout=5.0)
+    values = {kv.key: kv.value for kv in h.diagnostics[-1].status[0].values}
+    assert values['rest_bias_applied'] == 'True' and values['rest_bias_source'] == 'stillness'
+    assert 2.0 < float(values['rest_bias_seconds_still']) <= 3.0
+    np.testing.assert_allclose([float(v) for v in values['rest_bias_rad_s'].split()], bias,
+                               atol=3e-4)
+    assert 0 < float(values['rest_bias_sigma_rad_s']) < 1e-3
+    off = harness(rest_bias='off')
+    off.send([imu_msg(10**9 + k * 5_000_000, bias, [0, 0, 9.81]) for k in range(10)])
+    off.spin_until(lambda: off.diagnostics, timeout=5.0)
+    values = {kv.key: kv.value for kv in off.diagnostics[-1].status[0].values}
+    assert values['rest_bias_applied'] == 'False' and 'rest_bias_rad_s' not in values
+
+
 def test_one_long_gap_is_not_a_slow_stream(harness):
     h = harness()
     rec = load_imu(SAMPLE)
@@ -393,6 +413,7 @@ print('ok')
     (['-p', 'fusion_bias_estimation:=3'], "fusion_bias_estimation must be 'model', on"),
     (['-p', 'fusion_tau_acc:=-5.0'], 'fusion_tau_acc out of range'),
     (['-p', 'fusion_accel_bias:=on'], "fusion_accel_bias must be 'model' or off, not on"),
+    (['-p', 'rest_bias:=sometimes'], "rest_bias must be 'model', on or off, not 'sometimes'"),
     (['-p', "fixed_frame:=''"], 'fixed_frame must name a frame'),
 ])
 def test_a_bad_parameter_is_a_one_line_error_at_start_up(args, message, capsys):
