@@ -127,7 +127,8 @@ def _crossval(args: argparse.Namespace) -> None:
             raise DenoiseError(f'--attach {path}: this cross-validation is not of how that '
                                f'model was trained ({"; ".join(why)})')
     report = crossval(args.config, args.folds, args.out, progress=not args.quiet,
-                      only_fold=args.fold, seeds=args.seeds, seed=args.seed, data=args.data,
+                      only_fold=args.fold, seeds=args.seeds, sessions=args.sessions,
+                      seed=args.seed, data=args.data,
                       steps=args.steps, workers=args.workers, device=args.device)
     if report is None:
         where = (f'{args.out}/fold{args.fold}/' if args.seeds is None else ', '.join(
@@ -292,6 +293,9 @@ def build_parser() -> argparse.ArgumentParser:
                        'score the held-out recordings: network vs calibrated IMU vs raw')
     p.add_argument('--config', required=True, help='training recipe (its recordings are split)')
     p.add_argument('--folds', type=int, help='number of folds (default: one per recording)')
+    p.add_argument('--sessions', nargs='+', metavar='A,B,..',
+                   help='recordings that share a power-on, comma-separated, one argument a '
+                        'session: the folds leave one session out (its turn-on bias unseen)')
     p.add_argument('--out', type=Path, help='write the fold models and crossval.json here '
                    '(folds trained there already are scored, not trained again)')
     p.add_argument('--fold', type=int, help='train this fold alone (0-based) into --out, '

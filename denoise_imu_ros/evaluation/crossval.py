@@ -57,9 +57,33 @@ def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:
     return [recordings[i::k] for i in range(k)]
 
 
+def session_folds(recordings: list[str], sessions: list[str]) -> list[list[str]]:
+    """
+    Held-out groups of recordings that share a power-on: ``sessions`` lists each group.
+
+    Each group is comma-separated recording names of the recipe; every recording of the
+    recipe is in exactly one, and there are at least two: a fold then trains on other
+    power-ons only and scores one it never saw, as a robot's next start-up.
+    """
+    groups = [[n for n in group.split(',') if n] for group in sessions]
+    listed = [n for group in groups for n in group]
+    twice = sorted({n for n in listed if listed.count(n) > 1})
+    unknown = sorted(set(listed) - set(recordings))
+    missing = [n for n in recordings if n not in listed]
+    why = (f'{", ".join(twice)} in two sessions' if twice else
+           f'{", ".join(unknown)} not in the recipe' if unknown else
+           f'{", ".join(missing)} in no session' if missing else
+           'fewer than two sessions' if len([g for g in groups if g]) < 2 else None)
+    if why:
+        raise TrainingError(f'--sessions: {why} (each of the recipe\'s recordings in exactly '
+                            'one comma-separated group, at least two groups)')
+    return [g for g in groups if g]
+
+
 def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
              progress: bool = True, only_fold: int | None = None,
-             seeds: list[int] | None = None, **overrides: Any) -> dict[str, Any] | None:
+             seeds: list[int] | None = None, sessions: list[str] | None = None,
+             **overrides: Any) -> dict[str, Any] | None:
     """
     Train and score every fold of the recipe at ``config``; return the report.
 
@@ -74,6 +98,9 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     the ensemble ``denoise-imu ensemble`` would ship, with each seed's own figures beside
     it (``per_seed``) for the spread. The calibration row is likewise the mean of the
     seeds' calibrations.
+
+    ``sessions`` (comma-separated recordings sharing a power-on, one string a session)
+    makes the folds leave one power-on out instead of ``k`` groups of recordings.
     """
     if parallel.torchrun_rank() is not None:  # its other processes would have no model
         raise TrainingError('crossval does not run under torchrun: train its folds as '
@@ -86,7 +113,10 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     runs: list[int | None] = [None] if seeds is None else list(seeds)
     per_recording: dict[str, dict[str, dict[str, float]]] = {}
     per_seed: dict[int, dict[str, dict[str, dict[str, float]]]] = {s: {} for s in seeds or []}
-    fold_list = folds(recipe.sequences, k)
+    if sessions is not None and k is not None:
+        raise TrainingError('--folds and --sessions: give one (sessions are the folds)')
+    fold_list = (folds(recipe.sequences, k) if sessions is None
+                 else session_folds(recipe.sequences, sessions))
     if only_fold is not None and not (out is not None and 0 <= only_fold < len(fold_list)):
         raise TrainingError(f'--fold {only_fold}: needs --out and a fold from 0 to '
                             f'{len(fold_list) - 1}')
@@ -122,6 +152,8 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                     per_seed[seed][name] = {**raw, **{m: score(seq, g[m]) for m in g}}
     report = summarize(per_recording)
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
+                  fold_kind='leave one power-on session out' if sessions else
+                  'leave recordings out',
                   **({'seed': recipe.seed} if seeds is None else {
                       'seeds': runs, 'per_seed': {str(s): summarize(r)
                                                   for s, r in per_seed.items()}}))

@@ -55,7 +55,8 @@ def crossval_table(report: dict[str, Any]) -> str:
         avg = report['mean'][m]
         lines.append(f'| {m} | ' + ' | '.join(cells)
                      + f' | **{avg["aoe_deg"]:.2f}/{avg["aoe_yaw_deg"]:.2f}** |\n')
-    lines.append(f'\nUnseen recordings (leave-out folds), AOE 3-D / yaw in degrees. '
+    kind = report.get('fold_kind', 'leave recordings out')
+    lines.append(f'\nUnseen recordings (folds: {kind}), AOE 3-D / yaw in degrees. '
                  f'Verdict: {report["verdict"]}.\n')
     if 'per_seed' in report:
         alone = [f'seed {s} {r["mean"]["network"]["aoe_deg"]:.2f}'

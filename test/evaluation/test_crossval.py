@@ -205,3 +205,15 @@ def test_crossval_under_torchrun_is_a_clear_error_not_a_crash(tmp_path, monkeypa
     assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--quiet']) == 1
     err = capsys.readouterr().err.strip()
     assert 'crossval does not run under torchrun' in err and len(err.splitlines()) == 1
+
+
+def test_session_folds_leave_one_power_on_out_and_refuse_a_bad_grouping():
+    from denoise_imu_ros.evaluation.crossval import session_folds
+    names = ['b1', 'b2', 'c1', 'c2', 'c3']
+    assert session_folds(names, ['b1,b2', 'c1,c2,c3']) == [['b1', 'b2'], ['c1', 'c2', 'c3']]
+    for groups, why in ((['b1,b2', 'c1,c2'], 'c3 in no session'),
+                        (['b1,b2,c1', 'c1,c2,c3'], 'c1 in two sessions'),
+                        (['b1,b2,x', 'c1,c2,c3'], 'x not in the recipe'),
+                        (['b1,b2,c1,c2,c3'], 'fewer than two sessions')):
+        with pytest.raises(TrainingError, match=f'--sessions: {why} '):
+            session_folds(names, groups)
