@@ -46,6 +46,7 @@ __all__ = ['CHOICES', 'RestBias', 'RestBiasSettings', 'model_input', 'nominal_bi
            'rest_bias_batch', 'remove_rest_bias', 'resolve', 'settings_of']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
+WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
 
 
 @dataclass(frozen=True)

@@ -26,10 +26,18 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
   validation tail, in samples a multiple of the longest increment;
 - sigma_g: per axis 1.2 times the largest constant gyro bias against the poses, at
   least 0.2 deg/s (the output scale the paper sets by hand: EuRoC [1, 2, 5], TUM-VI 0.2);
-- align: ``auto`` when a recording's clock or frame is off (check-data), else ``none``.
-Recordings whose poses cannot supervise even a constant bias (check-data's
-``supervision``) are named in the reasons: such a recipe is not expected to beat plain
-integration, whatever its other keys.
+- align: ``auto`` when a recording's clock or frame is off (check-data), else ``none``;
+- rest_bias: on when most recordings start still (VQF's rest detection within their
+  first START_STILL_S): each power-on's turn-on bias is then measured, not learnt, and
+  what is learnt holds across power-ons; off when most start moving.
+A recording the poses cannot supervise is left out of the recipe and named, and the
+rules above apply to the others: one with no increment up to 512 samples free of
+ground-truth noise (poses too noisy for its motion, e.g. a fast trial under slow motion
+capture: an error only when every recording is so), and one whose poses do not lower its
+own attitude error even with a constant bias fitted on them (check-data's
+``supervision``), unless fewer than two recordings would remain: then they are kept and
+named in the reasons, and such a recipe is not expected to beat plain integration,
+whatever its other keys.
 """
 
 from __future__ import annotations
@@ -45,35 +53,46 @@ from .config import TrainConfig
 from ..core.atomic import write_text
 from ..core.errors import DatasetError
 from ..core.limits import common_rate
+from ..data import rest_bias
 from ..data.check import check, paper_increments
 from ..data.load import load_recording
 
 WINDOW_S = 80.0
+START_STILL_S = 5.0  # a recording still within this many seconds of its start starts still
 MIN_GYRO_STD_DEG = 0.2
 
 
 def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = None,
                 pose_topic: str | None = None) -> tuple[dict[str, Any], list[str]]:
     """Return the recipe (a mapping of TrainConfig keys) and the reasons for each choice."""
-    reports = {}
+    reports, still = {}, []
     for name in sequences:
-        report = check(load_recording(Path(data) / name, imu_topic, pose_topic))
+        rec = load_recording(Path(data) / name, imu_topic, pose_topic)
+        report = check(rec)
         if report['usable'] == 'no':
             raise DatasetError(f'{Path(data) / name}: not usable for training: '
                                + '; '.join(report['reasons']))
         reports[name] = report
+        if _starts_still(rec.imu, report['imu_rate_hz']):
+            still.append(name)
     rate = common_rate({n: r['imu_rate_hz'] for n, r in reports.items()}, data)
+    noise = [n for n, r in reports.items() if r['shortest_clean_increment'] is None]
+    if len(noise) == len(reports):
+        raise DatasetError('no increment up to 512 samples is free of ground-truth noise '
+                           'on any recording: the poses cannot supervise the loss')
+    weak = [n for n, r in reports.items() if not r['supervision']['helps'] and n not in noise]
+    if len(reports) - len(noise) - len(weak) < 2:
+        weak = []  # kept, and named below: crossval needs two recordings
+    left_out = noise + weak
+    reports = {n: r for n, r in reports.items() if n not in left_out}
+    sequences = [n for n in sequences if n not in left_out]
     noisy = set().union(*(r['noise_dominated_increments'] for r in reports.values()))
     paper = paper_increments(rate)
     if not set(paper) & noisy:
         increments = list(paper)
         why_inc = "the paper's 0.08/0.16 s, clean on every recording"
     else:
-        clean = [r['shortest_clean_increment'] for r in reports.values()]
-        if None in clean:
-            raise DatasetError('no increment up to 512 samples is free of ground-truth noise '
-                               'on every recording: the poses cannot supervise the loss')
-        first = max(clean)
+        first = max(r['shortest_clean_increment'] for r in reports.values())
         increments = [first, 2 * first]
         why_inc = (f"the paper's {paper[0]}/{paper[1]} are noise-dominated "
                    f'({sorted(noisy)}); {first} is clean on every recording')
@@ -92,6 +111,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         imu_topic=imu_topic, pose_topic=pose_topic, increments=increments,
         increment_weights=[1.0, 0.5], window=window, gyro_std_deg=gyro_std,
         align='auto' if off else 'none', swa_start=1200, select='swa',
+        rest_bias=len(set(still) & set(sequences)) > len(sequences) / 2,
         workers=min(2, len(sequences)))
     why = [f'IMU rate {rate:.1f} Hz (the model is for this rate only; receptive field '
            f'511 samples = {511 / rate:.2f} s)',
@@ -101,7 +121,20 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
            f'gyro_std_deg {gyro_std}: 1.2 x the largest gyro bias per axis '
            f'({", ".join(f"{b:.3f}" for b in bias)} deg/s), at least {MIN_GYRO_STD_DEG}',
            f'align {recipe["align"]}' + (f': {", ".join(off)} off in clock or frame'
-                                         if off else ': clocks and frames agree')]
+                                         if off else ': clocks and frames agree'),
+           f'rest_bias {"on" if recipe["rest_bias"] else "off"}: '
+           f'{len(set(still) & set(sequences))} of {len(sequences)} recordings are still '
+           f'within {START_STILL_S:g} s of their start (each run\'s turn-on bias is '
+           + ('measured there, not learnt)' if recipe['rest_bias'] else
+              'then learnt as part of the correction)')]
+    if noise:
+        why.append(f'left out: {", ".join(noise)}: no increment up to 512 samples is free '
+                   'of ground-truth noise there (poses too noisy for the motion), so they '
+                   'cannot supervise the loss; score them with eval instead')
+    if weak:
+        why.append(f'left out: {", ".join(weak)}: their poses do not lower their own '
+                   'attitude error even with a constant bias fitted on them (check-data); '
+                   'score them with eval instead')
     weak = [n for n, r in reports.items() if not r['supervision']['helps']]
     why.append(f'supervision: the poses of {", ".join(weak)} do not lower their own '
                'attitude error even with a constant bias fitted on them (check-data): a '
@@ -113,6 +146,13 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         why.append('one recording: train works, crossval (whether the network beats plain '
                    'integration on a recording it never saw) needs at least two')
     return recipe, why
+
+
+def _starts_still(imu: np.ndarray, rate_hz: float) -> bool:
+    """Whether VQF's rest detection finds stillness in a recording's first seconds."""
+    head = imu[:int(START_STILL_S * rate_hz)]
+    wide = rest_bias.RestBiasSettings(bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S)
+    return bool(len(head)) and bool(rest_bias.rest_bias_batch(head, rate_hz, wide)['rest'].any())
 
 
 def write_recipe(path: str | Path, recipe: dict[str, Any], why: list[str]) -> None:

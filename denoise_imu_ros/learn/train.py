@@ -55,7 +55,6 @@ from ..core.records import Sequence
 from ..data import rest_bias
 from ..data.load import load_sequence
 
-WIDE_BIAS_CLIP_DEG_S = 10.0  # the clip that finds a training set's rest biases
 RANK_SEED_STRIDE = 7919  # data-parallel process r draws its dropout masks from seed + r * this
 
 
@@ -130,7 +129,7 @@ def remove_rest_bias(cfg: TrainConfig, seqs: list[Sequence]
     are ever still: a recording that starts moving (and a robot that does) is corrected
     with it until its first stillness, in training as online. The bias clip (the largest
     bias, and the slowest steady turn taken for motion) is VQF's 2 deg/s, or twice the
-    largest training rest bias where that is more (found with a 10 deg/s clip). Returns
+    largest training rest bias where that is more (found with a wide clip). Returns
     the settings the model file records, None without ``cfg.rest_bias``.
     """
     if not cfg.rest_bias:
@@ -139,7 +138,7 @@ def remove_rest_bias(cfg: TrainConfig, seqs: list[Sequence]
     settings = rest_bias.RestBiasSettings()
     prior, _ = rest_bias.nominal_bias(
         (s.imu for s in seqs), rate,
-        dataclasses.replace(settings, bias_clip_deg_s=WIDE_BIAS_CLIP_DEG_S))
+        dataclasses.replace(settings, bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S))
     if prior is not None:
         clip = max(settings.bias_clip_deg_s, 2 * math.degrees(max(map(abs, prior))))
         settings = dataclasses.replace(settings, prior_rad_s=prior, bias_clip_deg_s=clip)

@@ -166,13 +166,36 @@ def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
     assert cfg.window % 128 == 0 and 75 < cfg.window / 199.4 <= 80
     assert cfg.sequences == rooms
     assert '16/32 are noise-dominated' in out.read_text().splitlines()[2]
-    assert out.read_text().splitlines()[6].startswith(
+    assert out.read_text().splitlines()[6].startswith('# rest_bias off: 0 of 2 recordings '
+                                                      'are still within 5 s of their start')
+    assert not cfg.rest_bias  # TUM-VI's rooms start moving
+    assert out.read_text().splitlines()[7].startswith(
         '# supervision: the poses of dataset-room5_512_16 do not lower their own attitude')
     assert 'one recording' not in capsys.readouterr().out  # two: crossval can hold one out
     one = tmp_path / 'one.yaml'
     assert main(['init-recipe', '--data', str(data_dir / 'tumvi'), '--sequences', rooms[0],
                  '--out', str(one)]) == 0
     assert 'one recording: train works, crossval' in capsys.readouterr().out
+
+
+def test_init_recipe_leaves_out_what_the_poses_cannot_supervise_and_says_so(
+        data_dir, tmp_path, capsys):
+    """BROAD: a fast trial under slow motion capture no longer refuses the whole set."""
+    from denoise_imu_ros.learn.config import load_config
+    broad = data_dir / 'broad'
+    if not broad.is_dir():
+        pytest.skip('BROAD not found')
+    trials = ['02_undisturbed_slow_rotation_B', '05_undisturbed_slow_rotation_with_breaks_B',
+              '07_undisturbed_fast_rotation_B']
+    out = tmp_path / 'recipe.yaml'
+    assert main(['init-recipe', '--data', str(broad), '--sequences', *trials,
+                 '--out', str(out)]) == 0
+    cfg = load_config(out)
+    assert cfg.sequences == trials[:2] and cfg.rest_bias  # both start still
+    said = capsys.readouterr().out
+    assert ('left out: 07_undisturbed_fast_rotation_B: no increment up to 512 samples is '
+            'free of ground-truth noise there') in said
+    assert 'rest_bias on: 2 of 2 recordings are still within 5 s of their start' in said
 
 
 def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_path, capsys):

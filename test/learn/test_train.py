@@ -306,7 +306,8 @@ def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc
     cfg = _short(euroc, rest_bias=True, steps=12, val_every=12, swa_start=0, select='final')
     raw = train_module.load_sequences(cfg)
     seqs, settings = train_module.remove_rest_bias(cfg, raw)
-    wide = dataclasses.replace(rest_bias.RestBiasSettings(), bias_clip_deg_s=10.0)
+    wide = dataclasses.replace(rest_bias.RestBiasSettings(),
+                               bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S)
     rate = float(np.median([s.rate_hz for s in raw]))  # the model file's rate
     prior, still = rest_bias.nominal_bias([s.imu for s in raw], rate, wide)
     assert still >= 1 and settings.prior_rad_s == prior
