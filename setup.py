@@ -1,3 +1,7 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""Build denoise_imu_ros as an ament_python package, with its compiled streaming step."""
+
 from glob import glob
 
 from setuptools import Extension, find_packages, setup

@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """denoise-imu correct / eval end to end, and one-line errors with exit code 1."""
 
 from pathlib import Path
@@ -150,7 +150,7 @@ def test_garbage_inputs_and_bad_options_are_one_line_errors(model_file, tmp_path
 
 
 def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_path, capsys):
-    """Issue 20, case 1 (and 13: a second process-bag is refused before any work)."""
+    """An existing bag output is refused, a second process-bag before any work."""
     import shutil
     bag = tmp_path / 'in'
     shutil.copytree(SAMPLE, bag)

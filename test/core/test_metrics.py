@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """Integration and AOE/ROE: against a plain loop, evo, and hand-made errors."""
 
 from denoise_imu_ros.core.metrics import attitude_errors, integrate

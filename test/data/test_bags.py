@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """Bags through rosbags: convert round trip, ROS 1 and ROS 2 inputs, topic errors."""
 
 from denoise_imu_ros.cli import main
@@ -92,7 +92,7 @@ def test_convert_writes_the_topic_names_asked_for(tmp_path):
 
 @pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
 def test_a_bag_compressed_inside_its_mcap_chunks_is_seen_as_compressed(tmp_path, storage):
-    """Issue 20, case 4: MCAP storage compression leaves metadata.yaml's mode empty."""
+    """MCAP storage compression leaves metadata.yaml's mode empty."""
     from denoise_imu_ros.data.bags import is_compressed, open_bag
     from helpers import write_asl
     rec = write_asl(tmp_path / 'rec', n_imu=400)
@@ -105,7 +105,7 @@ def test_a_bag_compressed_inside_its_mcap_chunks_is_seen_as_compressed(tmp_path,
 
 
 def test_every_reader_takes_a_bag_in_header_stamp_order(tmp_path):
-    """Issue 20, case 2: 1-15 ms of transport latency reorders the receive order."""
+    """1-15 ms of transport latency reorders the receive order."""
     from denoise_imu_ros.core import msgs
     from denoise_imu_ros.data.asl import read_asl
     from denoise_imu_ros.data.bags import (BAG_TYPES, imu_message, IMU_TYPE, POSE_TYPES,

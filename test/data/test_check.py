@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """check-data: rates, holes and the label-noise profile that picks increment lengths."""
 
 import dataclasses
@@ -199,7 +199,7 @@ def test_init_recipe_leaves_out_what_the_poses_cannot_supervise_and_says_so(
 
 
 def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_path, capsys):
-    """Issue 20, case 13."""
+    """Stamps in microseconds, and a --max-offset below the search's resolution: one line."""
     root = write_asl(tmp_path / 's', n_imu=2000)
     csv = root / 'mav0' / 'imu0' / 'data.csv'
     lines = csv.read_text().splitlines()
@@ -222,7 +222,7 @@ def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_p
     (slice(1, 4), 180 / math.pi, 'gyro in deg/s?')])
 def test_wrong_units_are_named_by_check_data_correct_eval_and_train(
         euroc, tmp_path, capsys, model_file, column, factor, cause):
-    """Issue 20, case 7: a 45 s crop of MH_01 with one sensor in other units."""
+    """A 45 s crop of MH_01 with one sensor in other units."""
     import yaml
     from denoise_imu_ros.data.asl import read_asl
     from denoise_imu_ros.data.bags import write_bag
@@ -252,7 +252,7 @@ def test_wrong_units_are_named_by_check_data_correct_eval_and_train(
 
 
 def test_an_imu_hole_is_named_offline_as_the_node_treats_it(euroc, tmp_path, capsys):
-    """Issue 20, case 8: one 5 s hole in 45 s of MH_01."""
+    """One 5 s hole in 45 s of MH_01."""
     from denoise_imu_ros.data.asl import read_asl
     from denoise_imu_ros.data.bags import write_bag
     from denoise_imu_ros.data.timebase import crop

@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """eval and correct: tables, figures, chunked batch correction."""
 
 import json
@@ -49,7 +49,7 @@ def test_eval_writes_json_markdown_and_figures(model_file, tmp_path):
 
 
 def test_eval_of_a_short_recording_writes_strict_json_and_plots(model_file, tmp_path):
-    """Issue 20, cases 11 and 12: never 35 m travelled, and a name ending in '/'."""
+    """Never 35 m travelled, and a name ending in '/'."""
     from helpers import write_asl
     write_asl(tmp_path / 'data' / 'base', n_imu=3000)  # 15 s turning on the spot
     out = tmp_path / 'eval'

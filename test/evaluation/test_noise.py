@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """Noise figures: the Allan fit recovers known noise, separates the poses' own noise."""
 
 from denoise_imu_ros.evaluation.noise import covariance_check, figures, pooled, yaml_snippet

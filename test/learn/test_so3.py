@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """Torch quaternion helpers against scipy, including at zero rotation."""
 
 from denoise_imu_ros.learn.so3 import quat_exp, quat_log, quat_mul, tree_product

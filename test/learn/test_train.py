@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """A few training steps on short real segments: the loss goes down, failures are clear."""
 
 import dataclasses
@@ -273,7 +273,7 @@ def _finished_training(monkeypatch):
 
 def test_a_finished_training_is_never_lost_when_its_output_cannot_be_written(
         tmp_path, capsys, monkeypatch):
-    """Issue 20, case 3: the save fails (a full disk): the model is kept elsewhere, said so."""
+    """The save fails (a full disk): the model is kept elsewhere, said so."""
     from denoise_imu_ros.core.errors import OutputError
     _finished_training(monkeypatch)
     out = tmp_path / 'model.safetensors'
@@ -292,7 +292,7 @@ def test_a_finished_training_is_never_lost_when_its_output_cannot_be_written(
 
 
 def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path, capsys, monkeypatch):
-    """Issue 20, case 14."""
+    """Ctrl-C during a training: one line on stderr, exit code 130, no traceback."""
     def interrupted(cfg, progress):
         raise KeyboardInterrupt
     monkeypatch.setattr(train_module, 'train', interrupted)

@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """The gyro_denoiser node in-process: topics, headers, bad input, fuzz, services."""
 
 import os
@@ -316,7 +316,7 @@ def test_use_sim_time_is_accepted(harness):
 
 
 def test_without_clock_diagnostics_and_the_rate_check_still_run(harness):
-    """Issue 20, case 6: use_sim_time and no /clock (a bag played without --clock)."""
+    """Use_sim_time and no /clock (a bag played without --clock)."""
     h = harness(use_sim_time=True)
     h.send([imu_msg(10**9 + k * 2_500_000, [0, 0, 0], [0, 0, 9.81]) for k in range(400)])
     h.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR for d in h.diagnostics
@@ -456,7 +456,7 @@ def test_help_and_unknown_arguments(capsys):
 
 
 def test_every_message_dropped_is_an_error_naming_the_cause(harness):
-    """Issue 20, case 10: every stamp zero is not 'no input yet'."""
+    """Every stamp zero is not 'no input yet'."""
     h = harness()
     h.send([imu_msg(0, [0, 0, 0], [0, 0, 9.81]) for _ in range(50)])
     h.spin_until(lambda: any(s.level == DiagnosticStatus.ERROR for d in h.diagnostics
@@ -466,7 +466,7 @@ def test_every_message_dropped_is_an_error_naming_the_cause(harness):
 
 
 def test_a_rate_change_withholds_the_attitude_within_ten_samples(harness):
-    """Issue 20, case 10: 200 -> 100 Hz; not 2.3 s of attitudes published as valid."""
+    """200 -> 100 Hz; not 2.3 s of attitudes published as valid."""
     h = harness()
     stamps = [10**9 + k * 5_000_000 for k in range(600)]
     stamps += [stamps[-1] + k * 10_000_000 for k in range(1, 101)]

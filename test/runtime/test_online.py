@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """The ROS-free online pipeline: equals offline integration, handles bad stamps."""
 
 from denoise_imu_ros.core.metrics import integrate
@@ -191,7 +191,7 @@ def test_property_no_sample_raises_or_yields_a_non_finite_output(
 
 
 def test_a_second_clock_and_a_rate_change_are_told_from_losses(seq, model):
-    """Issue 20, case 10: no 1.6e14 skipped periods; an off-rate stream is caught at once."""
+    """No 1.6e14 skipped periods; an off-rate stream is caught at once."""
     den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
     imu = seq.imu
     t = 10**9
@@ -219,7 +219,7 @@ def test_a_stream_slower_than_the_gap_limit_is_off_rate_too(seq, model):
 
 
 def test_losses_of_a_stream_faster_than_the_model_are_counted(seq, model):
-    """Issue 20, case 5: 1 kHz into the 200 Hz model, every fifth message lost."""
+    """1 kHz into the 200 Hz model, every fifth message lost."""
     den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
     kept = [k for k in range(2000) if k % 5 != 4]
     for k in kept:

@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """denoise-imu play: a bag's IMU published in real time."""
 
 from helpers import DOMAIN, SAMPLE

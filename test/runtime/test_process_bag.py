@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """process-bag: what the node publishes, written into a copy of a bag."""
 
 from denoise_imu_ros.cli import main
@@ -145,7 +145,7 @@ def test_every_offline_tool_refuses_a_stream_at_another_rate(model_file, tmp_pat
 
 
 def test_a_non_finite_input_covariance_is_never_published(harness, tmp_path):
-    """Issue 20, case 9: NaN accelerometer covariance in, zeros ('unknown') out, counted."""
+    """NaN accelerometer covariance in, zeros ('unknown') out, counted."""
     import math
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core import msgs
@@ -181,7 +181,7 @@ def test_a_non_finite_input_covariance_is_never_published(harness, tmp_path):
 
 def test_receive_order_jitter_drops_nothing_and_qos_and_compression_are_kept(
         tmp_path, model_file):
-    """Issue 20, cases 2 and 4."""
+    """Receive times out of stamp order: nothing dropped; recorded QoS and zstd kept."""
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core import msgs
     from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE

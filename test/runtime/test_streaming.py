@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """The streaming engine (numpy and compiled steps) equals the batch network, from sample 1."""
 
 from denoise_imu_ros.data.load import load_imu

@@ -1,5 +1,5 @@
-# Copyright 2026 denoise_imu_ros authors
-# Licensed under the Apache License, Version 2.0
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
 """Pins of the shipped models: provenance, accuracy on the bundled sample, streaming."""
 
 from denoise_imu_ros.core.modelfile import deployment_warning, read_model_file, shipped_models
