@@ -140,9 +140,14 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                 for seed, g in zip(runs, gyros):
                     per_seed[seed][name] = {**raw, **{m: score(seq, g[m]) for m in g}}
     report = summarize(per_recording)
+    sizes = sorted({len(recipe.sequences) - len(f) for f in fold_list})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
                   fold_kind='leave one power-on session out' if sessions else
                   'leave recordings out',
+                  fold_training=(f'each fold trains on {"-".join(map(str, sizes))} of the '
+                                 f'recipe\'s {len(recipe.sequences)} recordings; a model of '
+                                 'the whole recipe trains on all of them, so these figures '
+                                 'judge networks trained on less data than it'),
                   **({'seed': recipe.seed} if seeds is None else {
                       'seeds': runs, 'per_seed': {str(s): summarize(r)
                                                   for s, r in per_seed.items()}}))

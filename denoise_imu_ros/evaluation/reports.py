@@ -47,6 +47,8 @@ def crossval_table(report: dict[str, Any]) -> str:
     kind = report.get('fold_kind', 'leave recordings out')
     lines.append(f'\nUnseen recordings (folds: {kind}), AOE 3-D / yaw in degrees. '
                  f'Verdict: {report["verdict"]}.\n')
+    if 'fold_training' in report:
+        lines.append(f'\nNote: {report["fold_training"]}.\n')
     if 'per_seed' in report:
         alone = [f'seed {s} {r["mean"]["network"]["aoe_deg"]:.2f}'
                  for s, r in report['per_seed'].items()]
