@@ -83,14 +83,14 @@ def main() -> None:
         sys.exit(f'fusion_cost: no reader on {", ".join(sorted(set(unread())))}: '
                  'the publishes would cost nothing')
     publish_s: list[float] = []  # imu/data's publish call, inside the callbacks timed
-    fused = nodes[True]._pub_fused
-    rclpy_publish = fused.publish
+    outputs = nodes[True]._outputs
+    rclpy_publish = outputs.send_fused
 
     def timed_publish(msg: Imu) -> None:
         t = time.perf_counter()
         rclpy_publish(msg)
         publish_s.append(time.perf_counter() - t)
-    fused.publish = timed_publish
+    outputs.send_fused = timed_publish
     times = {True: [], False: []}
     cpu = {True: [], False: []}  # per round: (callback thread, other threads) s/message
     ratios, ratios_less, cpu_ratios = [], [], []

@@ -230,7 +230,7 @@ def _process_bag(args: argparse.Namespace) -> None:
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame,
                          compress=args.compress, namespace=args.namespace,
-                         rest=args.rest_bias)
+                         rest=args.rest_bias, embed_attitude=args.embed_attitude)
     dropped = ', '.join(f'{k} {v}' for k, v in counts.items() if k in DROP_CAUSES)
     rest = ', '.join(f'{k} {v}' for k, v in counts.items() if k not in DROP_CAUSES)
     print(f'wrote {args.output}: {rest}; dropped: {dropped}')
@@ -392,6 +392,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--compress', action=argparse.BooleanOptionalAction,
                    help='zstd compression (default: as the input bag says it is compressed)')
     p.add_argument('--rest-bias', **REST_BIAS_OPTION)
+    p.add_argument('--embed-attitude', action='store_true',
+                   help="also write the attitude into /imu/corrected, as the node's "
+                        'embed_attitude (orientation σ 0.05 rad)')
     p.set_defaults(func=_process_bag)
 
     p = sub.add_parser('play', parents=[topics],

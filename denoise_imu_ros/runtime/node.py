@@ -39,6 +39,7 @@ from std_srvs.srv import Trigger
 
 from .fusion import FusionSettings, orientation_covariance, settings_of
 from .online import Drop, DROP_CAUSES, Event, OnlineDenoiser
+from .outputs import Outputs
 from ..core import msgs
 from ..core.errors import DenoiseError
 from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE, stream_rate_hz
@@ -146,7 +147,6 @@ class GyroDenoiser(Node):
         self._not_recommended = deployment_warning(loaded)  # kept as a diagnostics WARN
         self._types = msgs.rclpy_types()
         self._fixed_frame = p('fixed_frame').value
-        self.add_post_set_parameters_callback(self._on_parameters)
 
         self._pub_imu = self.create_publisher(
             Imu, 'imu/corrected', QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
@@ -174,14 +174,15 @@ class GyroDenoiser(Node):
 
         self._stamps: deque[int] = deque(maxlen=int(2 * self._model_rate) + 1)
         self._rate_error = False  # set by the diagnostics timer from the measured rate
-        self.corrected_withheld = 0  # accepted samples whose imu/corrected was not published
-        self.attitude_withheld = 0  # accepted samples whose attitude was not published
-        self.fused_withheld = 0  # accepted samples whose imu/data was not published
         self._last_input: float | None = None  # time.monotonic() of the last message
         self._infer_s: deque[float] = deque(maxlen=1000)
-        self._corrected: Imu | None = None  # the outgoing messages, refilled every sample
-        self._attitude: QuaternionStamped | None = None
+        self._frame = ''  # the IMU's frame_id, from its last message
+        self._outputs = Outputs(  # covariances and embedding: _apply_parameters
+            self._types, self._pub_imu.publish,
+            None if self._pub_fused is None else self._pub_fused.publish,
+            self._pub_att.publish, self._fixed_frame, np.zeros(9), np.zeros(9))
         self._apply_parameters()
+        self.add_post_set_parameters_callback(self._on_parameters)
         self.get_logger().info(
             f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field '
             f'{loaded.config.receptive_field} samples, '
@@ -206,13 +207,14 @@ class GyroDenoiser(Node):
     # -- parameters ---------------------------------------------------------------
     def _apply_parameters(self) -> None:
         p = self.get_parameter
-        self._embed = p('embed_attitude').value
+        out = self._outputs
+        out.embed_attitude = p('embed_attitude').value
         var = p('orientation_stddev').value ** 2
         # arrays built here, once, not per message
-        self._orientation_cov = np.diag([var] * 3).ravel()
-        self._gyro_cov = np.array(gyro_covariance(self._loaded,
-                                                  p('angular_velocity_stddev').value))
-        self._fused_cov = np.array(orientation_covariance(
+        out.orientation_cov = np.diag([var] * 3).ravel()
+        out.gyro_cov = np.array(gyro_covariance(self._loaded,
+                                                p('angular_velocity_stddev').value))
+        out.fused_cov = np.array(orientation_covariance(
             self._loaded.meta, p('fused_orientation_stddev').value))
         self._denoiser.max_gap_factor = p('max_gap_factor').value
         self._denoiser.time_jump_s = p('time_jump_threshold').value
@@ -285,29 +287,24 @@ class GyroDenoiser(Node):
                 throttle_duration_sec=5.0)
         self._stamps.append(out.stamp_ns)
 
-        # an attitude held across a gap is not published as if it were valid; at a rate
-        # the model was not made for, neither are its corrections (nor a filter run on them)
-        off_rate = self._rate_error or out.rate_suspect
-        valid_attitude = out.event != Event.GAP and not off_rate
-        embed = out.attitude if self._embed and valid_attitude else None
-        corrected = self._corrected = msgs.corrected_imu(
-            self._types, msg, out.gyro, self._gyro_cov, embed, self._orientation_cov,
-            out.accel_cov, into=self._corrected)
-        if off_rate:
-            self.corrected_withheld += 1
-        else:
-            self._pub_imu.publish(corrected)
-        if self._pub_fused is not None and not off_rate:
-            self._pub_fused.publish(msgs.reorient(corrected, out.orientation, self._fused_cov))
-        elif self._pub_fused is not None:
-            self.fused_withheld += 1
-        if valid_attitude:
-            self._attitude = msgs.attitude(self._types, msg, self._fixed_frame, out.attitude,
-                                           into=self._attitude)
-            self._pub_att.publish(self._attitude)
-        else:
-            self.attitude_withheld += 1
+        self._frame = msg.header.frame_id
+        self._outputs.send(msg, out, self._rate_error)  # what it withholds: outputs.py
         self._infer_s.append(time.perf_counter() - t0)
+
+    @property
+    def corrected_withheld(self) -> int:
+        """Accepted samples whose imu/corrected was not published."""
+        return self._outputs.counts['corrected_withheld']
+
+    @property
+    def fused_withheld(self) -> int:
+        """Accepted samples whose imu/data was not published."""
+        return self._outputs.counts['fused_withheld']
+
+    @property
+    def attitude_withheld(self) -> int:
+        """Accepted samples whose imu/attitude was not published."""
+        return self._outputs.counts['attitude_withheld']
 
     def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         self._denoiser.reset_attitude()
@@ -327,7 +324,7 @@ class GyroDenoiser(Node):
 
     def _imu_frame(self) -> str:
         """Return the IMU's frame_id, from its last message (diagnostics name the device)."""
-        return '' if self._corrected is None else self._corrected.header.frame_id
+        return self._frame
 
     def _publish_diagnostics(self) -> None:
         counts = self._denoiser.counts

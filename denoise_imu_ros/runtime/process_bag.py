@@ -15,7 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 import re
 import tempfile
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 from rosbags.convert import convert, ConverterError
@@ -23,8 +23,8 @@ from rosbags.rosbag2 import (CompressionFormat, CompressionMode, StoragePlugin, 
                              WriterError)
 
 from .fusion import orientation_covariance, settings_of
-from .online import Drop, DROP_CAUSES, Event, OnlineDenoiser, Output
-from ..core import msgs
+from .online import Drop, DROP_CAUSES, OnlineDenoiser
+from .outputs import Outputs
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
 from ..core.limits import check_rate
@@ -86,7 +86,8 @@ def stamp_order(stamps: np.ndarray, jump_ns: int) -> np.ndarray:
 def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
                 fixed_frame: str = 'odom', compress: bool | None = None,
-                namespace: str = '/', rest: str = 'model') -> dict[str, int]:
+                namespace: str = '/', rest: str = 'model',
+                embed_attitude: bool = False) -> dict[str, int]:
     """
     Copy a bag, add the corrected IMU, orientation and attitude; return the counts.
 
@@ -98,7 +99,9 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     set back starts a new session, :func:`stamp_order`). Copied
     topics keep their recorded QoS; ``compress`` (zstd) defaults to the input's compression.
     The outputs are the node's topics in ``namespace``; a bag that has one already is
-    refused (the two would mix on one topic). ``rest`` is the node's ``rest_bias``.
+    refused (the two would mix on one topic). ``rest`` and ``embed_attitude`` are the
+    node's ``rest_bias`` and ``embed_attitude``; what is written and withheld is the
+    node's, built by the same code (:mod:`denoise_imu_ros.runtime.outputs`).
     """
     src = Path(src)
     if not src.exists():
@@ -138,6 +141,15 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                     topics = tuple(wr.add_connection(name, msgtype, typestore=TYPESTORE)
                                    for name, msgtype in zip(names, (IMU_TYPE, IMU_TYPE,
                                                                     ATTITUDE_TYPE)))
+                    received = [0]  # the receive time the outputs are written at
+
+                    def writer(topic: Any, msgtype: str) -> Callable[[Any], None]:
+                        return lambda m: wr.write(topic, received[0],
+                                                  TYPESTORE.serialize_cdr(m, msgtype))
+                    outputs = Outputs(BAG_TYPES, writer(topics[0], IMU_TYPE),
+                                      writer(topics[1], IMU_TYPE),
+                                      writer(topics[2], ATTITUDE_TYPE), fixed_frame, cov,
+                                      fused_cov, embed_attitude)
                     waiting: dict[int, tuple[Any, int]] = {}  # received, its turn not come
                     k, done = -1, 0
                     for conn, stamp, raw in rd.messages():
@@ -151,32 +163,16 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                                                'order the second time they were read')
                         waiting[k] = msg, stamp
                         while done < len(turn) and turn[done] in waiting:
-                            msg, received = waiting.pop(turn[done])
+                            msg, received[0] = waiting.pop(turn[done])
                             done += 1
                             res = den.process_imu(msg)
                             if not isinstance(res, Drop):
-                                _write_outputs(wr, topics, received, msg, res, cov, fused_cov,
-                                               fixed_frame)
+                                outputs.send(msg, res)
                     if done != len(stamps):
                         raise DatasetError(f'{src}: {len(stamps) - done} IMU messages read '
                                            'the first time were not there the second')
         except (*CORRUPT, WriterError, FileExistsError) as err:
             raise DatasetError(f'{src} -> {dst}: {err}') from err
-    return {k: v for k, v in den.counts.items() if v or k in DROP_CAUSES}
+    return {**{k: v for k, v in den.counts.items() if v or k in DROP_CAUSES},
+            **{k: v for k, v in outputs.counts.items() if v}}
 
-
-def _write_outputs(wr: Writer, topics: tuple[Any, Any, Any], stamp: int, msg: Any,
-                   res: Output, cov: np.ndarray, fused_cov: np.ndarray,
-                   fixed_frame: str) -> None:
-    """Write one sample's corrected IMU, orientation and attitude at ``stamp``, as the node."""
-    corr, fused, att = topics
-    if res.rate_suspect:  # what the node withholds is not written either (node.py)
-        return
-    corrected = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov, accel_cov=res.accel_cov)
-    wr.write(corr, stamp, TYPESTORE.serialize_cdr(corrected, IMU_TYPE))
-    oriented = msgs.corrected_imu(BAG_TYPES, msg, res.gyro, cov, res.orientation, fused_cov,
-                                  res.accel_cov)
-    wr.write(fused, stamp, TYPESTORE.serialize_cdr(oriented, IMU_TYPE))
-    if res.event != Event.GAP:
-        attitude = msgs.attitude(BAG_TYPES, msg, fixed_frame, res.attitude)
-        wr.write(att, stamp, TYPESTORE.serialize_cdr(attitude, ATTITUDE_TYPE))

@@ -385,7 +385,7 @@ from denoise_imu_ros.runtime.node import GyroDenoiser
 rclpy.init(domain_id={DOMAIN})
 node = GyroDenoiser(parameter_overrides=[Parameter('model', value='euroc')])
 sent = []  # what the callback publishes (one message refilled: its values, as serialised)
-node._pub_imu.publish = lambda m: sent.append(
+node._outputs.send_corrected = lambda m: sent.append(
     [m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z])
 data = np.load({str(tmp_path / 'data.npz')!r})
 types = msgs.rclpy_types()
