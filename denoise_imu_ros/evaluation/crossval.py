@@ -158,8 +158,8 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
 
 
 def _rest_bias_gyro(net: LoadedModel, imu: np.ndarray) -> np.ndarray:
-    """The raw gyro less its turn-on bias: the fold network's settings, or the defaults."""
-    settings = rest_bias.resolve(net.meta, 'on', str(net.path))
+    """The raw gyro less its turn-on bias: the baseline's estimator for the fold network."""
+    settings = rest_bias.baseline_settings(net.meta, str(net.path))
     return rest_bias.remove_rest_bias(imu, float(net.meta['sample_rate_hz']), settings)[:, :3]
 
 

@@ -56,10 +56,10 @@ def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndar
     The gyro of every method: raw, rest bias (raw less the turn-on bias), then each model's.
 
     Each model is fed as it runs online (its rest-bias settings, if it has them). The
-    rest-bias row uses the network's settings, with their prior, or the defaults.
+    rest-bias row: :func:`~denoise_imu_ros.data.rest_bias.baseline_settings`.
     """
     net = models['network']
-    rest = rest_bias.resolve(net.meta, 'on', str(net.path))
+    rest = rest_bias.baseline_settings(net.meta, str(net.path))
     gyros = {'raw': seq.imu[:, :3],
              'rest bias': rest_bias.remove_rest_bias(
                  seq.imu, float(net.meta['sample_rate_hz']), rest)[:, :3]}

@@ -100,6 +100,17 @@ def test_the_model_file_choice_and_the_switches():
         rest_bias.resolve(meta, 'sometimes')
 
 
+def test_the_baseline_rows_use_the_model_settings_or_a_clip_wide_enough_for_any_bias():
+    stored = RestBiasSettings(prior_rad_s=(0.001, 0.0, 0.0))
+    assert rest_bias.baseline_settings({'rest_bias': stored.to_dict()}) == stored
+    wide = rest_bias.baseline_settings({})
+    assert wide.prior_rad_s == (0.0, 0.0, 0.0) and wide.bias_clip_deg_s == 10.0
+    big = _imu(3.0, 2.0) + np.r_[0.0, 0.0, math.radians(4.6), 0.0, 0.0, 0.0]  # EuRoC's z
+    assert not rest_bias.rest_bias_batch(big, RATE, RestBiasSettings())['rest'].any()
+    found = rest_bias.rest_bias_batch(big, RATE, wide)['bias'][-1]
+    assert found[2] == pytest.approx(math.radians(4.6) + BIAS[2], rel=0.02)
+
+
 @pytest.mark.parametrize('value', [
     [1, 2], {'rest_min_s': 'long'}, {'prior_rad_s': [0.0, 0.0]}, {'threshold': 1.0},
     {'prior_rad_s': [0.0, float('nan'), 0.0]}, {'rest_min_s': 0.0},
