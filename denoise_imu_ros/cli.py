@@ -156,6 +156,16 @@ def _ensemble(args: argparse.Namespace) -> None:
     print(f'wrote {args.out}: the mean of {loaded.model.config.members} networks')
 
 
+def _rest_model(args: argparse.Namespace) -> None:
+    from .core.modelfile import read_model_file
+    from .data.rest_bias import write_rest_only_model
+    like = read_model_file(args.like)
+    _guard_output(args.out, [like.path], args.overwrite)
+    write_rest_only_model(like, args.out)
+    print(f'wrote {args.out}: the gyro less its turn-on bias, nothing learnt '
+          f'({like.meta["sample_rate_hz"]:g} Hz, the estimator of {like.path.name})')
+
+
 def _check_data(args: argparse.Namespace) -> None:
     from .core import jsonio
     from .data.check import check, markdown
@@ -309,6 +319,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--out', required=True, help='model file to write')
     p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.set_defaults(func=_ensemble)
+
+    p = sub.add_parser('rest-model', help='a model file that only removes the turn-on bias '
+                       "(crossval's verdict 'rest bias'), from a model trained with rest_bias")
+    p.add_argument('--like', required=True, help='a model trained with rest_bias: its rate, '
+                   'estimator and prior, recordings and verdict')
+    p.add_argument('--out', required=True, help='model file to write')
+    p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
+    p.set_defaults(func=_rest_model)
 
     p = sub.add_parser('tune-fusion', help="choose the gravity-aided filters' settings on the "
                        "model's training recordings (validation tails) and store them")

@@ -78,13 +78,14 @@ def deployment_warning(loaded: ModelFile) -> str | None:
     Why this model should not be deployed, from its cross-recording validation, or None.
 
     The stored report names what did best on unseen recordings (the network, the
-    calibration or no correction); a model of another kind still runs (benchmarks and
-    comparisons need it) but says so. None when it is the kind recommended, or when the
+    calibration, the turn-on bias alone or no correction); a model of another kind still
+    runs (benchmarks and comparisons need it) but says so. None when it is the kind recommended, or when the
     file has no report (``crossval --attach`` stores one).
     """
     report = loaded.meta.get('crossval')
     deploy = report.get('deploy') if isinstance(report, dict) else None
-    kind = 'calibration' if loaded.config.calibration_only else 'network'
+    kind = ('rest bias' if loaded.meta.get('kind') == 'rest bias' else
+            'calibration' if loaded.config.calibration_only else 'network')
     if deploy not in ('network', 'calibration', 'rest bias', 'none') or deploy == kind:
         return None
     return (f'{loaded.path.name} is a {kind} model, but the cross-recording validation of '

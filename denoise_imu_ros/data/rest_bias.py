@@ -24,15 +24,18 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields, replace
 import math
+from pathlib import Path
 from typing import Any, Iterable
 
 import numpy as np
 from vqf import VQF
 
+from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
+from ..core.modelfile import code_version, ModelFile, write_model_file
 
 __all__ = ['baseline_settings', 'CHOICES', 'RestBias', 'RestBiasSettings', 'model_input',
-           'nominal_bias',
+           'nominal_bias', 'write_rest_only_model',
            'rest_bias_batch', 'remove_rest_bias', 'resolve', 'settings_of']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
@@ -219,3 +222,31 @@ def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,
         return None, 0
     mean = np.mean(found, axis=0)
     return (float(mean[0]), float(mean[1]), float(mean[2])), len(found)
+
+
+REST_ONLY = 'rest bias'  # a model file's ``kind`` when it learns nothing (write_rest_only_model)
+
+
+def write_rest_only_model(like: ModelFile, path: str | Path) -> None:
+    """
+    Write a model file that removes the turn-on bias and corrects nothing else.
+
+    What ``crossval`` recommends where no learnt correction beats the raw gyro less its
+    turn-on bias (``deploy: rest bias``): the identity (a calibration with Δ = 0 and no
+    bias) fed the gyro less the estimate, with ``like``'s rate, estimator settings and
+    prior, recordings, recipe and cross-recording report, so that every tool runs it as
+    any model (the node, ``process-bag``, ``eval``, ``tune-fusion``).
+    """
+    settings = settings_of(like.meta, str(like.path))
+    if settings is None:
+        raise ModelFileError(f'{like.path}: not trained with rest_bias: it has no turn-on '
+                             'bias estimator (settings and prior) to run alone')
+    config = ModelConfig(gyro_std=like.config.gyro_std, calibration_only=True)
+    arrays = {'input_mean': np.zeros(6, np.float32), 'input_std': np.ones(6, np.float32),
+              'gyro_std': np.array(config.gyro_std, np.float32),
+              'delta': np.zeros((3, 3), np.float32), 'bias': np.zeros(3, np.float32)}
+    keep = ('dataset', 'sample_rate_hz', 'train_sequences', 'train_config', 'crossval')
+    meta = {k: like.meta[k] for k in keep if k in like.meta}
+    meta.update(kind=REST_ONLY, rest_bias=settings.to_dict(), made_from=str(like.path),
+                code_version=code_version())
+    write_model_file(path, config, arrays, meta)

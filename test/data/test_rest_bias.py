@@ -119,3 +119,30 @@ def test_malformed_stored_settings_are_refused_in_one_line(value):
     with pytest.raises(ModelFileError, match='m.safetensors: rest_bias') as err:
         rest_bias.settings_of({'rest_bias': value}, 'm.safetensors')
     assert '\n' not in str(err.value)
+
+
+def test_a_rest_only_model_runs_anywhere_a_model_does_and_corrects_nothing_else(tmp_path):
+    from denoise_imu_ros.cli import main
+    from denoise_imu_ros.core.modelfile import add_metadata, deployment_warning, read_model_file
+    from denoise_imu_ros.runtime.online import OnlineDenoiser
+    from helpers import write_untrained_model
+    settings = RestBiasSettings(prior_rad_s=(0.001, 0.002, 0.003))
+    report = {'deploy': 'rest bias', 'verdict': 'the network does not beat the raw gyro less '
+              'its turn-on bias: deploy no learnt correction'}
+    net = write_untrained_model(tmp_path / 'net.safetensors', {
+        'sample_rate_hz': RATE, 'rest_bias': settings.to_dict(), 'crossval': report})
+    assert main(['rest-model', '--like', str(net), '--out', str(tmp_path / 'rest')]) == 0
+    rest = read_model_file(tmp_path / 'rest')
+    assert rest.config.calibration_only and rest.meta['kind'] == 'rest bias'
+    assert rest_bias.settings_of(rest.meta) == settings and rest.meta['crossval'] == report
+    assert deployment_warning(rest) is None  # what the verdict recommends
+    assert 'deploy no learnt correction' in deployment_warning(read_model_file(net))
+    imu = _imu(3.0, 2.0)
+    den = OnlineDenoiser.from_model_file(rest)
+    got = np.array([den.process(10**9 + k * 5_000_000, s[:3], s[3:]).gyro
+                    for k, s in enumerate(imu)])
+    np.testing.assert_allclose(got, rest_bias.remove_rest_bias(imu, RATE, settings)[:, :3],
+                               rtol=0, atol=1e-7)
+    add_metadata(net, rest_bias=None)
+    assert main(['rest-model', '--like', str(net), '--out', str(tmp_path / 'x')]) == 1
+    assert not (tmp_path / 'x').exists()
