@@ -24,7 +24,7 @@ NEVER_OVER_A_BAG = 'a bag is never written over: remove it or choose another nam
 REST_BIAS_OPTION = {  # the node's rest_bias parameter, for the offline tools
     'choices': ('model', 'on', 'off'), 'default': 'model',
     'help': "remove the gyro's turn-on bias, estimated from stillness, before the model: "
-            "model (as the model was trained, the default), on, off"}
+            'model (as the model was trained, the default), on, off'}
 
 
 def _train(args: argparse.Namespace) -> None:

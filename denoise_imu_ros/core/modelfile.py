@@ -79,8 +79,8 @@ def deployment_warning(loaded: ModelFile) -> str | None:
 
     The stored report names what did best on unseen recordings (the network, the
     calibration, the turn-on bias alone or no correction); a model of another kind still
-    runs (benchmarks and comparisons need it) but says so. None when it is the kind recommended, or when the
-    file has no report (``crossval --attach`` stores one).
+    runs (benchmarks and comparisons need it) but says so. None when it is the kind
+    recommended, or when the file has no report (``crossval --attach`` stores one).
     """
     report = loaded.meta.get('crossval')
     deploy = report.get('deploy') if isinstance(report, dict) else None

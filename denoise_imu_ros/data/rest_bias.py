@@ -87,7 +87,7 @@ class RestBiasSettings:
                                  'constants and prior_sigma_rad_s must be positive')
         return settings
 
-    def filter(self, rate_hz: float) -> VQF:
+    def estimator(self, rate_hz: float) -> VQF:
         """Return a VQF that estimates the rest bias alone, started at the prior."""
         vqf = VQF(1.0 / rate_hz, motionBiasEstEnabled=False, restBiasEstEnabled=True,
                   restMinT=self.rest_min_s, restFilterTau=self.filter_tau_s,
@@ -130,14 +130,14 @@ class RestBias:
     def __init__(self, settings: RestBiasSettings, rate_hz: float) -> None:
         self.settings = settings
         self._rate_hz = rate_hz
-        self._vqf = settings.filter(rate_hz)
+        self._vqf = settings.estimator(rate_hz)
         self._gyro = np.zeros(3)
         self._accel = np.zeros(3)
         self.still_samples = 0  # samples detected still since the last reset
 
     def reset(self) -> None:
         """Start again from the prior (a new run: another power-on, a bag loop)."""
-        self._vqf = self.settings.filter(self._rate_hz)
+        self._vqf = self.settings.estimator(self._rate_hz)
         self.still_samples = 0
 
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
@@ -154,7 +154,7 @@ class RestBias:
         return self.still_samples / self._rate_hz
 
     def estimate(self) -> tuple[np.ndarray, float]:
-        """Return the bias estimate (3,) rad/s and its standard deviation, rad/s."""
+        """Return the current bias (3,) and its standard deviation, both rad/s."""
         bias, sigma = self._vqf.getBiasEstimate()
         return bias, float(sigma)
 
@@ -166,8 +166,9 @@ def rest_bias_batch(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings
 
     Equal to :meth:`RestBias.update` sample by sample (one C++ update, the same order).
     """
-    out = settings.filter(rate_hz).updateBatch(np.ascontiguousarray(imu[:, :3], dtype=float),
-                                               np.ascontiguousarray(imu[:, 3:], dtype=float))
+    out = settings.estimator(rate_hz).updateBatch(
+        np.ascontiguousarray(imu[:, :3], dtype=float),
+        np.ascontiguousarray(imu[:, 3:], dtype=float))
     return {'bias': out['bias'], 'sigma': out['biasSigma'],
             'rest': out['restDetected'].astype(bool)}
 
@@ -184,7 +185,7 @@ def remove_rest_bias(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings
 
 def baseline_settings(meta: dict[str, Any], where: str = 'model file') -> RestBiasSettings:
     """
-    The estimator of the practitioner's "rest bias" baseline rows of ``eval``/``crossval``.
+    Return the estimator of the "rest bias" baseline rows of ``eval`` and ``crossval``.
 
     The model's own settings and prior where it was trained with them; else the defaults
     with a prior of 0 and the wide clip, so that an IMU whose turn-on bias exceeds VQF's

@@ -26,9 +26,9 @@ from ..core import jsonio
 from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
+from ..data import rest_bias
 from ..data.load import load_sequence
 from ..learn import parallel
-from ..data import rest_bias
 from ..learn.checkpoint import load_model, LoadedModel
 from ..learn.config import load_config
 from ..learn.train import train
@@ -64,7 +64,7 @@ def session_folds(recordings: list[str], sessions: list[str]) -> list[list[str]]
            f'{", ".join(missing)} in no session' if missing else
            'fewer than two sessions' if len([g for g in groups if g]) < 2 else None)
     if why:
-        raise TrainingError(f'--sessions: {why} (each of the recipe\'s recordings in exactly '
+        raise TrainingError(f"--sessions: {why} (each of the recipe's recordings in exactly "
                             'one comma-separated group, at least two groups)')
     return [g for g in groups if g]
 
@@ -145,7 +145,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                   fold_kind='leave one power-on session out' if sessions else
                   'leave recordings out',
                   fold_training=(f'each fold trains on {"-".join(map(str, sizes))} of the '
-                                 f'recipe\'s {len(recipe.sequences)} recordings; a model of '
+                                 f"recipe's {len(recipe.sequences)} recordings; a model of "
                                  'the whole recipe trains on all of them, so these figures '
                                  'judge networks trained on less data than it'),
                   **({'seed': recipe.seed} if seeds is None else {
@@ -158,7 +158,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
 
 
 def _rest_bias_gyro(net: LoadedModel, imu: np.ndarray) -> np.ndarray:
-    """The raw gyro less its turn-on bias: the baseline's estimator for the fold network."""
+    """Return the raw gyro less its turn-on bias, by the fold network's baseline estimator."""
     settings = rest_bias.baseline_settings(net.meta, str(net.path))
     return rest_bias.remove_rest_bias(imu, float(net.meta['sample_rate_hz']), settings)[:, :3]
 

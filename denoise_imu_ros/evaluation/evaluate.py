@@ -53,7 +53,7 @@ def recording_names(sequences: list[str]) -> list[str]:
 
 def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndarray]:
     """
-    The gyro of every method: raw, rest bias (raw less the turn-on bias), then each model's.
+    Return the gyro of every method: raw, rest bias (less the turn-on bias), each model's.
 
     Each model is fed as it runs online (its rest-bias settings, if it has them). The
     rest-bias row: :func:`~denoise_imu_ros.data.rest_bias.baseline_settings`.
@@ -158,7 +158,8 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     report = {'model': str(loaded.path), 'model_code_version': loaded.meta.get('code_version'),
               'baseline': baseline,
               'rest_bias_input': {m: rest_bias.settings_of(lm.meta, str(lm.path)) is not None
-                                  for m, lm in models.items()}, 'data': str(data), 'start_sample': start_sample,
+                                  for m, lm in models.items()},
+              'data': str(data), 'start_sample': start_sample,
               'training_fit_note': note,
               'sequences': results,
               'average': average,

@@ -32,7 +32,6 @@ from ..core.records import Sequence
 from ..core.rotation import from_gravity
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
-from ..learn.model import correct_gyro
 from ..runtime.fusion import (fuse, FusionSettings, MAX_ACCEL_BIAS_M_S2, settings_of,
                               step_periods)
 

@@ -280,7 +280,6 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     from ..core.modelfile import fitting_note, gyro_covariance, scored_on_training_samples
     from ..data.load import load_sequence
     from ..learn.checkpoint import load_model
-    from ..learn.model import correct_gyro
     from .evaluate import check_inputs, default_baseline, recording_names
     names = recording_names(sequences)  # before the slow part: a name twice is refused
     net = load_model(model_spec)

@@ -113,7 +113,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                                          if off else ': clocks and frames agree'),
            f'rest_bias {"on" if recipe["rest_bias"] else "off"}: '
            f'{len(set(still) & set(sequences))} of {len(sequences)} recordings are still '
-           f'within {START_STILL_S:g} s of their start (each run\'s turn-on bias is '
+           f"within {START_STILL_S:g} s of their start (each run's turn-on bias is "
            + ('measured there, not learnt)' if recipe['rest_bias'] else
               'then learnt as part of the correction)')]
     if noise:

@@ -293,17 +293,17 @@ class GyroDenoiser(Node):
 
     @property
     def corrected_withheld(self) -> int:
-        """Accepted samples whose imu/corrected was not published."""
+        """Count the accepted samples whose imu/corrected was not published."""
         return self._outputs.counts['corrected_withheld']
 
     @property
     def fused_withheld(self) -> int:
-        """Accepted samples whose imu/data was not published."""
+        """Count the accepted samples whose imu/data was not published."""
         return self._outputs.counts['fused_withheld']
 
     @property
     def attitude_withheld(self) -> int:
-        """Accepted samples whose imu/attitude was not published."""
+        """Count the accepted samples whose imu/attitude was not published."""
         return self._outputs.counts['attitude_withheld']
 
     def _on_reset(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
@@ -378,7 +378,7 @@ class GyroDenoiser(Node):
         self._pub_diag.publish(array)
 
     def _rest_values(self) -> dict[str, str]:
-        """The turn-on bias estimate for /diagnostics: applied, seconds still, value."""
+        """Return the turn-on bias estimate for /diagnostics: applied, seconds still, value."""
         rest = self._denoiser.rest
         if rest is None:
             return {'rest_bias_applied': 'False'}

@@ -175,4 +175,3 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
             raise DatasetError(f'{src} -> {dst}: {err}') from err
     return {**{k: v for k, v in den.counts.items() if v or k in DROP_CAUSES},
             **{k: v for k, v in outputs.counts.items() if v}}
-

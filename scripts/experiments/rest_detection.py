@@ -17,7 +17,7 @@ import sys
 
 from denoise_imu_ros.core.metrics import score
 from denoise_imu_ros.data.load import load_sequence
-from denoise_imu_ros.data.rest_bias import RestBiasSettings, remove_rest_bias
+from denoise_imu_ros.data.rest_bias import remove_rest_bias, RestBiasSettings
 import numpy as np
 
 WAITS_S = (0.25, 0.5, 1.0, 1.5)   # VQF's default: 1.5 s

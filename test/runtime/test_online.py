@@ -245,7 +245,6 @@ def test_a_correction_that_is_not_finite_is_dropped_never_output(tmp_path, seq):
     assert den.counts['non_finite_output'] == 20
 
 
-
 def test_with_a_rest_bias_the_model_sees_what_the_batch_path_feeds_it(seq, model):
     from denoise_imu_ros.data.rest_bias import (model_input, rest_bias_batch, RestBias,
                                                 RestBiasSettings, remove_rest_bias)

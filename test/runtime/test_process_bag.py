@@ -145,7 +145,7 @@ def test_every_offline_tool_refuses_a_stream_at_another_rate(model_file, tmp_pat
 
 
 def test_a_non_finite_input_covariance_is_never_published(harness, tmp_path):
-    """NaN accelerometer covariance in, zeros ('unknown') out, counted."""
+    """A NaN accelerometer covariance in, zeros ('unknown') out, counted."""
     import math
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core import msgs
