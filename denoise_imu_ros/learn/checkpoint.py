@@ -22,6 +22,11 @@ from ..core.modelfile import code_version, read_model_file, sample_rate, write_m
 from ..data import rest_bias
 
 
+# imu/data's filter settings (tune-fusion) and the cross-recording verdict (crossval
+# --seeds): kept by an ensemble when every member carries the same
+SHARED_BY_MEMBERS = ('fusion', 'crossval')
+
+
 class LoadedModel(NamedTuple):
     """A torch model in eval mode plus the metadata it was saved with."""
 
@@ -53,7 +58,9 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
     Write one model file averaging the outputs of trained model files (see model.merge).
 
     The metadata keeps each member's seed and validation figures; the residual std the
-    node publishes as covariance is the members' mean (the ensemble's own is lower).
+    node publishes as covariance is the members' mean (the ensemble's own is lower). The
+    filter settings and the verdict are kept where every member has the same, else
+    dropped (``tune-fusion --attach`` and ``crossval --attach`` store the ensemble's).
     """
     members = [load_model(spec) for spec in specs]
     if len(members) < 2:
@@ -99,6 +106,10 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
         'code_version': code_version(),
         'created': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
     }
+    for key in SHARED_BY_MEMBERS:  # what every member says alike describes the ensemble
+        values = [m.meta.get(key) for m in members]
+        if values[0] is not None and all(v == values[0] for v in values):
+            meta[key] = values[0]
     save_model(path, model, meta)
     return load_model(path)
 

@@ -260,3 +260,23 @@ def test_an_ensemble_keeps_its_members_turn_on_bias_settings_or_refuses_two(tmp_
     save_model(tmp_path / 'raw.safetensors', untrained_model(), {'sample_rate_hz': 200.0})
     with pytest.raises(ModelFileError, match='remove different turn-on biases'):
         save_ensemble(tmp_path / 'ar.safetensors', [paths[0], tmp_path / 'raw.safetensors'])
+
+
+def test_an_ensemble_keeps_the_filter_settings_and_verdict_its_members_share(tmp_path, capsys):
+    from denoise_imu_ros.cli import main
+    from helpers import untrained_model
+    fusion = {'settings': {'tau_acc_s': 5.0, 'bias_estimation': False}}
+    verdict = {'deploy': 'network', 'verdict': 'deploy the network'}
+    for name, tau in (('a', 5.0), ('b', 5.0), ('c', 3.0)):
+        save_model(tmp_path / f'{name}.safetensors', untrained_model(), {
+            'sample_rate_hz': 200.0, 'crossval': verdict,
+            'fusion': dict(fusion, settings={'tau_acc_s': tau, 'bias_estimation': False})})
+    alike = save_ensemble(tmp_path / 'ab.safetensors',
+                          [tmp_path / 'a.safetensors', tmp_path / 'b.safetensors'])
+    assert alike.meta['fusion'] == fusion and alike.meta['crossval'] == verdict
+    assert main(['ensemble', str(tmp_path / 'a.safetensors'), str(tmp_path / 'c.safetensors'),
+                 '--out', str(tmp_path / 'ac.safetensors')]) == 0
+    differ = load_model(tmp_path / 'ac.safetensors')
+    assert 'fusion' not in differ.meta and differ.meta['crossval'] == verdict
+    err = capsys.readouterr().err
+    assert "do not all carry the same imu/data's filter settings" in err and 'verdict' not in err
