@@ -104,12 +104,13 @@ def _check_writable(folder: str | Path | None) -> None:
 
 
 def _crossval(args: argparse.Namespace) -> None:
-    from .core.modelfile import add_metadata, read_model_file
+    from .core.modelfile import add_metadata, check_attachable, read_model_file
     from .evaluation.crossval import attach_mismatches, crossval
     from .evaluation.reports import crossval_table
     from .learn.config import load_config
     recipe = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps)
     for path in args.attach or []:  # before the folds train, not after
+        check_attachable(path)
         why = attach_mismatches({'folds': [recipe.sequences], 'steps': recipe.steps},
                                 read_model_file(path).meta)
         if why:
@@ -140,7 +141,11 @@ def _init_recipe(args: argparse.Namespace) -> None:
 
 
 def _tune_fusion(args: argparse.Namespace) -> None:
+    from .core.modelfile import check_attachable
     from .evaluation.filters import attach, table, tune_model
+    if args.attach:  # before the work, not after
+        for spec in (args.model, args.baseline):
+            check_attachable(spec)
     report = tune_model(args.model, args.baseline, args.data, progress=not args.quiet)
     sys.stdout.write(table(report))
     if args.attach:

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import asdict
 import json
 import math
+import os
 from pathlib import Path
 import subprocess
 from typing import Any, NamedTuple, Protocol
@@ -164,14 +165,32 @@ def write_model_file(path: str | Path, config: ModelConfig, arrays: dict[str, np
         raise OutputError(f'{path}: cannot write the model file ({err})') from err
 
 
+def check_attachable(spec: str | Path, option: str = '--attach') -> Path:
+    """
+    Return the model file ``spec`` names if figures may be stored in it, else refuse.
+
+    A shipped model is the installed package's, shared by every user of the install: it
+    is never rewritten (copy it and attach to the copy). Checked before the work that
+    produces the figures, so that none is lost.
+    """
+    path = resolve(spec)
+    if path.resolve().parent == SHIPPED_DIR.resolve():
+        raise ModelFileError(f'{option} {spec}: a shipped model, shared by every user of '
+                             'this install, is never rewritten: copy it and attach to the copy')
+    if not (os.access(path, os.W_OK) and os.access(path.parent, os.W_OK)):
+        raise ModelFileError(f'{option} {spec}: not writable here (the file or its folder)')
+    return path
+
+
 def add_metadata(path: str | Path, **meta: Any) -> None:
     """
     Add or replace metadata entries of an existing model file (weights untouched).
 
     Used to store figures measured after training (cross-recording validation). The file
     is rewritten under a temporary name and renamed, so a failure leaves it intact.
+    Shipped models are refused (:func:`check_attachable`).
     """
-    mf = read_model_file(path)
+    mf = read_model_file(check_attachable(path))
     write_model_file(mf.path, mf.config, mf.arrays, dict(mf.meta, **meta))
 
 

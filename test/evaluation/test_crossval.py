@@ -217,3 +217,22 @@ def test_session_folds_leave_one_power_on_out_and_refuse_a_bad_grouping():
                         (['b1,b2,c1,c2,c3'], 'fewer than two sessions')):
         with pytest.raises(TrainingError, match=f'--sessions: {why} '):
             session_folds(names, groups)
+
+
+def test_a_shipped_model_is_never_rewritten_by_an_attach_and_refused_before_any_work(
+        tmp_path, capsys):
+    import hashlib
+    from denoise_imu_ros.core.modelfile import resolve
+    shipped = resolve('euroc')
+    before = hashlib.sha256(shipped.read_bytes()).hexdigest()
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump({
+        'dataset': 'synthetic', 'data': str(tmp_path), 'sequences': ['rec0', 'rec1']}))
+    for cmd in (['crossval', '--config', str(tmp_path / 'r.yaml'), '--attach', 'euroc'],
+                ['tune-fusion', '--model', 'euroc', '--baseline', 'euroc_calibrated',
+                 '--data', str(tmp_path / 'absent'), '--attach']):
+        assert main(cmd) == 1  # the recordings do not even exist: nothing was read
+        err = capsys.readouterr().err.strip()
+        assert err.endswith('--attach euroc: a shipped model, shared by every user of this '
+                            'install, is never rewritten: copy it and attach to the copy')
+        assert len(err.splitlines()) == 1
+    assert hashlib.sha256(shipped.read_bytes()).hexdigest() == before
