@@ -141,10 +141,10 @@ def check_gyro_against_poses(gyro: np.ndarray, gt_quat: np.ndarray, gt_valid: np
                            'as the poses: gyro in deg/s? (rad/s expected)')
 
 
-def check_rate(stamps_ns: np.ndarray, model_rate_hz: float | None, source: object) -> None:
+def check_rate(stamps_ns: np.ndarray, model_rate_hz: float, source: object) -> None:
     """Refuse a recording whose IMU rate is more than RATE_TOLERANCE off the model's."""
     rate = stream_rate_hz(stamps_ns)
-    if model_rate_hz and abs(rate / model_rate_hz - 1) > RATE_TOLERANCE:
+    if abs(rate / model_rate_hz - 1) > RATE_TOLERANCE:
         raise DatasetError(f'{source}: IMU rate {rate:.1f} Hz, the model was trained at '
                            f'{model_rate_hz:.1f} Hz (more than {100 * RATE_TOLERANCE:g} % '
                            'off: retrain at this rate or resample)')

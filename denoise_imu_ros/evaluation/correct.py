@@ -16,7 +16,7 @@ import numpy as np
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
 from ..core.limits import check_gaps, check_rate, check_units
-from ..core.modelfile import ModelFile, read_model_file
+from ..core.modelfile import ModelFile, read_model_file, sample_rate
 from ..data import rest_bias
 from ..data.load import load_imu
 from ..runtime.streaming import StreamingCorrector
@@ -53,9 +53,9 @@ def correct_to_csv(model_spec: str, source: str, output: str,
     if len(rec.imu) < field:
         raise DatasetError(f'{source}: {len(rec.imu)} IMU samples, shorter than the '
                            f'receptive field ({field})')
-    check_rate(rec.imu_stamp_ns, loaded.meta.get('sample_rate_hz'), source)
+    check_rate(rec.imu_stamp_ns, sample_rate(loaded), source)
     check_units(rec.imu, source, loaded.arrays['input_std'])
-    check_gaps(rec.imu_stamp_ns, loaded.meta.get('sample_rate_hz'), source)
+    check_gaps(rec.imu_stamp_ns, sample_rate(loaded), source)
     omega = corrected_gyro(loaded, rec.imu, engine, rest)
     with atomic_output(output, overwrite=True) as tmp, open(tmp, 'w') as f:
         f.write('timestamp_ns,wx,wy,wz\n')

@@ -25,8 +25,8 @@ from ..core.errors import OptionError, OutputError
 from ..core.limits import check_gaps, check_rate, check_units
 from ..core.metrics import (align_yaw, error_components, sequence_errors,
                             tilt_growth_deg_min)
-from ..core.modelfile import (fitting_note, scored_on_training_samples, shipped_models,
-                              training_span)
+from ..core.modelfile import (fitting_note, sample_rate, scored_on_training_samples,
+                              shipped_models, training_span)
 from ..core.records import Sequence
 from ..data import rest_bias
 from ..data.load import load_sequence
@@ -77,9 +77,9 @@ def rest_note(rest_input: dict[str, bool]) -> str:
 
 def check_inputs(seq: Sequence, loaded: LoadedModel, name: str) -> None:
     """Refuse a recording this model cannot score: another rate, unit, or IMU holes."""
-    check_rate(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
+    check_rate(seq.stamp_ns, sample_rate(loaded), name)
     check_units(seq.imu, name, loaded.model.input_std.numpy())
-    check_gaps(seq.stamp_ns, loaded.meta.get('sample_rate_hz'), name)
+    check_gaps(seq.stamp_ns, sample_rate(loaded), name)
 
 
 def evaluate(model_spec: str, data: str, sequences: list[str], out: str,

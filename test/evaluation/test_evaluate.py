@@ -99,3 +99,16 @@ def test_one_recording_given_twice_is_refused_not_averaged_twice(model_file, tmp
     assert main(['eval', '--model', str(model_file), '--data', str(SAMPLE_DIR), '--sequences',
                  SAMPLE.name, f'{SAMPLE.name}/', '--out', str(tmp_path / 'e')]) == 1
     assert f'--sequences: {SAMPLE.name} given twice' in capsys.readouterr().err
+
+
+def test_a_model_file_without_a_sample_rate_is_refused_by_eval_and_correct(tmp_path, capsys):
+    from helpers import write_untrained_model
+    model = write_untrained_model(tmp_path / 'norate.safetensors', {'dataset': 'test'})
+    for cmd in (['eval', '--model', str(model), '--data', str(SAMPLE_DIR), '--sequences',
+                 SAMPLE.name, '--out', str(tmp_path / 'e'), '--baseline', str(model)],
+                ['correct', '--model', str(model), '--input', str(SAMPLE),
+                 '--output', str(tmp_path / 'c.csv'), '--engine', 'streaming']):
+        assert main(cmd) == 1
+        err = capsys.readouterr().err.strip()
+        assert err.endswith('norate.safetensors: model file has no valid sample rate'), err
+    assert not (tmp_path / 'c.csv').exists()
