@@ -20,6 +20,13 @@ def model_file(tmp_path) -> Path:
         'validation': {'gyro_residual_std': [0.01, 0.02, 0.03]}})
 
 
+@pytest.fixture()
+def calib_file(tmp_path) -> Path:
+    """Write an untrained 200 Hz calibration (the 12-parameter baseline) model file."""
+    return write_untrained_model(tmp_path / 'calibrated.safetensors', {
+        'dataset': 'test', 'sample_rate_hz': 200.0}, calibration_only=True)
+
+
 @pytest.fixture(scope='session')
 def data_dir() -> Path:
     """Return ../shared/data, or skip the test."""

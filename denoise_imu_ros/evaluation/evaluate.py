@@ -30,7 +30,7 @@ from ..core.modelfile import (fitting_note, sample_rate, scored_on_training_samp
 from ..core.records import Sequence
 from ..data import rest_bias
 from ..data.load import load_sequence
-from ..learn.checkpoint import load_model, LoadedModel
+from ..learn.checkpoint import check_baseline, load_model, LoadedModel
 
 
 def default_baseline(meta: dict[str, Any], baseline: str | None) -> str | None:
@@ -101,6 +101,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     baseline = default_baseline(loaded.meta, baseline)
     if baseline is not None:
         models = {'calibrated': load_model(baseline), 'network': loaded}
+        check_baseline(loaded, models['calibrated'])
     out_dir = Path(out)
     if start_sample < 0:
         raise OptionError(f'--start-sample {start_sample}: must be 0 or more')

@@ -31,7 +31,7 @@ from ..core.modelfile import read_model_file, sample_rate, training_span
 from ..core.records import Sequence
 from ..core.rotation import from_gravity
 from ..data.load import load_sequence
-from ..learn.checkpoint import load_model
+from ..learn.checkpoint import check_baseline, load_model
 from ..runtime.fusion import (fuse, FusionSettings, MAX_ACCEL_BIAS_M_S2, settings_of,
                               step_periods)
 
@@ -239,6 +239,7 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
     """
     net = load_model(model_spec)
     calib = load_model(baseline_spec)
+    check_baseline(net, calib)
     cfg = net.meta.get('train_config') or {}
     names = net.meta.get('train_sequences') or []
     folder = data or (net.meta.get('run') or {}).get('data')

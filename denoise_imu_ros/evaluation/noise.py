@@ -279,12 +279,14 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     """Run the noise figures of raw, calibrated and corrected gyro; write and return them."""
     from ..core.modelfile import fitting_note, gyro_covariance, scored_on_training_samples
     from ..data.load import load_sequence
-    from ..learn.checkpoint import load_model
+    from ..learn.checkpoint import check_baseline, load_model
     from .evaluate import check_inputs, default_baseline, recording_names
     names = recording_names(sequences)  # before the slow part: a name twice is refused
     net = load_model(model_spec)
     baseline = default_baseline(net.meta, baseline)
     calib = load_model(baseline) if baseline is not None else None
+    if calib is not None:
+        check_baseline(net, calib)
     fitted_on = scored_on_training_samples(net.meta, names, 0)
     note = fitting_note(fitted_on, None) if fitted_on else None  # no --start-sample here
     if note:

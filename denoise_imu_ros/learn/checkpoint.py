@@ -114,6 +114,25 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
     return load_model(path)
 
 
+def check_baseline(model: LoadedModel, baseline: LoadedModel) -> None:
+    """
+    Refuse a calibration baseline that does not belong with ``model``: one line each.
+
+    It must be a calibration (``train --calibration-only``), not a network nor a rest-only
+    file, and of the model's IMU rate: the "calibrated" rows and the filter settings
+    stored crosswise would otherwise be wrong without a word.
+    """
+    role = ('a rest-only model' if baseline.meta.get('kind') == 'rest bias' else
+            None if baseline.model.config.calibration_only else 'a network')
+    if role:
+        raise ModelFileError(f'--baseline {baseline.path}: {role}, not a calibration (train '
+                             '--calibration-only makes one)')
+    rates = sample_rate(model), sample_rate(baseline)
+    if abs(rates[1] / rates[0] - 1) > 1e-3:
+        raise ModelFileError(f'--baseline {baseline.path}: a calibration of {rates[1]:.2f} Hz, '
+                             f'the model {model.path.name} is of {rates[0]:.2f} Hz')
+
+
 def load_model(spec: str | Path) -> LoadedModel:
     """Rebuild the torch model of a file, in eval mode (training, batch evaluation)."""
     mf = read_model_file(spec)

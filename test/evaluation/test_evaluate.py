@@ -25,11 +25,11 @@ def test_chunked_correction_equals_one_batch_call(model_file, monkeypatch):
     np.testing.assert_allclose(correct_gyro(model, imu), whole, rtol=0, atol=1e-6)
 
 
-def test_eval_writes_json_markdown_and_figures(model_file, tmp_path):
+def test_eval_writes_json_markdown_and_figures(model_file, calib_file, tmp_path):
     out = tmp_path / 'eval'
     assert main(['eval', '--model', str(model_file), '--data', str(SAMPLE_DIR),
                  '--sequences', SAMPLE.name, '--out', str(out),
-                 '--baseline', str(model_file)]) == 0
+                 '--baseline', str(calib_file)]) == 0
     report = json.loads((out / 'results.json').read_text())
     seq = report['sequences'][SAMPLE.name]
     assert set(seq) == {'raw', 'rest bias', 'calibrated', 'network'}
@@ -48,13 +48,14 @@ def test_eval_writes_json_markdown_and_figures(model_file, tmp_path):
         assert (out / png).read_bytes()[:4] == b'\x89PNG'
 
 
-def test_eval_of_a_short_recording_writes_strict_json_and_plots(model_file, tmp_path):
+def test_eval_of_a_short_recording_writes_strict_json_and_plots(model_file, calib_file,
+                                                                 tmp_path):
     """Never 35 m travelled, and a name ending in '/'."""
     from helpers import write_asl
     write_asl(tmp_path / 'data' / 'base', n_imu=3000)  # 15 s turning on the spot
     out = tmp_path / 'eval'
     assert main(['eval', '--model', str(model_file), '--data', str(tmp_path / 'data'),
-                 '--sequences', 'base/', '--out', str(out), '--baseline', str(model_file)]) == 0
+                 '--sequences', 'base/', '--out', str(out), '--baseline', str(calib_file)]) == 0
     text = (out / 'results.json').read_text()
     assert 'NaN' not in text and 'Infinity' not in text
     report = json.loads(text)
@@ -67,14 +68,15 @@ def test_eval_of_a_short_recording_writes_strict_json_and_plots(model_file, tmp_
                                                      'roe.png']
 
 
-def test_eval_says_when_it_scores_a_recording_the_model_was_fitted_on(tmp_path, capsys):
+def test_eval_says_when_it_scores_a_recording_the_model_was_fitted_on(tmp_path, calib_file,
+                                                                       capsys):
     from helpers import write_untrained_model
     model = write_untrained_model(tmp_path / 'model.safetensors', {
         'dataset': 'test', 'sample_rate_hz': 200.0, 'train_sequences': [SAMPLE.name],
         'train_config': {'window': 1000, 'max_offset': 32}})
     out = tmp_path / 'eval'
     assert main(['eval', '--model', str(model), '--data', str(SAMPLE_DIR), '--sequences',
-                 SAMPLE.name, '--out', str(out), '--baseline', str(model), '--no-plots']) == 0
+                 SAMPLE.name, '--out', str(out), '--baseline', str(calib_file), '--no-plots']) == 0
     warning = capsys.readouterr().err
     assert f'warning: {SAMPLE.name} was used to train this model (samples 0-1031)' in warning
     assert '--start-sample 1032' in warning
@@ -101,14 +103,36 @@ def test_one_recording_given_twice_is_refused_not_averaged_twice(model_file, tmp
     assert f'--sequences: {SAMPLE.name} given twice' in capsys.readouterr().err
 
 
-def test_a_model_file_without_a_sample_rate_is_refused_by_eval_and_correct(tmp_path, capsys):
+def test_a_model_file_without_a_sample_rate_is_refused_by_eval_and_correct(tmp_path, calib_file,
+                                                                            capsys):
     from helpers import write_untrained_model
     model = write_untrained_model(tmp_path / 'norate.safetensors', {'dataset': 'test'})
     for cmd in (['eval', '--model', str(model), '--data', str(SAMPLE_DIR), '--sequences',
-                 SAMPLE.name, '--out', str(tmp_path / 'e'), '--baseline', str(model)],
+                 SAMPLE.name, '--out', str(tmp_path / 'e'), '--baseline', str(calib_file)],
                 ['correct', '--model', str(model), '--input', str(SAMPLE),
                  '--output', str(tmp_path / 'c.csv'), '--engine', 'streaming']):
         assert main(cmd) == 1
         err = capsys.readouterr().err.strip()
         assert err.endswith('norate.safetensors: model file has no valid sample rate'), err
     assert not (tmp_path / 'c.csv').exists()
+
+
+def test_a_baseline_that_is_a_network_or_of_another_rate_is_refused_by_every_command(
+        model_file, tmp_path, capsys):
+    from denoise_imu_ros.learn.checkpoint import save_model
+    from helpers import untrained_model
+    calib100 = tmp_path / 'calib100.safetensors'
+    save_model(calib100, untrained_model(calibration_only=True), {'sample_rate_hz': 100.0})
+    for baseline, why in ((model_file, 'a network, not a calibration (train '
+                                       '--calibration-only makes one)'),
+                          (calib100, 'a calibration of 100.00 Hz, the model model.safetensors '
+                                     'is of 200.00 Hz')):
+        for cmd in (['eval', '--out', str(tmp_path / 'e'), '--data', str(SAMPLE_DIR),
+                     '--sequences', SAMPLE.name],
+                    ['noise', '--out', str(tmp_path / 'n'), '--data', str(SAMPLE_DIR),
+                     '--sequences', SAMPLE.name],
+                    ['tune-fusion', '--data', str(SAMPLE_DIR)]):
+            assert main([*cmd, '--model', str(model_file), '--baseline', str(baseline)]) == 1
+            err = capsys.readouterr().err.strip()
+            assert err.endswith(f'--baseline {baseline}: {why}'), err
+            assert len(err.splitlines()) == 1
