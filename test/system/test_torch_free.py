@@ -8,7 +8,8 @@ import subprocess
 import sys
 import time
 
-from helpers import DOMAIN, SAMPLE, write_asl
+from denoise_imu_ros.data.rest_bias import RestBiasSettings
+from helpers import DOMAIN, SAMPLE, write_asl, write_untrained_model
 import pytest
 
 BLOCKER = '''
@@ -48,9 +49,12 @@ def _cli(env: dict, *args: str) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize('command', ['convert', 'process-bag', 'correct', 'check-data',
-                                     'init-recipe'])
+                                     'init-recipe', 'rest-model'])
 def test_the_offline_commands_run_without_torch(no_torch_env, tmp_path, command):
+    rest = write_untrained_model(tmp_path / 'rest.safetensors', {
+        'sample_rate_hz': 200.0, 'rest_bias': RestBiasSettings().to_dict()})
     args, expect = {
+        'rest-model': (['--like', str(rest), '--out', str(tmp_path / 'r')], 'wrote'),
         'convert': ([str(write_asl(tmp_path / 'asl', n_imu=2000)), str(tmp_path / 'bag')],
                     'wrote'),
         'process-bag': ([str(SAMPLE), str(tmp_path / 'out'), '--model', 'euroc'], 'wrote'),
