@@ -12,8 +12,10 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+import signal
 import sys
 import tempfile
+import threading
 
 from .core.errors import DenoiseError, OptionError, OutputError
 
@@ -465,9 +467,29 @@ def _check_options(args: argparse.Namespace) -> None:
                               f'{bound}{limit}')
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the command is, so that its partial outputs are removed."""
+
+
+def _on_sigterm(_signum: int, _frame: object) -> None:
+    raise Terminated
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``denoise-imu`` console script."""
     args = build_parser().parse_args(argv)
+    # play stops on SIGTERM as ros2 bag play does (exit 0); a caller's handler is restored
+    own = args.command != 'play' and threading.current_thread() is threading.main_thread()
+    before = signal.signal(signal.SIGTERM, _on_sigterm) if own else None
+    try:
+        return _run(args)
+    finally:
+        if own:
+            signal.signal(signal.SIGTERM, before)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run a parsed command: its errors as one line and an exit code."""
     if args.command in TORCH_COMMANDS or getattr(args, 'engine', None) == 'batch':
         import torch
         # Denormal floats in the network's activations slow its CPU convolutions tenfold.
@@ -482,6 +504,9 @@ def main(argv: list[str] | None = None) -> int:
         where = f'{err.filename}: ' if err.filename else ''
         print(f'denoise-imu {args.command}: error: {where}{err.strerror or err}', file=sys.stderr)
         return 1
+    except Terminated:  # a KeyboardInterrupt: training's workers are stopped as for Ctrl-C
+        print(f'denoise-imu {args.command}: terminated', file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
         print(f'denoise-imu {args.command}: interrupted', file=sys.stderr)
         return 130

@@ -312,3 +312,21 @@ def test_a_clock_set_back_mid_bag_is_two_sessions_not_one_interleaved(tmp_path, 
     assert counts.get('gap_resets', 0) == 0 and counts['out_of_order'] == 0
     order = stamp_order(np.array([5, 3, 4, 100, 90, 2, 1]), 50)
     assert order.tolist() == [1, 2, 0, 4, 3, 6, 5]  # the 2 starts a session
+
+
+def test_sigterm_during_process_bag_leaves_no_partial_bag(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+    proc = subprocess.Popen([sys.executable, '-m', 'denoise_imu_ros.cli', 'process-bag',
+                             str(SAMPLE), str(tmp_path / 'out'), '--model', 'euroc'],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not list(tmp_path.glob('.out.*')) and time.monotonic() < deadline:
+        time.sleep(0.01)  # the hidden partial bag exists: it is being written
+    assert list(tmp_path.glob('.out.*')), 'process-bag never started writing'
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143 and err.strip() == 'denoise-imu process-bag: terminated'
+    assert list(tmp_path.iterdir()) == []  # neither the bag nor its hidden partial copy
