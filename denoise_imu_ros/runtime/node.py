@@ -148,23 +148,18 @@ class GyroDenoiser(Node):
         self._types = msgs.rclpy_types()
         self._fixed_frame = p('fixed_frame').value
 
-        self._pub_imu = self.create_publisher(
-            Imu, 'imu/corrected', QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
-        self._pub_fused = self.create_publisher(
-            Imu, 'imu/data', QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies()
-        ) if fusion is not None else None
-        self._pub_att = self.create_publisher(
-            QuaternionStamped, 'imu/attitude',
-            QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
-        self._pub_diag = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self._sub = self.create_subscription(
-            Imu, 'imu/data_raw', self._on_imu,
-            QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=p('input_queue_depth').value,
-                       reliability=ReliabilityPolicy.BEST_EFFORT),
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+        for name, value in self._given_parameters().items():  # rcl's own error is C spam
+            if name.startswith('qos_overrides.') and name.endswith('.depth') and (
+                    isinstance(value.value, int) and value.value < 1):
+                raise DenoiseError(f'bad parameter: {name} must be a positive integer, not '
+                                   f'{value.value}')
+        try:  # the QoS overrides given as parameters are read here
+            self._create_topics(fusion is not None)
+        except (RuntimeError, ParameterException, _rclpy.RCLError) as err:
+            why = ' '.join(str(err).split())
+            raise DenoiseError(f'bad parameter: a qos_overrides value rclpy cannot use ({why}; '
+                               'depth: a positive integer, reliability: reliable or '
+                               'best_effort, history: keep_last or keep_all)') from err
         self.create_service(Trigger, '~/reset_attitude', self._on_reset)
         # wall-clock timers: with use_sim_time and no /clock (a bag played without --clock)
         # sim time stands still, and the rate check and diagnostics must still run
@@ -197,12 +192,34 @@ class GyroDenoiser(Node):
         # rclpy ignores a value given for a parameter no node declares: say so, since a
         # misspelt name would otherwise run with the default (the QoS overrides are
         # declared by now, with the publishers and the subscription)
-        given = getattr(self, '_parameter_overrides', {})  # rclpy keeps them, privately
+        given = self._given_parameters()
         self.unknown_parameters = sorted(n for n in given if not self.has_parameter(n))
         if self.unknown_parameters:
             self.get_logger().warning(
                 f'ignored parameters this node does not have: '
                 f'{", ".join(self.unknown_parameters)} (gyro_denoiser --help lists its own)')
+
+    def _given_parameters(self) -> dict:
+        """Return the parameter values given at start-up (rclpy keeps them, privately)."""
+        return getattr(self, '_parameter_overrides', {})
+
+    def _create_topics(self, fused: bool) -> None:
+        """Create the publishers and the subscription, with their QoS overrides."""
+        reliable = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+        overridable = QoSOverridingOptions.with_default_policies
+        self._pub_imu = self.create_publisher(Imu, 'imu/corrected', reliable,
+                                              qos_overriding_options=overridable())
+        self._pub_fused = self.create_publisher(
+            Imu, 'imu/data', reliable, qos_overriding_options=overridable()) if fused else None
+        self._pub_att = self.create_publisher(QuaternionStamped, 'imu/attitude', reliable,
+                                              qos_overriding_options=overridable())
+        self._pub_diag = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._sub = self.create_subscription(
+            Imu, 'imu/data_raw', self._on_imu,
+            QoSProfile(history=HistoryPolicy.KEEP_LAST,
+                       depth=self.get_parameter('input_queue_depth').value,
+                       reliability=ReliabilityPolicy.BEST_EFFORT),
+            qos_overriding_options=overridable())
 
     # -- parameters ---------------------------------------------------------------
     def _apply_parameters(self) -> None:

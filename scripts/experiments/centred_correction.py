@@ -42,9 +42,9 @@ def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
         seq = load_sequence(Path(data) / name, align_poses=align)
         gyro = net.correct(seq.imu)
         rest = rest_bias.remove_rest_bias(seq.imu, net.meta['sample_rate_hz'], settings)
-        print(f'{name}: rest bias {score(seq, rest[:, :3])["aoe_deg"]:.2f}, network '
-              f'{score(seq, gyro)["aoe_deg"]:.2f}, centred {score(seq, gyro - mean)["aoe_deg"]:.2f}'
-              ' deg', flush=True)
+        figures = [score(seq, g)['aoe_deg'] for g in (rest[:, :3], gyro, gyro - mean)]
+        print(f'{name}: rest bias {figures[0]:.2f}, network {figures[1]:.2f}, centred '
+              f'{figures[2]:.2f} deg', flush=True)
 
 
 if __name__ == '__main__':

@@ -48,8 +48,8 @@ def test_eval_writes_json_markdown_and_figures(model_file, calib_file, tmp_path)
         assert (out / png).read_bytes()[:4] == b'\x89PNG'
 
 
-def test_eval_of_a_short_recording_writes_strict_json_and_plots(model_file, calib_file,
-                                                                 tmp_path):
+def test_eval_of_a_short_recording_writes_strict_json_and_plots(
+        model_file, calib_file, tmp_path):
     """Never 35 m travelled, and a name ending in '/'."""
     from helpers import write_asl
     write_asl(tmp_path / 'data' / 'base', n_imu=3000)  # 15 s turning on the spot
@@ -68,8 +68,8 @@ def test_eval_of_a_short_recording_writes_strict_json_and_plots(model_file, cali
                                                      'roe.png']
 
 
-def test_eval_says_when_it_scores_a_recording_the_model_was_fitted_on(tmp_path, calib_file,
-                                                                       capsys):
+def test_eval_says_when_it_scores_a_recording_the_model_was_fitted_on(
+        tmp_path, calib_file, capsys):
     from helpers import write_untrained_model
     model = write_untrained_model(tmp_path / 'model.safetensors', {
         'dataset': 'test', 'sample_rate_hz': 200.0, 'train_sequences': [SAMPLE.name],
@@ -103,8 +103,8 @@ def test_one_recording_given_twice_is_refused_not_averaged_twice(model_file, tmp
     assert f'--sequences: {SAMPLE.name} given twice' in capsys.readouterr().err
 
 
-def test_a_model_file_without_a_sample_rate_is_refused_by_eval_and_correct(tmp_path, calib_file,
-                                                                            capsys):
+def test_a_model_file_without_a_sample_rate_is_refused_by_eval_and_correct(
+        tmp_path, calib_file, capsys):
     from helpers import write_untrained_model
     model = write_untrained_model(tmp_path / 'norate.safetensors', {'dataset': 'test'})
     for cmd in (['eval', '--model', str(model), '--data', str(SAMPLE_DIR), '--sequences',

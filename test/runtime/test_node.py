@@ -419,6 +419,12 @@ print('ok')
     (['-p', 'fusion_tau_acc:=-5.0'], 'fusion_tau_acc out of range'),
     (['-p', 'fusion_accel_bias:=on'], "fusion_accel_bias must be 'model' or off, not on"),
     (['-p', 'rest_bias:=sometimes'], "rest_bias must be 'model', on or off, not 'sometimes'"),
+    (['-p', 'qos_overrides./imu/corrected.publisher.reliability:=sometimes'],
+     'a qos_overrides value rclpy cannot use (Unexpected QoS override for policy'),
+    (['-p', 'qos_overrides./imu/data_raw.subscription.depth:=-5'],
+     'qos_overrides./imu/data_raw.subscription.depth must be a positive integer, not -5'),
+    (['-p', "qos_overrides./imu/data_raw.subscription.depth:='10'"],
+     'a qos_overrides value rclpy cannot use (Trying to set parameter'),
     (['-p', "fixed_frame:=''"], 'fixed_frame must name a frame'),
 ])
 def test_a_bad_parameter_is_a_one_line_error_at_start_up(args, message, capsys):
