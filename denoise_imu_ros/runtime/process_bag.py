@@ -23,7 +23,7 @@ from rosbags.rosbag2 import (CompressionFormat, CompressionMode, StoragePlugin, 
                              WriterError)
 
 from .fusion import orientation_covariance, settings_of
-from .online import Drop, DROP_CAUSES, OnlineDenoiser
+from .online import Drop, DROP_CAUSES, FORWARD_JUMP_S, OnlineDenoiser
 from .outputs import Outputs
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
@@ -34,6 +34,7 @@ from ..data.bags import (BAG_TYPES, CORRUPT, IMU_TYPE, is_compressed, open_bag,
                          pick_connections, TYPESTORE)
 
 OUTPUT_TOPICS = ('imu/corrected', 'imu/data', 'imu/attitude')  # the node's, relative
+MAX_CLOCK_JUMPS = 10  # stamp jumps of over FORWARD_JUMP_S a bag may hold (restarts)
 ATTITUDE_TYPE = 'geometry_msgs/msg/QuaternionStamped'
 _NAME_TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
 
@@ -83,6 +84,23 @@ def stamp_order(stamps: np.ndarray, jump_ns: int) -> np.ndarray:
     return np.lexsort((stamps, session))
 
 
+def check_one_clock(stamps: np.ndarray, turn: np.ndarray, src: object) -> None:
+    """
+    Refuse IMU stamps that jump between clocks, back and forth, on one topic.
+
+    A clock set back or a driver restarted is a new session, and a bag may hold a few;
+    more than MAX_CLOCK_JUMPS jumps of over a minute (either way, in stamp order within
+    sessions) is two clocks mixed on one topic (two drivers, or one mixing clocks): the
+    outputs would be as many one-sample recordings.
+    """
+    steps = np.diff(stamps[turn])
+    jumps = int((steps > FORWARD_JUMP_S * 1e9).sum() + (steps < 0).sum())  # < 0: a session
+    if jumps > MAX_CLOCK_JUMPS:
+        raise DatasetError(f'{src}: its IMU stamps jump between clocks {jumps} times (more '
+                           f'than {FORWARD_JUMP_S:g} s, back and forth): two clocks on one '
+                           'topic? Re-stamp the IMU on one clock, or keep one publisher')
+
+
 def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
                 fixed_frame: str = 'odom', compress: bool | None = None,
@@ -128,6 +146,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                                    for c, _, raw in rd.messages() if c.id in imu_ids],
                                   dtype=np.int64)
                 turn = stamp_order(stamps, round(den.time_jump_s * 1e9))  # the i-th to go
+                check_one_clock(stamps, turn, src)
                 check_rate(stamps[turn], den.rate_hz, src)
                 wr = Writer(partial, version=9, storage_plugin=plugin)
                 if is_compressed(rd) if compress is None else compress:

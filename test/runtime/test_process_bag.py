@@ -314,6 +314,29 @@ def test_a_clock_set_back_mid_bag_is_two_sessions_not_one_interleaved(tmp_path, 
     assert order.tolist() == [1, 2, 0, 4, 3, 6, 5]  # the 2 starts a session
 
 
+def test_imu_stamps_on_two_clocks_are_refused_in_one_line_and_nothing_is_written(
+        tmp_path, model_file, capsys):
+    """Every 10th message 12 years later: not 800 one-sample recordings, exit 0."""
+    from denoise_imu_ros.core import msgs
+    from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
+    from denoise_imu_ros.runtime.player import read_imu_messages
+    from rosbags.rosbag2 import Writer
+    imu = read_imu_messages(SAMPLE)[:1000]
+    t0 = msgs.stamp_ns(imu[0].header)
+    with Writer(tmp_path / 'in', version=9) as w:
+        conn = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        for k, m in enumerate(imu):
+            m = msgs.copy_imu(BAG_TYPES, m)
+            t = t0 + 5_000_000 * k + (12 * 365 * 86400 * 10**9 if k % 10 == 9 else 0)
+            m.header = msgs.header(BAG_TYPES, t, 'imu0')
+            w.write(conn, t0 + 5_000_000 * k, TYPESTORE.serialize_cdr(m, IMU_TYPE))
+    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'), '--model',
+                 str(model_file)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert 'its IMU stamps jump between clocks' in err and 'two clocks on one topic?' in err
+    assert len(err.splitlines()) == 1 and not (tmp_path / 'out').exists()
+
+
 def test_sigterm_during_process_bag_leaves_no_partial_bag(tmp_path):
     import signal
     import subprocess
