@@ -161,12 +161,13 @@ def _ensemble(args: argparse.Namespace) -> None:
     _guard_output(args.out, [read_model_file(m).path for m in args.models], args.overwrite)
     loaded = save_ensemble(args.out, args.models)
     print(f'wrote {args.out}: the mean of {loaded.model.config.members} networks')
-    missing = {'fusion': "imu/data's filter settings (tune-fusion --attach)",
-               'crossval': 'a cross-recording verdict (crossval --attach)'}
+    missing = {'fusion': ("imu/data's filter settings", 'tune-fusion --attach'),
+               'crossval': ('cross-recording verdict', 'crossval --attach')}
     for key in SHARED_BY_MEMBERS:
         if key not in loaded.meta:
-            print(f'warning: the members do not all carry the same {missing[key]}: the '
-                  'ensemble has none; store its own', file=sys.stderr)
+            what, how = missing[key]
+            print(f'warning: the ensemble has no {what} (its members carry none, or not the '
+                  f'same): {how} stores its own', file=sys.stderr)
 
 
 def _rest_model(args: argparse.Namespace) -> None:

@@ -279,4 +279,5 @@ def test_an_ensemble_keeps_the_filter_settings_and_verdict_its_members_share(tmp
     differ = load_model(tmp_path / 'ac.safetensors')
     assert 'fusion' not in differ.meta and differ.meta['crossval'] == verdict
     err = capsys.readouterr().err
-    assert "do not all carry the same imu/data's filter settings" in err and 'verdict' not in err
+    assert ("the ensemble has no imu/data's filter settings (its members carry none, or not the "
+            'same): tune-fusion --attach stores its own') in err and 'verdict' not in err
