@@ -36,6 +36,7 @@ from .. import __version__
 FORMAT = 'denoise_imu_ros.gyro_model'
 FORMAT_VERSION = 1
 SHIPPED_DIR = Path(__file__).parents[1] / 'models'
+REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
 
 
 class ModelFile(NamedTuple):
@@ -85,7 +86,7 @@ def deployment_warning(loaded: ModelFile) -> str | None:
     """
     report = loaded.meta.get('crossval')
     deploy = report.get('deploy') if isinstance(report, dict) else None
-    kind = ('rest bias' if loaded.meta.get('kind') == 'rest bias' else
+    kind = (REST_ONLY if loaded.meta.get('kind') == REST_ONLY else
             'calibration' if loaded.config.calibration_only else 'network')
     if deploy not in ('network', 'calibration', 'rest bias', 'none') or deploy == kind:
         return None

@@ -32,11 +32,11 @@ from vqf import VQF
 
 from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
-from ..core.modelfile import code_version, ModelFile, write_model_file
+from ..core.modelfile import code_version, ModelFile, REST_ONLY, write_model_file
 
-__all__ = ['baseline_settings', 'CHOICES', 'RestBias', 'RestBiasSettings', 'model_input',
-           'nominal_bias', 'write_rest_only_model',
-           'rest_bias_batch', 'remove_rest_bias', 'resolve', 'settings_of']
+__all__ = ['baseline_settings', 'CHOICES', 'model_input', 'nominal_bias', 'remove_rest_bias',
+           'resolve', 'RestBias', 'rest_bias_batch', 'RestBiasSettings', 'settings_of',
+           'write_rest_only_model']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
@@ -47,7 +47,7 @@ class RestBiasSettings:
     """
     The stillness detector and the estimate's start, as VQF's parameters name them.
 
-    The thresholds were chosen on BROAD's session-B training trials (docs/results.md):
+    The time constants were chosen on BROAD's session-B trials (docs/method.md):
     0.5 s of stillness and a 0.25 s low-pass start the estimate earlier than VQF's
     defaults (1.5 s, 0.5 s), which lowered the open-loop error of the rest-bias gyro;
     the gyro and accelerometer thresholds are VQF's. ``bias_clip_deg_s`` also bounds
@@ -223,9 +223,6 @@ def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,
         return None, 0
     mean = np.mean(found, axis=0)
     return (float(mean[0]), float(mean[1]), float(mean[2])), len(found)
-
-
-REST_ONLY = 'rest bias'  # a model file's ``kind`` when it learns nothing (write_rest_only_model)
 
 
 def write_rest_only_model(like: ModelFile, path: str | Path) -> None:

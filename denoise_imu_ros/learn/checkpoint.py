@@ -18,7 +18,8 @@ import torch
 
 from .model import correct_gyro, GyroNet, merge
 from ..core.errors import ModelFileError
-from ..core.modelfile import code_version, read_model_file, sample_rate, write_model_file
+from ..core.modelfile import (code_version, read_model_file, REST_ONLY, sample_rate,
+                              write_model_file)
 from ..data import rest_bias
 
 
@@ -122,7 +123,7 @@ def check_baseline(model: LoadedModel, baseline: LoadedModel) -> None:
     file, and of the model's IMU rate: the "calibrated" rows and the filter settings
     stored crosswise would otherwise be wrong without a word.
     """
-    role = ('a rest-only model' if baseline.meta.get('kind') == 'rest bias' else
+    role = ('a rest-only model' if baseline.meta.get('kind') == REST_ONLY else
             None if baseline.model.config.calibration_only else 'a network')
     if role:
         raise ModelFileError(f'--baseline {baseline.path}: {role}, not a calibration (train '
