@@ -245,6 +245,6 @@ def write_rest_only_model(like: ModelFile, path: str | Path) -> None:
               'delta': np.zeros((3, 3), np.float32), 'bias': np.zeros(3, np.float32)}
     keep = ('dataset', 'sample_rate_hz', 'train_sequences', 'train_config', 'crossval')
     meta = {k: like.meta[k] for k in keep if k in like.meta}
-    meta.update(kind=REST_ONLY, rest_bias=settings.to_dict(), made_from=str(like.path),
+    meta.update(kind=REST_ONLY, rest_bias=settings.to_dict(), made_from=like.path.name,
                 code_version=code_version())
     write_model_file(path, config, arrays, meta)

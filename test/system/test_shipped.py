@@ -95,3 +95,27 @@ def test_shipped_tumvi_is_the_ensemble_of_eleven_family_trainings_and_its_folds_
     report = loaded.meta['crossval']  # the folds' ensembles of seeds, as what ships
     assert report['recipe'].endswith('train_tumvi_family.yaml')
     assert report['seeds'] == [0, 1, 2] and set(report['per_seed']) == {'0', '1', '2'}
+
+
+def test_shipped_broad_removes_the_turn_on_bias_alone_as_its_session_folds_say():
+    from denoise_imu_ros.data.rest_bias import settings_of
+    broad, network = read_model_file('broad'), load_model('broad_network')
+    assert broad.meta['kind'] == 'rest bias' and broad.config.calibration_only
+    report = broad.meta['crossval']
+    assert report == network.meta['crossval'] == load_model('broad_calibrated').meta['crossval']
+    assert report['fold_kind'] == 'leave one power-on session out'
+    assert len(report['folds']) == 2 and report['seeds'] == [0, 1, 2]
+    assert set(report['mean']) == {'raw', 'rest bias', 'calibrated', 'network'}
+    assert report['deploy'] == 'rest bias' and deployment_warning(broad) is None
+    assert deployment_warning(read_model_file('broad_network')).endswith(
+        'deploy no learnt correction, only the turn-on bias removed (rest_bias)')
+    assert network.model.config.members == 3
+    assert sorted(m['seed'] for m in network.meta['members']) == [0, 1, 2]
+    # one estimator, its prior between the two sessions' turn-on biases (rad/s)
+    settings = settings_of(broad.meta)
+    assert settings == settings_of(network.meta)
+    for axis, (b, c) in enumerate(((3.6e-3, 8.6e-3), (2.1e-3, -3.3e-3), (-4.0e-3, -4.4e-3))):
+        assert min(b, c) - 3e-4 < settings.prior_rad_s[axis] < max(b, c) + 3e-4
+    for name in ('broad', 'broad_network', 'broad_calibrated'):  # imu/data's settings
+        assert read_model_file(name).meta['fusion']['chosen_on'].startswith(
+            'validation tails of 02_undisturbed_slow_rotation_B')
