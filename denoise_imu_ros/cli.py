@@ -111,10 +111,13 @@ def _crossval(args: argparse.Namespace) -> None:
     from .evaluation.reports import crossval_table
     from .learn.config import load_config
     recipe = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps)
+    if args.attach and args.fold is not None:
+        raise OptionError('--attach with --fold: one fold is no verdict; attach when '
+                          'crossval scores every fold (without --fold)')
     for path in args.attach or []:  # before the folds train, not after
         check_attachable(path)
-        why = attach_mismatches({'folds': [recipe.sequences], 'steps': recipe.steps},
-                                read_model_file(path).meta)
+        why = attach_mismatches({'folds': [recipe.sequences], 'steps': recipe.steps,
+                                 'train_config': recipe.recipe()}, read_model_file(path).meta)
         if why:
             raise DenoiseError(f'--attach {path}: this cross-validation is not of how that '
                                f'model was trained ({"; ".join(why)})')

@@ -142,6 +142,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     report = summarize(per_recording)
     sizes = sorted({len(recipe.sequences) - len(f) for f in fold_list})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
+                  train_config=recipe.recipe(),
                   fold_kind='leave one power-on session out' if sessions else
                   'leave recordings out',
                   fold_training=(f'each fold trains on {"-".join(map(str, sizes))} of the '
@@ -163,12 +164,17 @@ def _rest_bias_gyro(net: LoadedModel, imu: np.ndarray) -> np.ndarray:
     return rest_bias.remove_rest_bias(imu, float(net.meta['sample_rate_hz']), settings)[:, :3]
 
 
+# recipe keys a fold and the model it judges may differ in (steps: compared apart)
+NOT_THE_RECIPE = {'sequences', 'seed', 'steps', 'calibration_only'}
+
+
 def attach_mismatches(report: dict[str, Any], meta: dict[str, Any]) -> list[str]:
     """
     Return what makes a cross-recording report not that of a model's own training.
 
-    The folds must hold out the model's training recordings and train as long as it did:
-    folds of a shortened recipe (``--steps``) judge a network that was never shipped.
+    The folds must hold out the model's training recordings and train as long as it did,
+    with its recipe: folds of a shortened recipe (``--steps``), or of another window,
+    increments or rest-bias setting, judge a network that was never shipped.
     """
     why = []
     held_out = sorted(name for fold in report.get('folds', []) for name in fold)
@@ -178,6 +184,11 @@ def attach_mismatches(report: dict[str, Any], meta: dict[str, Any]) -> list[str]
     steps = (meta.get('train_config') or {}).get('steps')
     if steps is not None and report.get('steps') not in (None, steps):
         why.append(f'its folds trained {report["steps"]} steps, the model {steps}')
+    folds = json.loads(jsonio.dumps(report.get('train_config') or {}))
+    model = meta.get('train_config') or {}
+    differ = sorted(k for k in set(folds) & set(model) - NOT_THE_RECIPE if folds[k] != model[k])
+    if differ:
+        why.append(f'its folds trained another recipe (they differ in {", ".join(differ)})')
     return why
 
 

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..core.errors import DatasetError, ModelFileError
-from ..core.limits import GRAVITY_M_S2
+from ..core.limits import check_rate, GRAVITY_M_S2
 from ..core.metrics import fused_errors, FusedErrors
 from ..core.modelfile import read_model_file, sample_rate, training_span
 from ..core.records import Sequence
@@ -254,6 +254,7 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
     for name in names:
         seq = load_sequence(f'{folder}/{name}', cfg.get('imu_topic'), cfg.get('pose_topic'),
                             cfg.get('max_gt_gap_s'), align_poses=cfg.get('align', 'none'))
+        check_rate(seq.stamp_ns, sample_rate(net), f'{folder}/{name}')  # --data: its own?
         if len(seq) - start < 2:
             continue
         whole = {'raw': seq.imu[:, :3], 'calibrated': calib.correct(seq.imu),

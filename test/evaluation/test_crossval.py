@@ -236,3 +236,26 @@ def test_a_shipped_model_is_never_rewritten_by_an_attach_and_refused_before_any_
                             'install, is never rewritten: copy it and attach to the copy')
         assert len(err.splitlines()) == 1
     assert hashlib.sha256(shipped.read_bytes()).hexdigest() == before
+
+
+def test_a_verdict_of_another_recipe_or_of_one_fold_is_not_attached(tmp_path, capsys):
+    from helpers import write_untrained_model
+    recipe = {'dataset': 'synthetic', 'data': str(tmp_path), 'sequences': ['rec0', 'rec1'],
+              'window': 1024, 'increments': [16, 32]}
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
+    model = write_untrained_model(tmp_path / 'm.safetensors', {
+        'sample_rate_hz': 100.0, 'train_sequences': ['rec0', 'rec1'],
+        'train_config': {'steps': 1800, 'window': 2048, 'increments': [8, 16], 'seed': 3}})
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--attach',
+                 str(model)]) == 1
+    assert ('its folds trained another recipe (they differ in increments, window)'
+            in capsys.readouterr().err)
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(tmp_path / 'o'),
+                 '--fold', '0', '--attach', str(model)]) == 1
+    assert '--attach with --fold: one fold is no verdict' in capsys.readouterr().err
+    assert attach_mismatches({'folds': [['rec0'], ['rec1']], 'steps': 1800,
+                              'train_config': {'window': 2048, 'increments': [8, 16],
+                                               'seed': 0, 'calibration_only': True}},
+                             {'train_sequences': ['rec0', 'rec1'],
+                              'train_config': {'steps': 1800, 'window': 2048,
+                                               'increments': [8, 16], 'seed': 3}}) == []
