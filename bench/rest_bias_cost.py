@@ -1,0 +1,66 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+What the turn-on bias estimate adds to the online pipeline's per-sample cost, side by side.
+
+Runs the same model over the same real samples through ``OnlineDenoiser.process`` (the
+node's and process-bag's per-sample work, without ROS) with ``rest_bias`` off and on,
+alternating rounds so that a change in the machine's speed hits both alike, and the
+estimator alone (``RestBias.update``). Prints the median per-sample time of each, and
+the ratio on/off.
+Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
+     [--recording 03_undisturbed_slow_rotation_C] [--samples 20000] [--rounds 5]
+"""
+
+import argparse
+from pathlib import Path
+import time
+
+from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
+from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.data.rest_bias import resolve, RestBias
+from denoise_imu_ros.runtime.online import OnlineDenoiser
+import numpy as np
+
+DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'broad'
+
+
+def per_sample_s(step, stamps: np.ndarray, imu: np.ndarray) -> float:
+    """Return the mean time of ``step(stamp, gyro, accel)`` over the samples, seconds."""
+    rows = [(int(t), r[:3].copy(), r[3:].copy()) for t, r in zip(stamps, imu)]
+    start = time.perf_counter()
+    for t, g, a in rows:
+        step(t, g, a)
+    return (time.perf_counter() - start) / len(rows)
+
+
+def main() -> None:
+    """Print the per-sample cost with rest_bias off and on, and of the estimator alone."""
+    parser = argparse.ArgumentParser()
+    parser.add_argument('--model', default='broad_network')
+    parser.add_argument('--recording', default='03_undisturbed_slow_rotation_C')
+    parser.add_argument('--samples', type=int, default=20000)
+    parser.add_argument('--rounds', type=int, default=5)
+    args = parser.parse_args()
+    model = read_model_file(args.model)
+    rec = load_imu(DATA / args.recording)
+    stamps, imu = rec.imu_stamp_ns[:args.samples], rec.imu[:args.samples]
+    times = {'off': [], 'on': [], 'estimator alone': []}
+    for _ in range(args.rounds):
+        for choice in ('off', 'on'):
+            den = OnlineDenoiser.from_model_file(model, rest_choice=choice)
+            times[choice].append(per_sample_s(den.process, stamps, imu))
+        rest = RestBias(resolve(model.meta, 'on'), sample_rate(model))
+        times['estimator alone'].append(
+            per_sample_s(lambda t, g, a: rest.update(g, a), stamps, imu))
+    median = {k: float(np.median(v)) for k, v in times.items()}
+    print(f'{model.path.name}, {len(stamps)} samples of {args.recording}, '
+          f'{args.rounds} rounds alternating, median per sample:')
+    for name, value in median.items():
+        print(f'  rest_bias {name}: {value * 1e6:.1f} us' if name != 'estimator alone'
+              else f'  the estimator alone: {value * 1e6:.1f} us')
+    print(f'  on / off: {median["on"] / median["off"]:.3f}')
+
+
+if __name__ == '__main__':
+    main()
