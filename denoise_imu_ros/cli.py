@@ -362,7 +362,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser('eval', parents=[topics],
                        help='AOE/ROE of raw, calibrated and corrected gyro integration')
     p.add_argument('--model', required=True,
-                   help='shipped name (euroc, tumvi, euroc_calibrated, tumvi_calibrated) or file')
+                   help='shipped name (euroc, tumvi, broad, broad_network, *_calibrated) or file')
     p.add_argument('--data', required=True, help='folder holding the sequences')
     p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags')
     p.add_argument('--out', required=True, help='output folder (JSON, Markdown, PNG)')
@@ -379,7 +379,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser('noise', parents=[topics],
                        help='gyro noise figures for a VIO (Allan deviation, Kalibr-style '
                             'noise density and random walk) and a check of the covariance')
-    p.add_argument('--model', required=True)
+    p.add_argument('--model', required=True,
+                   help='shipped name (euroc, tumvi, broad, broad_network, *_calibrated) or file')
     p.add_argument('--data', required=True, help='folder holding the recordings')
     p.add_argument('--sequences', nargs='+', required=True, help='recordings with ground truth')
     p.add_argument('--out', required=True, help='output folder (YAML, JSON, PNG)')
@@ -404,7 +405,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('correct', parents=[topics],
                        help='write the corrected gyro of every IMU sample as CSV')
-    p.add_argument('--model', required=True)
+    p.add_argument('--model', required=True,
+                   help='shipped name (euroc, tumvi, broad, broad_network, *_calibrated) or file')
     p.add_argument('--input', required=True, help='ASL sequence folder or bag')
     p.add_argument('--output', required=True, help='CSV: timestamp_ns,wx,wy,wz')
     p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',
@@ -418,7 +420,8 @@ def build_parser() -> argparse.ArgumentParser:
                             '(as the node)')
     p.add_argument('input', help='ROS 1 or ROS 2 bag')
     p.add_argument('output', help='ROS 2 bag to write (must not exist)')
-    p.add_argument('--model', required=True)
+    p.add_argument('--model', required=True,
+                   help='shipped name (euroc, tumvi, broad, broad_network, *_calibrated) or file')
     p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
     p.add_argument('--fixed-frame', default='odom', help='frame_id of /imu/attitude')
     p.add_argument('--namespace', default='/',

@@ -90,8 +90,16 @@ def deployment_warning(loaded: ModelFile) -> str | None:
             'calibration' if loaded.config.calibration_only else 'network')
     if deploy not in ('network', 'calibration', 'rest bias', 'none') or deploy == kind:
         return None
+    rows = {'network': 'network', 'calibration': 'calibrated', REST_ONLY: 'rest bias',
+            'none': 'raw'}
+    mean = report.get('mean') if isinstance(report.get('mean'), dict) else {}
+    own, best = (mean.get(rows[k]) for k in (kind, deploy))
+    figures = [r.get('aoe_deg') if isinstance(r, dict) else None for r in (own, best)]
+    label = {'none': 'no correction'}.get(deploy, deploy)
+    said = (f' ({kind} {figures[0]:.2f}° against {label} {figures[1]:.2f}° in mean AOE on '
+            'unseen recordings)' if all(isinstance(f, (int, float)) for f in figures) else '')
     return (f'{loaded.path.name} is a {kind} model, but the cross-recording validation of '
-            f'its recipe says: {report.get("verdict")}')
+            f'its recipe says{said}: {report.get("verdict")}')
 
 
 def training_span(meta: dict[str, Any]) -> int | None:

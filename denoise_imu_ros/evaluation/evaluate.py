@@ -25,8 +25,8 @@ from ..core.errors import OptionError, OutputError
 from ..core.limits import check_gaps, check_rate, check_units
 from ..core.metrics import (align_yaw, error_components, sequence_errors,
                             tilt_growth_deg_min)
-from ..core.modelfile import (fitting_note, sample_rate, scored_on_training_samples,
-                              shipped_models, training_span)
+from ..core.modelfile import (fitting_note, REST_ONLY, sample_rate,
+                              scored_on_training_samples, shipped_models, training_span)
 from ..core.records import Sequence
 from ..data import rest_bias
 from ..data.load import load_sequence
@@ -67,12 +67,14 @@ def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndar
     return gyros
 
 
-def rest_note(rest_input: dict[str, bool]) -> str:
-    """Say which models were fed the gyro less its turn-on bias (trained so)."""
-    said = [f'{m}: {"the gyro less its turn-on bias" if on else "the raw gyro"}'
+def rest_note(rest_input: dict[str, bool], rest_only: bool) -> str:
+    """Say what each model was fed (the gyro less its turn-on bias where trained so)."""
+    said = [f'the {m} row, {"the gyro less its turn-on bias" if on else "the raw gyro"}'
             for m, on in rest_input.items()]
     return ('\nRest bias: the raw gyro less its turn-on bias, estimated causally from '
-            'stillness (data/rest_bias.py). Models fed ' + '; '.join(said) + '.\n')
+            'stillness (data/rest_bias.py). Fed to the models: ' + '; '.join(said) + '.'
+            + (' The model is rest-only (no network): its "network" row is the rest bias.'
+               if rest_only else '') + '\n')
 
 
 def check_inputs(seq: Sequence, loaded: LoadedModel, name: str) -> None:
@@ -178,7 +180,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     write_text(out_dir / 'results.json', jsonio.dumps(report, indent=2))
     table = (eval_table(results, average) + fused_table(fused, fused_average)
              + growth_table(results, fused))
-    table += rest_note(report['rest_bias_input'])
+    table += rest_note(report['rest_bias_input'], loaded.meta.get('kind') == REST_ONLY)
     if start_sample:
         table += f'\nScored from sample {start_sample} on of every recording.\n'
     if note:

@@ -118,12 +118,15 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
               'then learnt as part of the correction)')]
     if noise:
         why.append(f'left out: {", ".join(noise)}: no increment up to 512 samples is free '
-                   'of ground-truth noise there (poses too noisy for the motion), so they '
-                   'cannot supervise the loss; score them with eval instead')
+                   'of ground-truth noise there (poses too noisy for the motion), so '
+                   + ('it cannot' if len(noise) == 1 else 'they cannot')
+                   + ' supervise the loss; score with eval instead')
     if weak:
-        why.append(f'left out: {", ".join(weak)}: their poses do not lower their own '
-                   'attitude error even with a constant bias fitted on them (check-data); '
-                   'score them with eval instead')
+        why.append(f'left out: {", ".join(weak)}: '
+                   + ('its poses do not lower its own' if len(weak) == 1 else
+                      'their poses do not lower their own')
+                   + ' attitude error even with a constant bias fitted on them (check-data); '
+                   'score with eval instead')
     weak = [n for n, r in reports.items() if not r['supervision']['helps']]
     why.append(f'supervision: the poses of {", ".join(weak)} do not lower their own '
                'attitude error even with a constant bias fitted on them (check-data): a '

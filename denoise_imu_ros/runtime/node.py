@@ -64,7 +64,7 @@ STALL_S = 2.0   # s without any input message after which diagnostics say the in
 
 PARAMETERS = [
     ('model', 'euroc', _param(
-        'Shipped model name (euroc, tumvi, euroc_calibrated, tumvi_calibrated) or path to a '
+        'Shipped model name (euroc, tumvi, broad, broad_network, *_calibrated) or path to a '
         '.safetensors model file.',
         read_only=True)),
     ('fixed_frame', 'odom', _param(
@@ -178,17 +178,25 @@ class GyroDenoiser(Node):
             self._pub_att.publish, self._fixed_frame, np.zeros(9), np.zeros(9))
         self._apply_parameters()
         self.add_post_set_parameters_callback(self._on_parameters)
+        field = loaded.config.receptive_field
+        rest = self._denoiser.rest
         self.get_logger().info(
-            f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field '
-            f'{loaded.config.receptive_field} samples, '
-            f'{"compiled" if self._denoiser.engine.compiled else "numpy"} step); '
-            'imu/data_raw -> imu/corrected'
+            f'model {loaded.path} ({self._model_rate:.1f} Hz, receptive field {field} '
+            f'sample{"s" if field > 1 else ""}, '
+            f'{"compiled" if self._denoiser.engine.compiled else "numpy"} step); turn-on '
+            + ('bias not removed' if rest is None else
+               'bias removed: estimated from stillness, until then '
+               f'{[round(b, 5) for b in rest.settings.prior_rad_s]} rad/s')
+            + '; imu/data_raw -> imu/corrected'
             + ('' if fusion is None else
                f', imu/data (VQF: tau_acc {fusion.tau_acc_s:g} s, bias estimation '
                f'{"on" if fusion.bias_estimation else "off"}, accelerometer bias removed '
                f'{[round(b, 4) for b in fusion.accel_bias_m_s2]} m/s^2)'))
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)
+        if rest is None and loaded.meta.get('rest_bias') is not None:
+            self.get_logger().warning('rest_bias off: the model was trained on the gyro less '
+                                      'its turn-on bias, it now gets the raw gyro')
         # rclpy ignores a value given for a parameter no node declares: say so, since a
         # misspelt name would otherwise run with the default (the QoS overrides are
         # declared by now, with the publishers and the subscription)
