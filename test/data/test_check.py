@@ -191,11 +191,11 @@ def test_init_recipe_leaves_out_what_the_poses_cannot_supervise_and_says_so(
     assert main(['init-recipe', '--data', str(broad), '--sequences', *trials,
                  '--out', str(out)]) == 0
     cfg = load_config(out)
-    assert cfg.sequences == trials[:2] and cfg.rest_bias  # both start still
+    assert cfg.sequences == trials[:2] and not cfg.rest_bias  # measured, not assumed
     said = capsys.readouterr().out
     assert ('left out: 07_undisturbed_fast_rotation_B: no increment up to 512 samples is '
             'free of ground-truth noise there') in said
-    assert 'rest_bias on: 2 of 2 recordings are still within 5 s of their start' in said
+    assert 'rest_bias off: 2 of 2 recordings are still within 5 s of their start' in said
 
 
 def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_path, capsys):
