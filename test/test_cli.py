@@ -40,9 +40,10 @@ def test_a_model_its_validation_advises_against_runs_with_a_warning(tmp_path, ca
                  '--output', str(tmp_path / 'c.csv')]) == 0
     verdict = load_model('tumvi').meta['crossval']['verdict']
     assert verdict.endswith('deploy no correction')
-    assert capsys.readouterr().err == (
+    assert capsys.readouterr().err == (  # its own figure beside the recommended one
         'warning: tumvi.safetensors is a network model, but the cross-recording validation '
-        f'of its recipe says: {verdict}\n')
+        'of its recipe says (network 2.67° against no correction 1.36° in mean AOE on '
+        f'unseen recordings): {verdict}\n')
 
 
 def test_errors_are_one_line_naming_the_file(model_file, tmp_path, capsys):
