@@ -34,9 +34,9 @@ from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
 from ..core.modelfile import code_version, ModelFile, REST_ONLY, write_model_file
 
-__all__ = ['baseline_settings', 'CHOICES', 'model_input', 'nominal_bias', 'remove_rest_bias',
-           'resolve', 'RestBias', 'rest_bias_batch', 'RestBiasSettings', 'settings_of',
-           'write_rest_only_model']
+__all__ = ['baseline_gyro', 'baseline_settings', 'CHOICES', 'model_input', 'nominal_bias',
+           'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch', 'RestBiasSettings',
+           'settings_of', 'write_rest_only_model']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
@@ -193,6 +193,13 @@ def baseline_settings(meta: dict[str, Any], where: str = 'model file') -> RestBi
     as strong as averaging the still start, not the node's cautious ``rest_bias:=on``.
     """
     return settings_of(meta, where) or RestBiasSettings(bias_clip_deg_s=WIDE_CLIP_DEG_S)
+
+
+def baseline_gyro(meta: dict[str, Any], imu: np.ndarray, where: str = 'model file'
+                  ) -> np.ndarray:
+    """Return the "rest bias" row's gyro (N, 3): the raw gyro less its turn-on bias."""
+    settings = baseline_settings(meta, where)
+    return remove_rest_bias(imu, float(meta['sample_rate_hz']), settings)[:, :3]
 
 
 def model_input(meta: dict[str, Any], imu: np.ndarray, choice: str = 'model',

@@ -130,7 +130,8 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                 min_samples=models[0][0].model.receptive_field,
                                 align_poses=recipe.align)
             raw = {'raw': score(seq, seq.imu[:, :3]),
-                   'rest bias': score(seq, _rest_bias_gyro(models[0][0], seq.imu))}
+                   'rest bias': score(seq, rest_bias.baseline_gyro(
+                       models[0][0].meta, seq.imu, str(models[0][0].path)))}
             gyros = [{'calibrated': calib.correct(seq.imu), 'network': net.correct(seq.imu)}
                      for net, calib in models]
             per_recording[name] = {**raw, **{
@@ -156,12 +157,6 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
         out.mkdir(parents=True, exist_ok=True)
         write_text(out / 'crossval.json', jsonio.dumps(report, indent=2))
     return report
-
-
-def _rest_bias_gyro(net: LoadedModel, imu: np.ndarray) -> np.ndarray:
-    """Return the raw gyro less its turn-on bias, by the fold network's baseline estimator."""
-    settings = rest_bias.baseline_settings(net.meta, str(net.path))
-    return rest_bias.remove_rest_bias(imu, float(net.meta['sample_rate_hz']), settings)[:, :3]
 
 
 # recipe keys a fold and the model it judges may differ in (steps: compared apart)

@@ -56,13 +56,11 @@ def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndar
     Return the gyro of every method: raw, rest bias (less the turn-on bias), each model's.
 
     Each model is fed as it runs online (its rest-bias settings, if it has them). The
-    rest-bias row: :func:`~denoise_imu_ros.data.rest_bias.baseline_settings`.
+    rest-bias row: :func:`~denoise_imu_ros.data.rest_bias.baseline_gyro`.
     """
     net = models['network']
-    rest = rest_bias.baseline_settings(net.meta, str(net.path))
     gyros = {'raw': seq.imu[:, :3],
-             'rest bias': rest_bias.remove_rest_bias(
-                 seq.imu, float(net.meta['sample_rate_hz']), rest)[:, :3]}
+             'rest bias': rest_bias.baseline_gyro(net.meta, seq.imu, str(net.path))}
     gyros.update({m: lm.correct(seq.imu) for m, lm in models.items()})
     return gyros
 

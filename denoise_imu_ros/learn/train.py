@@ -109,8 +109,8 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
     return seqs
 
 
-def remove_rest_bias(cfg: TrainConfig, seqs: list[Sequence]
-                     ) -> tuple[list[Sequence], rest_bias.RestBiasSettings | None]:
+def without_turn_on_bias(cfg: TrainConfig, seqs: list[Sequence]
+                         ) -> tuple[list[Sequence], rest_bias.RestBiasSettings | None]:
     """
     With ``cfg.rest_bias``: every sequence's gyro less its causal turn-on bias estimate.
 
@@ -417,7 +417,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     """Train as process ``rank`` of ``cfg.workers``; the first one returns the result."""
     t_start = time.monotonic()
     _setup_process(cfg, rank)
-    seqs, rest = remove_rest_bias(cfg, seqs)
+    seqs, rest = without_turn_on_bias(cfg, seqs)
     model, split, gen = build_model(cfg, seqs, rank)
     optimizer, scheduler, swa = build_optimiser(cfg, model)
     loss_cfg = cfg.loss_config()

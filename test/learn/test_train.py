@@ -305,7 +305,7 @@ def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc
     from denoise_imu_ros.data import rest_bias
     cfg = _short(euroc, rest_bias=True, steps=12, val_every=12, swa_start=0, select='final')
     raw = train_module.load_sequences(cfg)
-    seqs, settings = train_module.remove_rest_bias(cfg, raw)
+    seqs, settings = train_module.without_turn_on_bias(cfg, raw)
     wide = dataclasses.replace(rest_bias.RestBiasSettings(),
                                bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S)
     rate = float(np.median([s.rate_hz for s in raw]))  # the model file's rate
@@ -315,7 +315,7 @@ def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc
     assert settings.bias_clip_deg_s == pytest.approx(2 * np.degrees(np.abs(prior).max()))
     for s, r in zip(seqs, raw):
         assert np.array_equal(s.imu, rest_bias.remove_rest_bias(r.imu, rate, settings))
-    assert train_module.remove_rest_bias(dataclasses.replace(cfg, rest_bias=False), raw) == (
+    assert train_module.without_turn_on_bias(dataclasses.replace(cfg, rest_bias=False), raw) == (
         raw, None)
     result = train(cfg, progress=False)
     result.save(tmp_path / 'rest.safetensors')
