@@ -6,12 +6,17 @@ Training speed of the EuRoC recipe (6 sequences x 16,000 samples per step).
 Runs the real trainer twice per variant, for a few and for more steps, and reports the
 difference per step, which leaves out loading and validation. Variants, side by side in
 the same run so that ratios are meaningful on a shared machine:
-  - one process with 2 threads;
-  - 2 data-parallel worker processes with 1 thread each (the recipe's setting).
+  - float32, one process with 2 threads;
+  - float32, 2 data-parallel worker processes with 1 thread each (the step before
+    ``precision``);
+  - the recipe as shipped: ``precision: auto`` (bfloat16 hidden layers where the CPU has
+    it natively), ``workers: auto``.
 Prints seconds per step and the projected time of the full recipe, and a floor: the
 recipe's convolution arithmetic (forward and backward) at the speed this machine
-multiplies large float32 matrices, one core per worker, nothing else counted.
-Run: .venv/bin/python bench/train_speed.py [--steps N]
+multiplies large float32 matrices, every core busy, nothing else counted. Then the
+whole recipe once, timed end to end (loading, validation and weight average included),
+with ``--full``.
+Run: .venv/bin/python bench/train_speed.py [--steps N] [--full]
 """
 
 import argparse
@@ -19,7 +24,7 @@ from pathlib import Path
 import time
 
 from denoise_imu_ros.core.architecture import ModelConfig
-from denoise_imu_ros.learn.config import load_config
+from denoise_imu_ros.learn.config import load_config, usable_cores
 from denoise_imu_ros.learn.model import GyroNet
 from denoise_imu_ros.learn.train import train
 import torch
@@ -27,14 +32,16 @@ import torch
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def seconds_per_step(workers: int, steps: int) -> float:
+RECIPE = ROOT / 'config' / 'train_euroc.yaml'
+DATA = str(ROOT.parent / 'shared' / 'data' / 'euroc')
+
+
+def seconds_per_step(steps: int, **variant: object) -> float:
     """Time of `steps` more training steps, by difference of two runs."""
     times = []
     for n in (steps // 4, steps + steps // 4):
-        cfg = load_config(ROOT / 'config' / 'train_euroc.yaml',
-                          data=str(ROOT.parent / 'shared' / 'data' / 'euroc'),
-                          steps=n, val_every=10 * n, swa_start=0, select='final',
-                          workers=workers)
+        cfg = load_config(RECIPE, data=DATA, steps=n, val_every=10 * n, swa_start=0,
+                          select='final', **variant)
         t = time.perf_counter()
         train(cfg, progress=False)
         times.append(time.perf_counter() - t)
@@ -68,19 +75,32 @@ def gemm_macs_per_second(size: int = 2048, repeats: int = 5) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument('--steps', type=int, default=40, help='steps timed per variant')
+    parser.add_argument('--full', action='store_true',
+                        help='then train the whole shipped recipe once, timed end to end')
     args = parser.parse_args()
-    recipe = load_config(ROOT / 'config' / 'train_euroc.yaml')
+    recipe = load_config(RECIPE)
     full = recipe.steps
-    rows = [('1 process, 2 threads', seconds_per_step(1, args.steps)),
-            ('2 worker processes, 1 thread each', seconds_per_step(2, args.steps))]
-    base = rows[0][1]
-    print(f'{"variant":36s} {"s/step":>8s} {f"{full} steps":>11s} {"ratio":>6s}')
-    for name, t in rows:
-        print(f'{name:36s} {t:8.3f} {t * full / 60:7.1f} min {t / base:6.2f}')
+    rows = [('float32, 1 process, 2 threads',
+             seconds_per_step(args.steps, precision='float32', workers=1, threads=2)),
+            ('float32, 2 workers, 1 thread each',
+             seconds_per_step(args.steps, precision='float32', workers=2, threads=2)),
+            (f'recipe: {recipe.precision}, {recipe.workers} workers',
+             seconds_per_step(args.steps))]
     macs = conv_macs_per_step(len(recipe.sequences), recipe.window)
-    floor = macs / (recipe.workers * gemm_macs_per_second())
+    floor = macs / (usable_cores() * gemm_macs_per_second())
+    base = rows[0][1]
+    print(f'{"variant":36s} {"s/step":>8s} {f"{full} steps":>11s} {"ratio":>6s} '
+          f'{"x floor":>8s}')
+    for name, t in rows:
+        print(f'{name:36s} {t:8.3f} {t * full / 60:7.1f} min {t / base:6.2f} '
+              f'{t / floor:8.2f}')
     print(f'floor: {macs / 1e9:.1f} GMAC of convolutions per step at the float32 GEMM speed '
-          f'of {recipe.workers} cores: {floor:.3f} s/step, {floor * full / 60:.1f} min')
+          f'of {usable_cores()} cores: {floor:.3f} s/step, {floor * full / 60:.1f} min')
+    if args.full:
+        t = time.perf_counter()
+        train(load_config(RECIPE, data=DATA), progress=False)
+        print(f'the whole recipe ({full} steps, validation and weight average included): '
+              f'{(time.perf_counter() - t) / 60:.1f} min')
 
 
 if __name__ == '__main__':

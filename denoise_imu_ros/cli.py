@@ -16,17 +16,37 @@ import signal
 import sys
 import tempfile
 import threading
+from typing import Any
+import warnings
 
-from .core.errors import DenoiseError, OptionError, OutputError
+from .core.errors import DataWarning, DenoiseError, OptionError, OutputError
 
 # Commands that run the torch network; the others (process-bag, play, check-data,
 # convert, init-recipe, correct --engine streaming) never import torch.
 TORCH_COMMANDS = ('train', 'crossval', 'eval', 'ensemble', 'tune-fusion', 'noise')
+PYTHON_SHOW_WARNING = warnings.showwarning
 NEVER_OVER_A_BAG = 'a bag is never written over: remove it or choose another name'
+POSES_OPTION = {  # a VIO's or SLAM's trajectories in place of the recordings' poses
+    'metavar': 'DIR', 'help': 'trajectories (TUM format: t x y z qx qy qz qw, as VIO and SLAM '
+                              'tools write them), <recording>.txt in DIR, in place of the '
+                              "recordings' own poses"}
 REST_BIAS_OPTION = {  # the node's rest_bias parameter, for the offline tools
     'choices': ('model', 'on', 'off'), 'default': 'model',
     'help': "remove the gyro's turn-on bias, estimated from stillness, before the model: "
             'model (as the model was trained, the default), on, off'}
+
+
+def _workers(value: str) -> int | str:
+    """Parse ``--workers``: a positive count, or auto."""
+    if value == 'auto':
+        return value
+    try:
+        count = int(value)
+    except ValueError:
+        count = 0
+    if count < 1:
+        raise argparse.ArgumentTypeError(f'{value!r}: a positive number of processes, or auto')
+    return count
 
 
 def _train(args: argparse.Namespace) -> None:
@@ -140,7 +160,8 @@ def _crossval(args: argparse.Namespace) -> None:
 def _init_recipe(args: argparse.Namespace) -> None:
     from .learn.recipe import init_recipe, write_recipe
     _guard_output(args.out, [Path(args.data) / s for s in args.sequences], args.overwrite)
-    recipe, why = init_recipe(args.data, args.sequences, args.imu_topic, args.pose_topic)
+    recipe, why = init_recipe(args.data, args.sequences, args.imu_topic, args.pose_topic,
+                              args.poses)
     write_recipe(args.out, recipe, why)
     print(f'wrote {args.out}:\n' + ''.join(f'  {line}\n' for line in why), end='')
 
@@ -187,7 +208,7 @@ def _check_data(args: argparse.Namespace) -> None:
     from .core import jsonio
     from .data.check import check, markdown
     from .data.load import load_recording
-    rec = load_recording(args.input, args.imu_topic, args.pose_topic)
+    rec = load_recording(args.input, args.imu_topic, args.pose_topic, args.poses)
     report = check(rec, args.max_offset)
     sys.stdout.write(markdown(report))
     if args.json:
@@ -202,14 +223,14 @@ def _eval(args: argparse.Namespace) -> None:
     _not_an_input(args.out, _report_inputs(args))  # its reports beside a recording's files
     evaluate(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
              imu_topic=args.imu_topic, pose_topic=args.pose_topic, plots=not args.no_plots,
-             start_sample=args.start_sample, align_poses=args.align)
+             start_sample=args.start_sample, align_poses=args.align, poses=args.poses)
 
 
 def _noise(args: argparse.Namespace) -> None:
     from .evaluation.noise import markdown, noise, yaml_snippet
     _not_an_input(args.out, _report_inputs(args))
     report = noise(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
-                   imu_topic=args.imu_topic, pose_topic=args.pose_topic)
+                   imu_topic=args.imu_topic, pose_topic=args.pose_topic, poses=args.poses)
     sys.stdout.write(markdown(report))
     print(f'\nFor a VIO ({args.out}/noise.yaml; Allan plots and JSON beside it):\n')
     sys.stdout.write(yaml_snippet(report['pooled'], ', '.join(report['recordings'])))
@@ -294,8 +315,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--steps', type=int, help='overrides the recipe step count')
     p.add_argument('--calibration-only', action='store_true',
                    help='train the 12-parameter "calibrated IMU" baseline')
-    p.add_argument('--workers', type=int,
-                   help='overrides the recipe: data-parallel processes (1 = one process)')
+    p.add_argument('--workers', type=_workers,
+                   help='overrides the recipe: data-parallel processes (1 = one process; '
+                        'auto: from the cores this machine lends and the recordings)')
     p.add_argument('--device', help='cpu or cuda[:N] (default: cuda when torch sees a GPU)')
     p.add_argument('--whole-sequences', action='store_true',
                    help='draw training windows from the whole sequences, validation tails '
@@ -323,7 +345,8 @@ def build_parser() -> argparse.ArgumentParser:
                       'the mean of their corrected gyros: the verdict of the ensemble')
     p.add_argument('--data', help='overrides the recipe data folder')
     p.add_argument('--steps', type=int, help='overrides the recipe step count')
-    p.add_argument('--workers', type=int, help='overrides the recipe worker count')
+    p.add_argument('--workers', type=_workers, help='overrides the recipe worker count '
+                   '(a number or auto)')
     p.add_argument('--device', help='cpu or cuda[:N] (default: cuda when torch sees a GPU)')
     p.add_argument('--attach', nargs='+', metavar='MODEL',
                    help='store the report in these model files (trained with this recipe)')
@@ -374,6 +397,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--align', choices=('none', 'auto'), default='none',
                    help='auto: move the poses onto the IMU clock and frame first (check-data)')
     p.add_argument('--no-plots', action='store_true')
+    p.add_argument('--poses', **POSES_OPTION)
     p.set_defaults(func=_eval)
 
     p = sub.add_parser('noise', parents=[topics],
@@ -385,6 +409,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--sequences', nargs='+', required=True, help='recordings with ground truth')
     p.add_argument('--out', required=True, help='output folder (YAML, JSON, PNG)')
     p.add_argument('--baseline', help='calibrated-IMU model (default: <dataset>_calibrated)')
+    p.add_argument('--poses', **POSES_OPTION)
     p.set_defaults(func=_noise)
 
     p = sub.add_parser('check-data', parents=[topics],
@@ -393,6 +418,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--json', action='store_true', help='also print one JSON line at the end')
     p.add_argument('--max-offset', type=float, default=0.5,
                    help='clock-offset search range, +- s (default 0.5)')
+    p.add_argument('--poses', metavar='FILE',
+                   help='a trajectory file (TUM format, or a folder of <recording>.txt) '
+                        "in place of the recording's own poses")
     p.set_defaults(func=_check_data)
 
     p = sub.add_parser('init-recipe', parents=[topics],
@@ -401,6 +429,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags in it')
     p.add_argument('--out', default='recipe.yaml', help='recipe to write')
     p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
+    p.add_argument('--poses', **POSES_OPTION)
     p.set_defaults(func=_init_recipe)
 
     p = sub.add_parser('correct', parents=[topics],
@@ -482,6 +511,15 @@ def _on_sigterm(_signum: int, _frame: object) -> None:
     raise Terminated
 
 
+def _data_warning(message: Warning | str, category: type[Warning], *args: Any,
+                  **kwargs: Any) -> None:
+    """Say a DataWarning in one line; leave any other warning to Python's own format."""
+    if issubclass(category, DataWarning):
+        print(f'warning: {message}', file=sys.stderr)
+    else:
+        PYTHON_SHOW_WARNING(message, category, *args, **kwargs)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``denoise-imu`` console script."""
     args = build_parser().parse_args(argv)
@@ -489,7 +527,9 @@ def main(argv: list[str] | None = None) -> int:
     own = args.command != 'play' and threading.current_thread() is threading.main_thread()
     before = signal.signal(signal.SIGTERM, _on_sigterm) if own else None
     try:
-        return _run(args)
+        with warnings.catch_warnings():  # restores Python's own format afterwards
+            warnings.showwarning = _data_warning
+            return _run(args)
     finally:
         if own:
             signal.signal(signal.SIGTERM, before)

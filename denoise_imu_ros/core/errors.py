@@ -25,3 +25,7 @@ class OutputError(DenoiseError):
 
 class OptionError(DenoiseError):
     """An option value is out of its range (a playback rate, a start sample)."""
+
+
+class DataWarning(UserWarning):
+    """Something in the input was left out or is doubtful; the work goes on (said once)."""

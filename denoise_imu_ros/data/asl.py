@@ -29,7 +29,7 @@ def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
     if not path.is_file():
         raise DatasetError(f'{path}: file not found')
     with path.open(encoding='utf-8-sig', errors='strict') as f:  # a BOM is no data
-        lines = _lines(f, path)
+        lines = text_lines(f, path)
     try:
         with warnings.catch_warnings():  # a file without data rows: said below
             warnings.simplefilter('ignore', UserWarning)
@@ -68,7 +68,7 @@ def _parse_lines(lines: list[str], path: Path, ncols: int) -> tuple[np.ndarray, 
     return np.array(stamps, dtype=np.int64), np.array(rows, dtype=np.float64)
 
 
-def _lines(f: object, path: Path) -> list[str]:
+def text_lines(f: object, path: Path) -> list[str]:
     """All lines of a text file; a binary or non-UTF-8 one is a one-line error."""
     try:
         return f.readlines()

@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+import warnings
 
 from .asl import read_asl
 from .pose_alignment import apply_pose_alignment, estimate_pose_alignment, not_following
 from .timebase import onto_imu_stamps
-from ..core.errors import DatasetError
-from ..core.records import Recording, Sequence
+from .trajectory import read_tum, trajectory_file, with_trajectory
+from ..core.errors import DatasetError, DataWarning
+from ..core.records import check_recording, Recording, Sequence
 
 
 def is_bag(path: str | Path) -> bool:
@@ -36,8 +38,21 @@ def load_imu(path: str | Path, imu_topic: str | None = None) -> Recording:
 
 
 def load_recording(path: str | Path, imu_topic: str | None = None,
-                   pose_topic: str | None = None) -> Recording:
-    """Read an ASL folder or a bag (IMU and poses); topics are auto-detected when None."""
+                   pose_topic: str | None = None, poses: str | Path | None = None) -> Recording:
+    """
+    Read an ASL folder or a bag (IMU and poses); topics are auto-detected when None.
+
+    ``poses``: a trajectory file (TUM format, as VIO and SLAM tools write them), or a
+    folder of ``<recording>.txt``, whose poses replace the recording's own.
+    """
+    if poses is not None:
+        rec = load_imu(path, imu_topic)
+        trajectory = read_tum(trajectory_file(poses, Path(path).name))
+        if trajectory.dropped:
+            warnings.warn(trajectory.summary(), DataWarning, stacklevel=2)
+        rec = with_trajectory(rec, trajectory)
+        check_recording(rec, gt_file=trajectory.path)
+        return rec
     if is_bag(path):
         from .bags import read_bag  # rosbags: a quarter second of import, for bags only
         return read_bag(path, imu_topic=imu_topic, pose_topic=pose_topic)
@@ -49,15 +64,17 @@ def load_recording(path: str | Path, imu_topic: str | None = None,
 def load_sequence(path: str | Path, imu_topic: str | None = None,
                   pose_topic: str | None = None,
                   max_gt_gap_s: float | None = None,
-                  min_samples: int = 1, align_poses: str | dict = 'none') -> Sequence:
+                  min_samples: int = 1, align_poses: str | dict = 'none',
+                  poses: str | Path | None = None) -> Sequence:
     """
     Read an ASL folder or a bag and align it; topics are auto-detected when None.
 
     ``align_poses``: ``none``, ``auto`` (clock offset and frame rotation estimated as
     ``check-data`` does) or ``{time_offset_s, imu_from_pose_rotation_xyzw}``; what was
-    applied is kept in :attr:`Sequence.pose_alignment`.
+    applied is kept in :attr:`Sequence.pose_alignment`. ``poses``: as for
+    :func:`load_recording`.
     """
-    rec = load_recording(path, imu_topic, pose_topic)
+    rec = load_recording(path, imu_topic, pose_topic, poses)
     used = None
     if align_poses == 'auto':
         found = estimate_pose_alignment(rec)

@@ -128,7 +128,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
             seq = load_sequence(Path(recipe.data) / name, recipe.imu_topic, recipe.pose_topic,
                                 recipe.max_gt_gap_s,
                                 min_samples=models[0][0].model.receptive_field,
-                                align_poses=recipe.align)
+                                align_poses=recipe.align, poses=recipe.poses)
             raw = {'raw': score(seq, seq.imu[:, :3]),
                    'rest bias': score(seq, rest_bias.baseline_gyro(
                        models[0][0].meta, seq.imu, str(models[0][0].path)))}

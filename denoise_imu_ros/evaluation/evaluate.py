@@ -85,7 +85,8 @@ def check_inputs(seq: Sequence, loaded: LoadedModel, name: str) -> None:
 def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
              baseline: str | None = None, imu_topic: str | None = None,
              pose_topic: str | None = None, plots: bool = True,
-             start_sample: int = 0, align_poses: str = 'none') -> dict[str, Any]:
+             start_sample: int = 0, align_poses: str = 'none',
+             poses: str | None = None) -> dict[str, Any]:
     """
     Evaluate raw, calibrated and corrected gyro; write JSON, Markdown and PNG files.
 
@@ -121,7 +122,8 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     roe_all: dict[str, list[np.ndarray]] = {}
     for given, name in zip(sequences, names):
         seq = load_sequence(Path(data) / given, imu_topic, pose_topic,
-                            min_samples=loaded.model.receptive_field, align_poses=align_poses)
+                            min_samples=loaded.model.receptive_field, align_poses=align_poses,
+                            poses=poses)
         check_inputs(seq, loaded, name)
         if start_sample >= len(seq) - 1:
             raise OptionError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')

@@ -253,7 +253,8 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
     tails, seqs, gyros = [], [], {source: [] for source in KINDS}
     for name in names:
         seq = load_sequence(f'{folder}/{name}', cfg.get('imu_topic'), cfg.get('pose_topic'),
-                            cfg.get('max_gt_gap_s'), align_poses=cfg.get('align', 'none'))
+                            cfg.get('max_gt_gap_s'), align_poses=cfg.get('align', 'none'),
+                            poses=cfg.get('poses'))
         check_rate(seq.stamp_ns, sample_rate(net), f'{folder}/{name}')  # --data: its own?
         if len(seq) - start < 2:
             continue

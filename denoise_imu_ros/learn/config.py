@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, fields
 import math
+import os
 from pathlib import Path
 import re
 from typing import Any
@@ -24,6 +25,8 @@ from ..core.errors import TrainingError
 RUN_KEYS = ('data', 'threads', 'workers', 'device')  # where it runs, not what it learns
 OPTIONS = ('seed', 'data', 'steps', 'workers', 'device')  # keys train's options override
 DEVICE = re.compile(r'cpu|cuda(:\d+)?')             # the devices training supports
+PRECISIONS = ('float32', 'bfloat16', 'auto')          # of the hidden layers in training
+AUTO = 'auto'                                         # workers and threads: from the machine
 
 
 class _RecipeLoader(yaml.SafeLoader):
@@ -75,6 +78,9 @@ class TrainConfig:
     sequences: list[str] = field(default_factory=list)  # ASL folders or bags in `data`
     imu_topic: str | None = None       # bags only; None = the only Imu topic
     pose_topic: str | None = None      # bags only; None = the only pose topic
+    # a folder of TUM trajectories, <recording>.txt, as VIO/SLAM tools write them, whose
+    # poses replace the recordings' own; None: the recordings' poses
+    poses: str | None = None
     # ground-truth holes longer than this (s) are masked; None: 2.5 of its own periods
     max_gt_gap_s: float | None = None
     # poses onto the IMU clock and frame: none, auto (estimated per recording, as
@@ -110,6 +116,9 @@ class TrainConfig:
     swa_start: int = 0                 # > 0: average weights from this step on (SWA)
     select: str = 'best_validation'    # kept: best_validation (of all candidates), final, swa
     seed: int = 0
+    # the hidden layers' arithmetic while training (model.GyroNet.features): float32,
+    # bfloat16, or auto (bfloat16 where the device computes it natively, else float32)
+    precision: str = 'float32'
     threads: int = 2                   # torch intra-op threads, shared by the workers
     workers: int = 1                   # data-parallel processes (parallel.py), CPU only
     device: str | None = None          # cpu or cuda[:N]; None: cuda when available
@@ -173,6 +182,28 @@ def _alignment(value: Any) -> bool:
             and abs(math.hypot(*quat) - 1.0) < 1e-3)
 
 
+def usable_cores() -> int:
+    """CPU cores this process may run on (its affinity, which containers narrow)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def machine_share(recordings: int, cores: int) -> tuple[int, int]:
+    """
+    Data-parallel workers and torch threads in all (``workers: auto``, ``threads: auto``).
+
+    A worker holds whole recordings, so a step lasts as long as the busiest worker's
+    share: the fewest workers that give it the fewest recordings (six recordings on four
+    cores: three workers of two, not four of two, two, one and one), every core a thread.
+    """
+    recordings, cores = max(1, recordings), max(1, cores)
+    busiest = -(-recordings // min(cores, recordings))
+    workers = -(-recordings // busiest)
+    return workers, max(workers, cores)
+
+
 def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
     """
     Read a YAML recipe and check every value's type and range.
@@ -195,6 +226,13 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: unknown keys {unknown}')
     given = {k: v for k, v in overrides.items() if v is not None}
     raw.update(given)
+    if AUTO in (raw.get('workers'), raw.get('threads')):
+        recordings = raw.get('sequences')
+        share = machine_share(len(recordings) if isinstance(recordings, list) else 1,
+                              usable_cores())
+        for key, value in zip(('workers', 'threads'), share):
+            if raw.get(key) == AUTO:
+                raw[key] = value
 
     def source(key: str) -> str:
         """Where a value came from: the command line's option, or the file."""
@@ -237,6 +275,9 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
                             'time_offset_s (seconds, at most 60 either way) and '
                             'imu_from_pose_rotation_xyzw (a unit quaternion)')
     cfg.workers = min(cfg.workers, len(cfg.sequences))  # each worker needs a sequence
+    if cfg.precision not in PRECISIONS:
+        raise TrainingError(f'{source("precision")}: precision must be one of '
+                            f'{", ".join(PRECISIONS)}, not {cfg.precision!r}')
     if cfg.device is not None and not DEVICE.fullmatch(cfg.device):
         raise TrainingError(f'device {cfg.device!r}: not a torch device (use cpu or cuda)')
     if cfg.select not in ('best_validation', 'final', 'swa') or (

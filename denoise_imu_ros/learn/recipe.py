@@ -54,11 +54,12 @@ MIN_GYRO_STD_DEG = 0.2
 
 
 def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = None,
-                pose_topic: str | None = None) -> tuple[dict[str, Any], list[str]]:
+                pose_topic: str | None = None,
+                poses: str | Path | None = None) -> tuple[dict[str, Any], list[str]]:
     """Return the recipe (a mapping of TrainConfig keys) and the reasons for each choice."""
     reports, still = {}, []
     for name in sequences:
-        rec = load_recording(Path(data) / name, imu_topic, pose_topic)
+        rec = load_recording(Path(data) / name, imu_topic, pose_topic, poses)
         report = check(rec)
         if report['usable'] == 'no':
             raise DatasetError(f'{Path(data) / name}: not usable for training: '
@@ -99,7 +100,8 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     recipe = {k: v for k, v in asdict(TrainConfig()).items() if k != 'device'}
     recipe.update(
         dataset=Path(data).name, data=str(data), sequences=list(sequences),
-        imu_topic=imu_topic, pose_topic=pose_topic, increments=increments,
+        imu_topic=imu_topic, pose_topic=pose_topic,
+        poses=None if poses is None else str(poses), increments=increments,
         increment_weights=[1.0, 0.5], window=window, gyro_std_deg=gyro_std,
         align='auto' if off else 'none', swa_start=1200, select='swa',
         rest_bias=False,

@@ -65,6 +65,18 @@ def resolve_device(device: str | None) -> str:
     return str(dev)
 
 
+def resolve_precision(precision: str, device: str) -> torch.dtype | None:
+    """Return the hidden layers' training type: None (float32) or torch.bfloat16."""
+    if precision == 'float32':
+        return None
+    if precision == 'bfloat16':
+        return torch.bfloat16
+    native = (torch.cuda.is_bf16_supported() if torch.device(device).type == 'cuda'
+              else torch.backends.mkldnn.is_available()
+              and torch.ops.mkldnn._is_mkldnn_bf16_supported())
+    return torch.bfloat16 if native else None
+
+
 def _setup_process(cfg: TrainConfig, rank: int) -> None:
     """Seed, share the threads, and flush denormal floats, in every process alike."""
     # the same initial weights everywhere; denormals: tiny gradients far in GELU's tail
@@ -91,7 +103,7 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
     for name in cfg.sequences:
         seq = load_sequence(Path(cfg.data) / name, cfg.imu_topic, cfg.pose_topic,
                             cfg.max_gt_gap_s, min_samples=max(min_len, receptive_field),
-                            align_poses=cfg.align)
+                            align_poses=cfg.align, poses=cfg.poses)
         head = cfg.window + cfg.max_offset
         for part, valid in (('training window', seq.gt_valid[:head + 1]),
                             ('validation tail', seq.gt_valid[head:])):
@@ -221,6 +233,7 @@ def build_model(cfg: TrainConfig, seqs: list[Sequence],
                         dtype=torch.float32)
     model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
     model.to(cfg.device)
+    model.train_dtype = resolve_precision(cfg.precision, cfg.device)
     if cfg.workers > 1:
         parallel.sync_batch_norm(model)
         torch.manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)  # its own dropout masks
@@ -322,7 +335,9 @@ def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[s
         'rest_bias': None if rest is None else rest.to_dict(),
         'pose_alignment': {s.name: s.pose_alignment for s in seqs
                            if s.pose_alignment is not None},
-        'run': cfg.run_environment(),
+        'run': dict(cfg.run_environment(),
+                    precision=str(resolve_precision(cfg.precision, cfg.device)
+                                  or torch.float32).removeprefix('torch.')),
         'selected': chosen,
         'validation': candidates[chosen],
         'candidates': candidates,
@@ -457,7 +472,9 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
             if step > 0 and val['loss'] < best['loss']:
                 best = dict(val, step=step, state=copy.deepcopy(model.state_dict()))
     if swa is not None:
-        # BatchNorm statistics of the averaged weights: recomputed on training windows.
+        # BatchNorm statistics of the averaged weights: recomputed on training windows,
+        # in float32 as the model will run
+        swa.module.train_dtype = None
         torch.optim.swa_utils.update_bn(
             [batch(split, cfg, gen)[0].to(cfg.device) for _ in range(8)], swa)
     if rank > 0:

@@ -59,3 +59,43 @@ def test_dropout_drops_the_requested_fraction_and_keeps_the_mean():
     assert abs((y == 0).float().mean().item() - 0.1) < 2e-3
     assert abs(y.mean().item() - 1.0) < 5e-3
     assert torch.equal(drop.eval()(torch.ones(10)), torch.ones(10))
+
+
+def _gradients(model: GyroNet, u: torch.Tensor) -> tuple[torch.Tensor, dict]:
+    """Output and parameter gradients of one backward pass of a squared-output loss."""
+    model.zero_grad()
+    out = model(u)
+    out.square().sum().backward()
+    return out.detach(), {k: p.grad.clone() for k, p in model.named_parameters()}
+
+
+def test_bfloat16_training_keeps_float32_ends_and_float32_gradients_within_its_rounding():
+    torch.manual_seed(0)
+    model = GyroNet(ModelConfig(dropout=0.0)).train()
+    u = 0.3 * torch.randn(2, 3000, 6)
+    out32, grad32 = _gradients(model, u)
+    model.train_dtype = torch.bfloat16
+    out16, grad16 = _gradients(model, u)
+    assert out16.dtype == torch.float32
+    assert not torch.equal(out16, out32)  # the hidden layers did run in bfloat16
+    assert (out16 - out32).abs().max() < 1e-2 * out32.abs().max()
+    for key, g in grad32.items():
+        if key.endswith('bias') and key != f'net.{len(model.net) - 1}.bias':
+            continue  # a bias followed by BatchNorm: its gradient is rounding noise
+        assert (grad16[key] - g).norm() < 3e-2 * g.norm(), key
+        assert grad16[key].dtype == torch.float32
+
+
+def test_bfloat16_is_for_training_only_evaluation_stays_float32():
+    torch.manual_seed(1)
+    model = GyroNet(ModelConfig()).eval()
+    u = 0.3 * torch.randn(1, 1000, 6)
+    before = model(u)
+    model.train_dtype = torch.bfloat16
+    assert torch.equal(model(u), before)
+
+
+def test_dropout_keeps_the_type_it_is_given():
+    drop = Dropout(0.1).train()
+    for dtype in (torch.float32, torch.bfloat16):
+        assert drop(torch.ones(1000, dtype=dtype)).dtype == dtype

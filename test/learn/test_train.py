@@ -10,9 +10,9 @@ from denoise_imu_ros.core.errors import DatasetError, TrainingError
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn import train as train_module
 from denoise_imu_ros.learn.checkpoint import load_model
-from denoise_imu_ros.learn.config import load_config
-from denoise_imu_ros.learn.train import (batch, build_model, resolve_device, train,
-                                         training_split)
+from denoise_imu_ros.learn.config import load_config, machine_share
+from denoise_imu_ros.learn.train import (batch, build_model, resolve_device,
+                                         resolve_precision, train, training_split)
 from helpers import ROOT
 import numpy as np
 import pytest
@@ -126,6 +126,45 @@ def test_config_typos_and_bad_windows_are_refused(tmp_path):
         with pytest.raises(TrainingError, match='torch sees no CUDA GPU'):
             resolve_device('cuda')
         assert resolve_device(load_config(tmp_path / 'd.yaml').device) == 'cpu'  # no GPU
+
+
+@pytest.mark.parametrize('recordings, cores, share', [
+    (6, 2, (2, 2)), (6, 4, (3, 4)), (6, 16, (6, 16)), (9, 2, (2, 2)), (1, 8, (1, 8)),
+    (6, 1, (1, 1))])
+def test_automatic_workers_give_the_busiest_the_fewest_recordings(recordings, cores, share):
+    assert machine_share(recordings, cores) == share
+
+
+def test_workers_and_threads_auto_follow_the_machine_and_precision_is_checked(
+        tmp_path, monkeypatch):
+    from denoise_imu_ros.learn import config as config_module
+    monkeypatch.setattr(config_module, 'usable_cores', lambda: 4)
+    (tmp_path / 'a.yaml').write_text('sequences: [a, b, c, d, e, f]\nworkers: auto\n'
+                                     'threads: auto\n')
+    cfg = load_config(tmp_path / 'a.yaml')
+    assert (cfg.workers, cfg.threads) == (3, 4)
+    assert load_config(tmp_path / 'a.yaml', workers=1).workers == 1  # --workers wins
+    (tmp_path / 'p.yaml').write_text('sequences: [a]\nprecision: float16\n')
+    with pytest.raises(TrainingError, match='precision must be one of float32, bfloat16, '
+                                            "auto, not 'float16'"):
+        load_config(tmp_path / 'p.yaml')
+
+
+def test_precision_auto_is_bfloat16_only_where_the_device_has_it(monkeypatch):
+    assert resolve_precision('float32', 'cpu') is None
+    assert resolve_precision('bfloat16', 'cpu') is torch.bfloat16
+    monkeypatch.setattr(torch.ops.mkldnn, '_is_mkldnn_bf16_supported', lambda: False)
+    assert resolve_precision('auto', 'cpu') is None
+    monkeypatch.setattr(torch.ops.mkldnn, '_is_mkldnn_bf16_supported', lambda: True)
+    assert resolve_precision('auto', 'cpu') is torch.bfloat16
+    monkeypatch.setattr(torch.cuda, 'is_bf16_supported', lambda: False)
+    assert resolve_precision('auto', 'cuda') is None
+
+
+def test_workers_option_takes_a_count_or_auto(capsys):
+    with pytest.raises(SystemExit):
+        main(['train', '--config', 'x.yaml', '--workers', '0'])
+    assert "'0': a positive number of processes, or auto" in capsys.readouterr().err
 
 
 def test_data_parallel_processes_draw_the_one_process_batch(euroc):

@@ -1,0 +1,108 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+Trajectory files as VIO and SLAM tools write them (TUM format), as a recording's poses.
+
+One pose a line, ``t x y z qx qy qz qw``: t in seconds, the body-to-world pose of
+whatever the tool tracked (often a camera: ``align: auto`` finds its frame and clock).
+Lines starting with ``#`` are comments. Tools write duplicate stamps (a pose written
+twice), stamps that step back (a re-initialisation rewriting its past) and rows that
+are not poses (NaN, a zero quaternion): those rows are dropped and counted, and a
+file with nothing left is an error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .asl import text_lines
+from ..core.errors import DatasetError
+from ..core.records import Recording
+
+SUFFIXES = ('.txt', '.tum')   # a folder of trajectories holds <recording><suffix>
+UNIT_TOLERANCE = 1e-2         # a quaternion's norm off 1 by more is no pose
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """The poses of one trajectory file, and what was dropped from it."""
+
+    path: Path
+    stamp_ns: np.ndarray        # (M,) int64, strictly increasing
+    quat: np.ndarray            # (M, 4) float64 xyzw, unit, body to world
+    pos: np.ndarray             # (M, 3) float64
+    dropped: dict[str, int]     # rows left out, by reason
+
+    def summary(self) -> str:
+        """One line: what was dropped, for the commands to say (empty: nothing)."""
+        if not self.dropped:
+            return ''
+        what = ', '.join(f'{n} {why}' for why, n in self.dropped.items())
+        return f'{self.path}: {len(self.stamp_ns)} poses kept; dropped {what}'
+
+
+def read_tum(path: str | Path) -> Trajectory:
+    """Read a TUM trajectory file; a file that is not one is a one-line error."""
+    path = Path(path)
+    if not path.is_file():
+        raise DatasetError(f'{path}: trajectory file not found')
+    with path.open(encoding='utf-8-sig', errors='strict') as f:
+        lines = [line for line in text_lines(f, path)
+                 if line.strip() and not line.lstrip().startswith('#')]
+    rows = np.full((len(lines), 8), np.nan)
+    for i, line in enumerate(lines):
+        parts = line.replace(',', ' ').split()
+        if len(parts) != 8:
+            raise DatasetError(f'{path}: line "{line.strip()[:60]}" has {len(parts)} '
+                               'values, not the 8 of a TUM pose (t x y z qx qy qz qw)')
+        try:
+            rows[i] = [float(p) for p in parts]
+        except ValueError:
+            raise DatasetError(f'{path}: unparsable line "{line.strip()[:60]}"') from None
+    if not len(rows):
+        raise DatasetError(f'{path}: no poses')
+    dropped: dict[str, int] = {}
+
+    def drop(bad: np.ndarray, why: str) -> None:
+        nonlocal rows
+        if bad.any():
+            dropped[why] = int(bad.sum())
+            rows = rows[~bad]
+    drop(~np.isfinite(rows).all(axis=1), 'non-finite rows')
+    drop(np.abs(np.linalg.norm(rows[:, 4:], axis=1) - 1) > UNIT_TOLERANCE,
+         'rows whose quaternion is not a unit one')
+    stamp_ns = np.round(rows[:, 0] * 1e9).astype(np.int64)
+    # keep each stamp above every earlier kept one: duplicates and steps back go
+    later = np.concatenate([[True], stamp_ns[1:] > np.maximum.accumulate(stamp_ns)[:-1]])
+    duplicate = ~later & np.isin(stamp_ns, stamp_ns[later])
+    if duplicate.any():
+        dropped['duplicate stamps'] = int(duplicate.sum())
+    if (~later & ~duplicate).any():
+        dropped['stamps earlier than a previous one'] = int((~later & ~duplicate).sum())
+    rows, stamp_ns = rows[later], stamp_ns[later]
+    if len(rows) < 2:
+        raise DatasetError(f'{path}: fewer than two usable poses')
+    quat = rows[:, 4:] / np.linalg.norm(rows[:, 4:], axis=1, keepdims=True)
+    return Trajectory(path, stamp_ns, quat, rows[:, 1:4], dropped)
+
+
+def trajectory_file(poses: str | Path, recording: str) -> Path:
+    """Find the trajectory of ``recording``: ``poses`` itself, or <recording>.txt in it."""
+    poses = Path(poses)
+    if not poses.is_dir():
+        return poses
+    for suffix in SUFFIXES:
+        if (poses / f'{recording}{suffix}').is_file():
+            return poses / f'{recording}{suffix}'
+    raise DatasetError(f'{poses}: no trajectory of {recording} '
+                       f'({" or ".join(recording + s for s in SUFFIXES)})')
+
+
+def with_trajectory(rec: Recording, trajectory: Trajectory) -> Recording:
+    """``rec`` with the trajectory's poses in place of its own (it may have none)."""
+    return dataclasses.replace(rec, gt_stamp_ns=trajectory.stamp_ns, gt_quat=trajectory.quat,
+                               gt_pos=trajectory.pos)

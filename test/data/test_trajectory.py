@@ -1,0 +1,123 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""TUM trajectory files: read as evo reads them, rows tools get wrong dropped and counted."""
+
+from pathlib import Path
+
+from denoise_imu_ros.cli import main
+from denoise_imu_ros.core.errors import DatasetError, DataWarning
+from denoise_imu_ros.data.load import load_recording, load_sequence
+from denoise_imu_ros.data.trajectory import read_tum, trajectory_file
+from helpers import T0, write_asl
+import numpy as np
+import pytest
+
+POSE = '0.1 0.2 0.3 0 0 0 1'
+
+
+def _write(path: Path, rows: list[str]) -> Path:
+    path.write_text('\n'.join(rows) + '\n')
+    return path
+
+
+def test_a_real_vio_trajectory_reads_as_evo_reads_it(data_dir):
+    from evo.tools import file_interface
+    path = data_dir / 'euroc_vio' / 'vins_mono' / 'MH_01_easy.txt'
+    ours = read_tum(path)
+    theirs = file_interface.read_tum_trajectory_file(str(path))
+    assert not ours.dropped
+    np.testing.assert_allclose(ours.stamp_ns * 1e-9, theirs.timestamps, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(ours.pos, theirs.positions_xyz, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(ours.quat, theirs.orientations_quat_wxyz[:, [1, 2, 3, 0]],
+                               rtol=0, atol=1e-9)
+
+
+def test_duplicate_backward_non_finite_and_non_unit_rows_are_dropped_and_counted(tmp_path):
+    path = _write(tmp_path / 't.txt', [
+        '# timestamp tx ty tz qx qy qz qw',
+        f'1.0 {POSE}', f'1.1 {POSE}', f'1.1 {POSE}',   # a duplicate
+        f'1.2 {POSE}', f'1.15 {POSE}',                  # a step back
+        '1.3 nan 0 0 0 0 0 1',                          # not a pose
+        '1.4 0 0 0 0 0 0 0',                            # no rotation
+        f'1.5 {POSE}'])
+    traj = read_tum(path)
+    assert traj.stamp_ns.tolist() == [1_000_000_000, 1_100_000_000, 1_200_000_000,
+                                      1_500_000_000]
+    assert traj.dropped == {'non-finite rows': 1, 'rows whose quaternion is not a unit one': 1,
+                            'duplicate stamps': 1, 'stamps earlier than a previous one': 1}
+    assert traj.summary().startswith(f'{path}: 4 poses kept; dropped 1 non-finite rows')
+
+
+@pytest.mark.parametrize('rows, message', [
+    (['1.0 0 0 0 0 0 1'], 'has 7 values, not the 8 of a TUM pose'),
+    (['1.0 0 0 zero 0 0 0 1'], 'unparsable line "1.0 0 0 zero'),
+    (['# only a comment'], 'no poses'),
+    ([f'1.0 {POSE}', f'1.0 {POSE}'], 'fewer than two usable poses')])
+def test_a_file_that_is_no_trajectory_is_one_line(tmp_path, rows, message):
+    with pytest.raises(DatasetError, match=message):
+        read_tum(_write(tmp_path / 't.txt', rows))
+
+
+def test_a_folder_of_trajectories_is_looked_up_by_recording_name(tmp_path):
+    _write(tmp_path / 'a.txt', [f'1.0 {POSE}', f'2.0 {POSE}'])
+    _write(tmp_path / 'b.tum', [f'1.0 {POSE}', f'2.0 {POSE}'])
+    assert trajectory_file(tmp_path, 'a') == tmp_path / 'a.txt'
+    assert trajectory_file(tmp_path, 'b') == tmp_path / 'b.tum'
+    assert trajectory_file(tmp_path / 'a.txt', 'anything') == tmp_path / 'a.txt'
+    with pytest.raises(DatasetError, match=r'no trajectory of c \(c.txt or c.tum\)'):
+        trajectory_file(tmp_path, 'c')
+
+
+def _yawing_trajectory(path: Path, rate_hz: float = 20.0, yaw_rate: float = 0.3) -> Path:
+    """Write the poses write_asl's recording follows as a 20 Hz TUM file, a row twice."""
+    t = np.arange(0, 5.0, 1 / rate_hz)
+    yaw = yaw_rate * t
+    rows = [f'{(T0 * 1e-9 + s):.9f} 0 0 0 0 0 {np.sin(y / 2):.12f} {np.cos(y / 2):.12f}'
+            for s, y in zip(t, yaw)]
+    return _write(path, rows[:10] + rows[9:])
+
+
+def test_trajectory_poses_replace_the_recordings_own_and_the_drop_is_said(tmp_path):
+    rec_dir = write_asl(tmp_path / 'rec', n_imu=1000, yaw_rate=0.3)
+    (tmp_path / 'vio').mkdir()
+    _yawing_trajectory(tmp_path / 'vio' / 'rec.txt')
+    with pytest.warns(DataWarning, match='dropped 1 duplicate stamps'):
+        rec = load_recording(rec_dir, poses=tmp_path / 'vio')
+    assert len(rec.gt_stamp_ns) == 100  # 20 Hz, not the folder's own 200 Hz
+    with pytest.warns(DataWarning):
+        seq = load_sequence(rec_dir, poses=tmp_path / 'vio')
+    yaw = 0.3 * (seq.stamp_ns - T0) * 1e-9
+    np.testing.assert_allclose(seq.gt_quat[:, 2], np.sin(yaw / 2), atol=1e-4)
+
+
+def test_check_data_reads_a_trajectory_and_says_what_it_dropped_in_one_line(tmp_path, capsys):
+    rec_dir = write_asl(tmp_path / 'rec', n_imu=1000, yaw_rate=0.3)
+    traj = _yawing_trajectory(tmp_path / 'rec.txt')
+    main(['check-data', str(rec_dir), '--poses', str(traj)])
+    out = capsys.readouterr()
+    assert 'poses 20.0 Hz' in out.out
+    assert out.err.startswith(f'warning: {traj}: 100 poses kept; dropped 1 duplicate stamps')
+
+
+def test_the_recordings_own_poses_as_tum_files_give_the_same_recipe(euroc, tmp_path,
+                                                                    monkeypatch):
+    from denoise_imu_ros.data.load import load_recording as read
+    from denoise_imu_ros.learn import train as train_module
+    from denoise_imu_ros.learn.config import load_config
+    from denoise_imu_ros.learn.recipe import init_recipe
+    names = ['MH_01_easy', 'V2_01_easy']
+    for name in names:  # the motion capture, written as a VIO tool writes its trajectory
+        rec = read(euroc / name)
+        rows = np.column_stack([rec.gt_stamp_ns * 1e-9, rec.gt_pos, rec.gt_quat])
+        np.savetxt(tmp_path / f'{name}.txt', rows, fmt='%.9f')
+    own, _ = init_recipe(euroc, names)
+    from_files, _ = init_recipe(euroc, names, poses=tmp_path)
+    assert from_files.pop('poses') == str(tmp_path) and own.pop('poses') is None
+    assert from_files == own
+    (tmp_path / 'r.yaml').write_text(f'sequences: {names}\ndata: {euroc}\n'
+                                     f'poses: {tmp_path}\n')
+    seen = []
+    monkeypatch.setattr(train_module, 'load_sequence',
+                        lambda *a, **k: seen.append(k['poses']) or load_sequence(*a, **k))
+    train_module.load_sequences(load_config(tmp_path / 'r.yaml'))
+    assert seen == [str(tmp_path)] * 2
