@@ -18,7 +18,9 @@ removed and the whole recording integrated: if that never lowers the recording's
 attitude error, the increments' disagreement with the gyro is the poses' error, and a
 network trained to remove it will not beat plain integration.
 
-Clock offset and frame rotation: :mod:`denoise_imu_ros.data.pose_alignment`.
+Clock offset and frame rotation: :mod:`denoise_imu_ros.data.pose_alignment`. Where they
+are significant, the label noise and the supervision are judged on the poses moved onto
+the IMU clock and into its frame, as training with ``align: auto`` uses them.
 """
 
 from __future__ import annotations
@@ -29,7 +31,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .pose_alignment import estimate_pose_alignment, MAX_OFFSET_S, not_following
+from .pose_alignment import (apply_pose_alignment, estimate_pose_alignment, MAX_OFFSET_S,
+                             not_following)
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
 from ..core.limits import accel_units, imu_holes, MAX_GAP_FACTOR
@@ -57,8 +60,8 @@ ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'tim
              'imu_from_pose_rotation_xyzw', 'imu_from_pose_rotation_deg',
              'imu_from_pose_rotation_std_deg', 'gyro_bias_vs_pose_deg_s',
              'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
-             'rate_window_s', 'paper_increments', 'shortest_clean_increment', 'label_noise',
-             'supervision')
+             'rate_window_s', 'judged_after_alignment', 'paper_increments',
+             'shortest_clean_increment', 'label_noise', 'supervision')
 
 
 def paper_increments(rate_hz: float) -> tuple[int, int]:
@@ -156,8 +159,17 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
                           f'({report["duration_s"]:.2f} s), fewer than the network\'s '
                           f'receptive field ({field} samples): nothing to estimate or train'])
         return report
-    report.update(label_noise(seq))
     report.update(estimate_pose_alignment(rec, max_offset_s))
+    # the poses as training would use them: on the IMU clock and in its frame, when the
+    # estimate says they are not and is itself trustworthy (the poses follow the gyro,
+    # and rotation about every axis makes the frame observable)
+    report['judged_after_alignment'] = (
+        needs_alignment(report) and not not_following(report, max_offset_s)
+        and min(report['excitation_rms_deg_s']) >= MIN_EXCITATION_DEG_S)
+    if report['judged_after_alignment']:
+        seq = onto_imu_stamps(apply_pose_alignment(rec, report['time_offset_s'],
+                                                   report['imu_from_pose_rotation_xyzw']))
+    report.update(label_noise(seq))
     report.update(_increments(report, seq.rate_hz))
     long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
     report['supervision'] = supervision(seq, (*report['paper_increments'], long))
@@ -231,10 +243,7 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
             reasons.append(f'no rotation about the IMU {axis} axis ({rms:.2f} deg/s RMS)')
     if reasons:
         return 'no', reasons
-    if _significant(report['time_offset_s'], report['time_offset_std_s'],
-                    OFFSET_TOLERANCE_S) or _significant(
-            report['imu_from_pose_rotation_deg'], report['imu_from_pose_rotation_std_deg'],
-            ROTATION_TOLERANCE_DEG):
+    if needs_alignment(report):
         return 'after alignment', [
             f'poses {1e3 * report["time_offset_s"]:+.1f} ms off the IMU clock and in a frame '
             f'{report["imu_from_pose_rotation_deg"]:.2f} deg from the IMU\'s: apply both '
@@ -253,6 +262,14 @@ def _units(report: dict[str, Any]) -> list[str]:
         reasons.append(f"the gyro reads {np.median(scale):.1f} times the poses' rate "
                        '(57.3 for degrees): gyro in deg/s? (rad/s expected)')
     return reasons
+
+
+def needs_alignment(report: dict[str, Any]) -> bool:
+    """Whether the clock offset or the frame rotation found is beyond tolerance and noise."""
+    return _significant(report['time_offset_s'], report['time_offset_std_s'],
+                        OFFSET_TOLERANCE_S) or _significant(
+        report['imu_from_pose_rotation_deg'], report['imu_from_pose_rotation_std_deg'],
+        ROTATION_TOLERANCE_DEG)
 
 
 def _significant(value: float, std: float, tolerance: float) -> bool:
@@ -286,6 +303,9 @@ def markdown(report: dict[str, Any]) -> str:
               '  excitation, RMS rate per IMU axis (deg/s): '
               + ', '.join(f'{v:.1f}' for v in r['excitation_rms_deg_s']),
               '  increment residual after a constant bias (samples: mrad per axis, as deg/s):']
+    if r['judged_after_alignment']:
+        lines[-1] = ('  with the clock offset and frame rotation applied: increment residual '
+                     'after a constant bias (samples: mrad per axis, as deg/s):')
     lines += [f'    {j:4d}: {p["residual_mrad"]:7.3f}  {p["noise_rate_deg_s"]:7.3f}'
               for j, p in r['increments'].items()]
     lines.append(f'  label noise: {r["label_noise"]}')
