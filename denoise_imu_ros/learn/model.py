@@ -128,6 +128,25 @@ class GyroNet(nn.Module):
             x = hidden(x)
         return last(x.float())
 
+    @torch.no_grad()
+    def recentre(self) -> None:
+        """
+        Move each hidden convolution's mean output into its bias, leaving f unchanged.
+
+        BatchNorm removes a convolution's mean, so its bias changes nothing but the level
+        of the output it normalises; here the bias takes the running estimate of that
+        level away (and BatchNorm's running mean with it), keeping outputs near zero.
+        bfloat16 rounds a value to 2^-9 of its size: a channel that varies by less than
+        that around a larger level would be flat in training and not in evaluation (the
+        same weights, in float32), which BatchNorm's running variance turns into outputs
+        hundreds of times too large. Training calls it after every step in bfloat16.
+        """
+        for i in range(len(self.config.channels)):
+            conv, norm = self.net[BLOCK * i], self.net[BLOCK * i + 1]
+            shift = norm.running_mean.clone()
+            conv.bias -= shift
+            norm.running_mean -= shift
+
     def forward(self, u: torch.Tensor) -> torch.Tensor:
         """Corrected angular velocity (B, T, 3) in rad/s from raw IMU samples (B, T, 6)."""
         calib = torch.eye(3, dtype=u.dtype, device=u.device) + self.delta

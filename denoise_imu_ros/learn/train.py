@@ -272,6 +272,10 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
     for s in seqs:
         imu = torch.tensor(s.imu, dtype=torch.float32, device=device)
         omega = model(imu[None])[0].double().cpu()
+        if not torch.isfinite(omega).all():
+            raise TrainingError(f'{s.name}: the network gives non-finite rates on its '
+                                'validation tail: the training diverged (lower the learning '
+                                'rate, or train in float32: precision: float32)')
         n = (len(s) - 1 - start) // loss_cfg.span * loss_cfg.span
         sl = slice(start, start + n)
         losses.append(float(increment_loss(
@@ -457,6 +461,8 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
                                     f'{scheduler.get_last_lr()[0]:.3g}); lower the learning '
                                     'rate or check the data')
             optimizer.step()
+            if model.train_dtype is not None:
+                model.recentre()
             scheduler.step()
             bar.set_postfix(loss=f'{loss.item():.4g}')
             if swa is not None and step >= cfg.swa_start:

@@ -99,3 +99,19 @@ def test_dropout_keeps_the_type_it_is_given():
     drop = Dropout(0.1).train()
     for dtype in (torch.float32, torch.bfloat16):
         assert drop(torch.ones(1000, dtype=dtype)).dtype == dtype
+
+
+def test_recentring_moves_each_convolutions_level_into_its_bias_and_changes_no_output():
+    torch.manual_seed(3)
+    model = GyroNet(ModelConfig(dropout=0.0))
+    u = 0.3 * torch.randn(2, 2000, 6)
+    model.train()(u)  # BatchNorm's running means now hold the levels
+    for i in range(4):
+        model.net[4 * i].bias.data += 5.0  # a level far above the spread
+    model(u)
+    before_train, before_eval = model.train()(u), model.eval()(u)
+    model.recentre()
+    for i in range(4):
+        assert model.net[4 * i + 1].running_mean.abs().max() == 0
+    torch.testing.assert_close(model.eval()(u), before_eval, rtol=0, atol=1e-6)
+    torch.testing.assert_close(model.train()(u), before_train, rtol=0, atol=1e-6)

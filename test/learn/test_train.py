@@ -87,6 +87,19 @@ def test_non_finite_loss_stops_with_a_clear_message(euroc, monkeypatch):
         train(_short(euroc), progress=False)
 
 
+def test_a_network_that_diverged_on_its_validation_tails_is_one_line(tmp_path):
+    from denoise_imu_ros.core.architecture import ModelConfig
+    from denoise_imu_ros.learn.loss import LossConfig
+    from denoise_imu_ros.learn.model import GyroNet
+    from helpers import write_asl
+    seq = load_sequence(write_asl(tmp_path / 'rec', n_imu=2000))
+    model = GyroNet(ModelConfig())
+    model.net[-1].bias.data[:] = float('inf')
+    with pytest.raises(TrainingError, match='rec: the network gives non-finite rates on its '
+                                            'validation tail: the training diverged'):
+        train_module.validate(model, [seq], 1000, LossConfig())
+
+
 def test_calibration_baseline_trains_from_the_same_command(euroc, tmp_path):
     cfg = yaml.safe_load(CONFIG.read_text())
     cfg.update(sequences=['MH_01_easy'], window=1024, steps=6, val_every=6, swa_start=3)
