@@ -147,14 +147,25 @@ def shipped_models() -> list[str]:
     return sorted(p.stem for p in SHIPPED_DIR.glob('*.safetensors'))
 
 
-def code_version() -> str:
-    """Package version, plus the git commit when running from a checkout."""
+def code_version(package: Path = Path(__file__).resolve().parents[1]) -> str:
+    """
+    Package version, plus the git commit when the package runs from its own checkout.
+
+    The commit is recorded only when git tracks this package's own files there: an
+    installed copy (a colcon workspace's install/ inside another repository) records the
+    version alone, not the commit of whatever repository holds it; ``.dirty`` marks
+    changes to the package not committed.
+    """
+    def git(*args: str) -> str:
+        return subprocess.run(['git', *args], cwd=package, capture_output=True, text=True,
+                              timeout=5, check=True).stdout.strip()
     try:
-        rev = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], cwd=Path(__file__).parent,
-                             capture_output=True, text=True, timeout=5, check=True).stdout
+        git('ls-files', '--error-unmatch', '__init__.py')
+        rev = git('rev-parse', '--short', 'HEAD')
+        dirty = git('status', '--porcelain', '--untracked-files=no', '--', '.')
     except (OSError, subprocess.SubprocessError):
         return __version__
-    return f'{__version__}+g{rev.strip()}'
+    return f'{__version__}+g{rev}' + ('.dirty' if dirty else '')
 
 
 def write_model_file(path: str | Path, config: ModelConfig, arrays: dict[str, np.ndarray],
