@@ -26,6 +26,11 @@ from .core.errors import DataWarning, DenoiseError, OptionError, OutputError
 TORCH_COMMANDS = ('train', 'crossval', 'eval', 'ensemble', 'tune-fusion', 'noise')
 PYTHON_SHOW_WARNING = warnings.showwarning
 NEVER_OVER_A_BAG = 'a bag is never written over: remove it or choose another name'
+ALIGN_OPTION = {  # the poses against the IMU's clock and frame, for the scoring tools
+    'choices': ('check', 'auto', 'none'), 'default': 'check',
+    'help': "check (the default): refuse poses found off the IMU's clock or frame; auto: "
+            'move them onto both first (as check-data finds them); none: score them as '
+            'they are'}
 POSES_OPTION = {  # a VIO's or SLAM's trajectories in place of the recordings' poses
     'metavar': 'DIR', 'help': 'trajectories (TUM format: t x y z qx qy qz qw, as VIO and SLAM '
                               'tools write them), <recording>.txt in DIR, in place of the '
@@ -230,7 +235,8 @@ def _noise(args: argparse.Namespace) -> None:
     from .evaluation.noise import markdown, noise, yaml_snippet
     _not_an_input(args.out, _report_inputs(args))
     report = noise(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
-                   imu_topic=args.imu_topic, pose_topic=args.pose_topic, poses=args.poses)
+                   imu_topic=args.imu_topic, pose_topic=args.pose_topic, poses=args.poses,
+                   align_poses=args.align)
     sys.stdout.write(markdown(report))
     print(f'\nFor a VIO ({args.out}/noise.yaml; Allan plots and JSON beside it):\n')
     sys.stdout.write(yaml_snippet(report['pooled'], ', '.join(report['recordings'])))
@@ -394,8 +400,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--start-sample', type=int, default=0,
                    help='score from this sample on (16032: the validation tail of the '
                         'training recipe); the network still sees the samples before')
-    p.add_argument('--align', choices=('none', 'auto'), default='none',
-                   help='auto: move the poses onto the IMU clock and frame first (check-data)')
+    p.add_argument('--align', **ALIGN_OPTION)
     p.add_argument('--no-plots', action='store_true')
     p.add_argument('--poses', **POSES_OPTION)
     p.set_defaults(func=_eval)
@@ -409,6 +414,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--sequences', nargs='+', required=True, help='recordings with ground truth')
     p.add_argument('--out', required=True, help='output folder (YAML, JSON, PNG)')
     p.add_argument('--baseline', help='calibrated-IMU model (default: <dataset>_calibrated)')
+    p.add_argument('--align', **ALIGN_OPTION)
     p.add_argument('--poses', **POSES_OPTION)
     p.set_defaults(func=_noise)
 

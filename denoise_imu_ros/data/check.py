@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .pose_alignment import (apply_pose_alignment, estimate_pose_alignment, MAX_OFFSET_S,
-                             not_following)
+from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
+                             MAX_OFFSET_S, needs_alignment, not_following)
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
 from ..core.limits import accel_units, imu_holes, MAX_GAP_FACTOR
@@ -45,9 +45,6 @@ BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)
 NOISE_RATE_LIMIT_DEG_S = 1.0
 MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
 MIN_DURATION_S = 30.0      # shorter recordings cannot train (window, tail, warm-up)
-OFFSET_TOLERANCE_S = 1e-3  # above, and SIGNIFICANCE standard errors: apply the offset
-ROTATION_TOLERANCE_DEG = 0.2  # above, and SIGNIFICANCE standard errors: apply the rotation
-SIGNIFICANCE = 2.0
 OFFSET_SPREAD_S = 4e-3     # quarters spread wider (clean ones: 3.2 ms at most): drift
 PAPER_INCREMENT_S = 0.08  # the paper's 16 samples at 200 Hz (and twice it, 32)
 DEG_PER_RAD_LOW = 20.0    # a gyro scale above this against the poses: degrees, not radians
@@ -146,7 +143,7 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     Everything check-data reports on one recording, with a verdict and its reasons.
 
     ``usable`` is ``yes``, ``after alignment`` (the clock offset or the frame rotation
-    exceed OFFSET_TOLERANCE_S / ROTATION_TOLERANCE_DEG and twice their standard error)
+    are significant: :func:`~denoise_imu_ros.data.pose_alignment.needs_alignment`)
     or ``no``; a clock offset that is not constant along the recording is a reason too.
     """
     seq = onto_imu_stamps(rec)
@@ -244,10 +241,7 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
     if reasons:
         return 'no', reasons
     if needs_alignment(report):
-        return 'after alignment', [
-            f'poses {1e3 * report["time_offset_s"]:+.1f} ms off the IMU clock and in a frame '
-            f'{report["imu_from_pose_rotation_deg"]:.2f} deg from the IMU\'s: apply both '
-            'before training']
+        return 'after alignment', [f'{describe(report)}: apply both before training']
     return 'yes', []
 
 
@@ -262,19 +256,6 @@ def _units(report: dict[str, Any]) -> list[str]:
         reasons.append(f"the gyro reads {np.median(scale):.1f} times the poses' rate "
                        '(57.3 for degrees): gyro in deg/s? (rad/s expected)')
     return reasons
-
-
-def needs_alignment(report: dict[str, Any]) -> bool:
-    """Whether the clock offset or the frame rotation found is beyond tolerance and noise."""
-    return _significant(report['time_offset_s'], report['time_offset_std_s'],
-                        OFFSET_TOLERANCE_S) or _significant(
-        report['imu_from_pose_rotation_deg'], report['imu_from_pose_rotation_std_deg'],
-        ROTATION_TOLERANCE_DEG)
-
-
-def _significant(value: float, std: float, tolerance: float) -> bool:
-    """Whether an estimate is both beyond the tolerance and clear of its own noise."""
-    return abs(value) > tolerance and abs(value) > SIGNIFICANCE * std
 
 
 def markdown(report: dict[str, Any]) -> str:

@@ -14,7 +14,8 @@ from pathlib import Path
 import warnings
 
 from .asl import read_asl
-from .pose_alignment import apply_pose_alignment, estimate_pose_alignment, not_following
+from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
+                             needs_alignment, not_following)
 from .timebase import onto_imu_stamps
 from .trajectory import read_tum, trajectory_file, with_trajectory
 from ..core.errors import DatasetError, DataWarning
@@ -71,12 +72,19 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
 
     ``align_poses``: ``none``, ``auto`` (clock offset and frame rotation estimated as
     ``check-data`` does) or ``{time_offset_s, imu_from_pose_rotation_xyzw}``; what was
-    applied is kept in :attr:`Sequence.pose_alignment`. ``poses``: as for
+    applied is kept in :attr:`Sequence.pose_alignment`. ``check``: none, but poses found
+    off the IMU's clock or frame are an error (figures against them would be wrong). ``poses``: as for
     :func:`load_recording`.
     """
     rec = load_recording(path, imu_topic, pose_topic, poses)
     used = None
-    if align_poses == 'auto':
+    if align_poses == 'check':
+        found = estimate_pose_alignment(rec)
+        if needs_alignment(found) and not not_following(found):
+            raise DatasetError(f'{path}: {describe(found)}: figures against them as they are '
+                               'would be wrong; give --align auto to move them first (or '
+                               '--align none to score them as they are)')
+    elif align_poses == 'auto':
         found = estimate_pose_alignment(rec)
         why = not_following(found)
         if why:  # no estimate to apply: say so rather than shift the poses by it
@@ -87,7 +95,7 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     elif isinstance(align_poses, dict):
         used = dict(align_poses)
     elif align_poses != 'none':
-        raise DatasetError(f'align must be none, auto or a mapping, not {align_poses!r}')
+        raise DatasetError(f'align must be none, check, auto or a mapping, not {align_poses!r}')
     if used is not None:
         rec = apply_pose_alignment(rec, used['time_offset_s'], used['imu_from_pose_rotation_xyzw'])
     seq = onto_imu_stamps(rec, max_gt_gap_s=max_gt_gap_s, min_samples=min_samples)

@@ -37,6 +37,9 @@ COARSE_WINDOWS = 2000      # rate windows the coarse offset search scores
 COARSE_STEP_S = 4e-3       # its step: the 50 ms rate windows make minima wider
 OFFSET_XTOL_S = 1e-5       # precision of the final offset search
 TIE_RAD_S = 1e-9           # offsets whose rate residuals differ by less than this tie
+OFFSET_TOLERANCE_S = 1e-3  # above, and SIGNIFICANCE standard errors: apply the offset
+ROTATION_TOLERANCE_DEG = 0.2  # above, and SIGNIFICANCE standard errors: apply the rotation
+SIGNIFICANCE = 2.0
 
 
 class Rates:
@@ -135,6 +138,25 @@ def not_following(found: dict[str, Any], max_offset_s: float = MAX_OFFSET_S) -> 
                 f'deg/s RMS against {motion:.1f} deg/s of motion): the offset is beyond the '
                 'search range, or the poses are not of this IMU')
     return None
+
+
+def describe(found: dict[str, Any]) -> str:
+    """Return the clock offset and frame rotation of an estimate, in words."""
+    return (f'poses {1e3 * found["time_offset_s"]:+.1f} ms off the IMU clock and in a frame '
+            f'{found["imu_from_pose_rotation_deg"]:.2f} deg from the IMU\'s')
+
+
+def needs_alignment(report: dict[str, Any]) -> bool:
+    """Whether the clock offset or the frame rotation found is beyond tolerance and noise."""
+    return _significant(report['time_offset_s'], report['time_offset_std_s'],
+                        OFFSET_TOLERANCE_S) or _significant(
+        report['imu_from_pose_rotation_deg'], report['imu_from_pose_rotation_std_deg'],
+        ROTATION_TOLERANCE_DEG)
+
+
+def _significant(value: float, std: float, tolerance: float) -> bool:
+    """Whether an estimate is both beyond the tolerance and clear of its own noise."""
+    return abs(value) > tolerance and abs(value) > SIGNIFICANCE * std
 
 
 def estimate_pose_alignment(rec: Recording,

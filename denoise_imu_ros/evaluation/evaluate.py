@@ -94,7 +94,8 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     validation tail of a training sequence); the networks still see the samples before
     it, and integration starts from the ground truth at ``start_sample``. ``align_poses``
     ``auto`` moves each recording's poses onto the IMU clock and frame first (as
-    ``check-data`` estimates them); what was applied is in the report.
+    ``check-data`` estimates them); what was applied is in the report. ``check`` refuses
+    poses found off them (the command line's default).
     """
     names = recording_names(sequences)
     loaded = load_model(model_spec)

@@ -275,7 +275,8 @@ def noise_report(seqs: list[Sequence], gyros: dict[str, list[np.ndarray]],
 
 def noise(model_spec: str, data: str, sequences: list[str], out: str,
           baseline: str | None = None, imu_topic: str | None = None,
-          pose_topic: str | None = None, poses: str | None = None) -> dict[str, Any]:
+          pose_topic: str | None = None, poses: str | None = None,
+          align_poses: str = 'none') -> dict[str, Any]:
     """Run the noise figures of raw, calibrated and corrected gyro; write and return them."""
     from ..core.modelfile import fitting_note, gyro_covariance, scored_on_training_samples
     from ..data.load import load_sequence
@@ -294,7 +295,8 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     seqs, gyros = [], {'raw': [], 'calibrated': [], 'corrected': []}
     for name, short in zip(sequences, names):
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
-                            min_samples=net.model.receptive_field, poses=poses)
+                            min_samples=net.model.receptive_field, poses=poses,
+                            align_poses=align_poses)
         check_inputs(seq, net, short)
         seqs.append(seq)
         gyros['raw'].append(seq.imu[:, :3])

@@ -3,6 +3,7 @@
 """TUM trajectory files: read as evo reads them, rows tools get wrong dropped and counted."""
 
 from pathlib import Path
+import re
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError, DataWarning
@@ -121,3 +122,15 @@ def test_the_recordings_own_poses_as_tum_files_give_the_same_recipe(euroc, tmp_p
                         lambda *a, **k: seen.append(k['poses']) or load_sequence(*a, **k))
     train_module.load_sequences(load_config(tmp_path / 'r.yaml'))
     assert seen == [str(tmp_path)] * 2
+
+
+@pytest.mark.parametrize('command', ['eval', 'noise'])
+def test_scoring_a_cameras_trajectory_as_the_imus_poses_is_refused_in_one_line(
+        command, data_dir, euroc, tmp_path, capsys):
+    vins = data_dir / 'euroc_vio' / 'vins_mono'
+    assert main([command, '--model', 'euroc', '--data', str(euroc), '--sequences',
+                 'MH_01_easy', '--poses', str(vins), '--out', str(tmp_path / 'o')]) == 1
+    err = capsys.readouterr().err.splitlines()[-1]  # after a note that it trained on it
+    assert err.startswith(f'denoise-imu {command}: error: ') and re.search(
+        r'MH_01_easy: poses -89\.\d ms off the IMU clock and in a frame 88\.\d\d deg from the '
+        r"IMU's: figures against them as they are would be wrong; give --align auto", err)
