@@ -95,7 +95,8 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     elif isinstance(align_poses, dict):
         used = dict(align_poses)
     elif align_poses != 'none':
-        raise DatasetError(f'align must be none, check, auto or a mapping, not {align_poses!r}')
+        raise DatasetError('align must be none, check, auto or a mapping, not '
+                           f'{align_poses!r}')
     if used is not None:
         rec = apply_pose_alignment(rec, used['time_offset_s'], used['imu_from_pose_rotation_xyzw'])
     seq = onto_imu_stamps(rec, max_gt_gap_s=max_gt_gap_s, min_samples=min_samples)
