@@ -73,8 +73,8 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     ``align_poses``: ``none``, ``auto`` (clock offset and frame rotation estimated as
     ``check-data`` does) or ``{time_offset_s, imu_from_pose_rotation_xyzw}``; what was
     applied is kept in :attr:`Sequence.pose_alignment`. ``check``: none, but poses found
-    off the IMU's clock or frame are an error (figures against them would be wrong). ``poses``: as for
-    :func:`load_recording`.
+    off the IMU's clock or frame are an error (figures against them would be wrong).
+    ``poses``: as for :func:`load_recording`.
     """
     rec = load_recording(path, imu_topic, pose_topic, poses)
     used = None
