@@ -49,6 +49,8 @@ OFFSET_SPREAD_S = 4e-3     # quarters spread wider (clean ones: 3.2 ms at most):
 PAPER_INCREMENT_S = 0.08  # the paper's 16 samples at 200 Hz (and twice it, 32)
 DEG_PER_RAD_LOW = 20.0    # a gyro scale above this against the poses: degrees, not radians
 SUPERVISION_LONG_S = 1.0  # the longest increment the supervision check also fits on
+CLIPPED_MIN_FRACTION = 1e-3  # samples pinned at an axis's extreme beyond this: saturation
+CLIPPED_MIN_SAMPLES = 10
 
 
 # what check() estimates beyond rates and holes (None for a recording too short for it)
@@ -202,7 +204,28 @@ def _streams(rec: Recording, seq: Sequence) -> dict[str, Any]:
             'pose_holes': len(starts), 'pose_longest_hole_s': longest,
             'pose_hole_fraction': float(holes.mean()), 'duration_s': float(imu_dt.sum()),
             'accel_norm_mean_m_s2': float(np.mean(np.linalg.norm(seq.imu[:, 3:], axis=1))),
-            'imu_holes': len(gaps), 'imu_longest_hole_s': float(imu_dt[gaps].max(initial=0.0))}
+            'imu_holes': len(gaps), 'imu_longest_hole_s': float(imu_dt[gaps].max(initial=0.0)),
+            'gyro_clipped': clipped(seq.imu[:, :3]), 'accel_clipped': clipped(seq.imu[:, 3:])}
+
+
+def clipped(values: np.ndarray) -> dict[str, Any] | None:
+    """
+    Samples pinned at an axis's largest magnitude, where a sensor saturates; None if none.
+
+    A real signal reaches its extreme once or a few times; a saturated one sits on it. An
+    axis that never varies (a constant signal) is not saturated.
+    """
+    worst = None
+    for axis in range(values.shape[1]):
+        v = np.abs(values[:, axis])
+        top = float(v.max())
+        pinned = int(np.count_nonzero(v == top))
+        if (top > 0 and CLIPPED_MIN_SAMPLES <= pinned < len(v) / 2
+                and pinned >= CLIPPED_MIN_FRACTION * len(v)
+                and (worst is None or pinned > worst['samples'])):
+            worst = {'axis': 'xyz'[axis], 'limit': top, 'samples': pinned,
+                     'fraction': pinned / len(v)}
+    return worst
 
 
 def _increments(report: dict[str, Any], rate_hz: float) -> dict[str, Any]:
@@ -231,6 +254,13 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
     not_aligned = not_following(report, max_offset_s)
     if not_aligned:
         reasons.append(not_aligned)
+    for sensor, unit, scale in (('gyro', 'deg/s', math.degrees(1.0)), ('accel', 'm/s^2', 1.0)):
+        c = report[f'{sensor}_clipped']
+        if c:  # it misleads every estimate below (a frame rotation, a bias) before training
+            reasons.append(f'{sensor} saturated: {c["samples"]} samples '
+                           f'({100 * c["fraction"]:.1f} %) pinned at +-{scale * c["limit"]:.4g} '
+                           f'{unit} on its {c["axis"]} axis; record within its range, or '
+                           'leave the saturated motion out')
     if report['imu_holes']:
         reasons.append(f'{report["imu_holes"]} IMU holes longer than {MAX_GAP_FACTOR:g} periods '
                        f'(longest {report["imu_longest_hole_s"]:.3g} s): split the recording '

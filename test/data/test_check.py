@@ -305,3 +305,15 @@ def test_poses_too_sparse_to_give_a_rate_are_a_clear_error(tmp_path):
     rec = read_asl(write_asl(tmp_path / 's', n_imu=1600, gt_rate=0.3))
     with pytest.raises(DatasetError, match='over which their rate is compared'):
         estimate_pose_alignment(rec)
+
+
+def test_a_saturated_gyro_is_named_not_taken_for_a_frame_rotation(euroc, tmp_path):
+    rec = read_asl(euroc / 'MH_04_difficult')
+    limit = np.percentile(np.abs(rec.imu[:, 2]), 95)  # the fastest 5 % of yaw clipped
+    imu = rec.imu.copy()
+    imu[:, 2] = np.clip(imu[:, 2], -limit, limit)
+    report = check(dataclasses.replace(rec, imu=imu))
+    assert report['usable'] == 'no' and report['gyro_clipped']['axis'] == 'z'
+    assert report['reasons'][0].startswith('gyro saturated: ')
+    assert f'pinned at +-{math.degrees(limit):.4g} deg/s on its z axis' in report['reasons'][0]
+    assert check(rec)['gyro_clipped'] is None and check(rec)['accel_clipped'] is None
