@@ -210,7 +210,7 @@ def _streams(rec: Recording, seq: Sequence) -> dict[str, Any]:
 
 def clipped(values: np.ndarray) -> dict[str, Any] | None:
     """
-    Samples pinned at an axis's largest magnitude, where a sensor saturates; None if none.
+    Find samples pinned at an axis's largest magnitude (a saturated sensor), or None.
 
     A real signal reaches its extreme once or a few times; a saturated one sits on it. An
     axis that never varies (a constant signal) is not saturated.
