@@ -196,3 +196,21 @@ def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_p
     assert main(['process-bag', str(bag), str(tmp_path / 'pb'), '--model', str(model_file)]) == 1
     err = _error(capsys)  # it has no --overwrite to suggest
     assert 'exists already' in err and 'remove it' in err and '--overwrite' not in err
+
+
+def test_an_imu_mounted_unlike_the_models_is_said_in_one_line(tmp_path, capsys):
+    import dataclasses
+    from denoise_imu_ros.data.bags import write_bag
+    from denoise_imu_ros.data.load import load_recording
+    from scipy.spatial.transform import Rotation
+    rec = load_recording(SAMPLE)
+    # the same motion seen by an IMU turned 90 deg about y (EuRoC's x up, now z up)
+    turn = Rotation.from_rotvec([0.0, 90.0, 0.0], degrees=True)
+    imu = np.hstack([turn.apply(rec.imu[:, :3]), turn.apply(rec.imu[:, 3:])])
+    write_bag(dataclasses.replace(rec, imu=imu), tmp_path / 'turned')
+    for source, said in ((SAMPLE, False), (tmp_path / 'turned', True)):
+        assert main(['correct', '--model', 'euroc', '--input', str(source), '--output',
+                     str(tmp_path / 'out.csv'), '--overwrite']) == 0
+        err = capsys.readouterr().err
+        assert (f"warning: {source}: gravity is 90 deg from where the model's training IMU "
+                'had it' in err) == said, err

@@ -18,14 +18,18 @@ into an attitude ruined for good. The limits sit well above every MEMS IMU's ran
 
 from __future__ import annotations
 
+import math
+import warnings
+
 import numpy as np
 
-from .errors import DatasetError
+from .errors import DatasetError, DataWarning
 from .rotation import conjugate_arrays, multiply_arrays
 
 RATE_TOLERANCE = 0.05     # relative rate mismatch refused offline, an ERROR online
 MAX_GYRO_RAD_S = 100.0    # ~5,700 deg/s
 MAX_ACCEL_M_S2 = 2000.0   # ~200 g
+MOUNTING_TOLERANCE_DEG = 45.0  # gravity this far from the model's training IMU's: warned
 MAX_RATE_HZ = 100e3       # above, stamps are not nanoseconds (microseconds give 200 kHz)
 
 
@@ -100,15 +104,20 @@ def accel_units(norm_m_s2: float) -> str | None:
     return f'mean accelerometer norm {norm_m_s2:.3g} m/s^2, gravity is 9.81: {hint}'
 
 
-def check_units(imu: np.ndarray, source: object,
-                model_input_std: np.ndarray | None = None) -> None:
+def check_units(imu: np.ndarray, source: object, model_input_std: np.ndarray | None = None,
+                model_input_mean: np.ndarray | None = None) -> None:
     """
-    Refuse IMU data in the wrong units, naming the likely cause.
+    Refuse IMU data in the wrong units, naming the likely cause; warn of another mounting.
 
     The mean accelerometer norm is gravity's, ~9.81 m/s^2, on any recording that is not
     in free fall: ~1 says g. A gyro whose spread is GYRO_SCALE_LIMIT times the model's
-    training data (57 times: deg/s) is not in rad/s.
+    training data (57 times: deg/s) is not in rad/s. Gravity far from where the model's
+    training IMU had it (:func:`mounting`) is said as a DataWarning.
     """
+    if model_input_mean is not None:
+        moved = mounting(imu, model_input_mean)
+        if moved:
+            warnings.warn(f'{source}: {moved}', DataWarning, stacklevel=2)
     problem = accel_units(float(np.mean(np.linalg.norm(imu[:, 3:], axis=1))))
     if problem:
         raise DatasetError(f'{source}: {problem}')
@@ -117,6 +126,28 @@ def check_units(imu: np.ndarray, source: object,
         if ratio > GYRO_SCALE_LIMIT:
             raise DatasetError(f'{source}: the gyro varies {ratio:.0f} times as much as the '
                                "model's training data: gyro in deg/s? (rad/s expected)")
+
+
+def mounting(imu: np.ndarray, model_input_mean: np.ndarray) -> str | None:
+    """
+    Say whether gravity lies far from where the model's training IMU had it, or None.
+
+    The model's input normalisation holds its training data's mean accelerometer: for
+    a robot, gravity in its IMU's frame. More than MOUNTING_TOLERANCE_DEG away, this IMU
+    is mounted otherwise (or the robot hangs upside down): the model corrects axes that
+    are not this IMU's.
+    """
+    here, there = imu[:, 3:].mean(axis=0), np.asarray(model_input_mean[3:6], dtype=float)
+    if min(np.linalg.norm(here), np.linalg.norm(there)) < 1.0:  # no gravity in a mean
+        return None
+    cos = float(here @ there / (np.linalg.norm(here) * np.linalg.norm(there)))
+    angle = math.degrees(math.acos(min(1.0, max(-1.0, cos))))
+    if angle <= MOUNTING_TOLERANCE_DEG:
+        return None
+    return (f"gravity is {angle:.0f} deg from where the model's training IMU had it (mean "
+            f'accelerometer {np.round(here, 2).tolist()} against {np.round(there, 2).tolist()} '
+            "m/s^2): mounted differently? The model corrects its own IMU's axes: rotate "
+            "this IMU's data into them, or train on this IMU")
 
 
 def check_gyro_against_poses(gyro: np.ndarray, gt_quat: np.ndarray, gt_valid: np.ndarray,

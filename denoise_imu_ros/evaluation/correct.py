@@ -54,7 +54,7 @@ def correct_to_csv(model_spec: str, source: str, output: str,
         raise DatasetError(f'{source}: {len(rec.imu)} IMU samples, shorter than the '
                            f'receptive field ({field})')
     check_rate(rec.imu_stamp_ns, sample_rate(loaded), source)
-    check_units(rec.imu, source, loaded.arrays['input_std'])
+    check_units(rec.imu, source, loaded.arrays['input_std'], loaded.arrays.get('input_mean'))
     check_gaps(rec.imu_stamp_ns, sample_rate(loaded), source)
     omega = corrected_gyro(loaded, rec.imu, engine, rest)
     with atomic_output(output, overwrite=True) as tmp, open(tmp, 'w') as f:

@@ -78,7 +78,7 @@ def rest_note(rest_input: dict[str, bool], rest_only: bool) -> str:
 def check_inputs(seq: Sequence, loaded: LoadedModel, name: str) -> None:
     """Refuse a recording this model cannot score: another rate, unit, or IMU holes."""
     check_rate(seq.stamp_ns, sample_rate(loaded), name)
-    check_units(seq.imu, name, loaded.model.input_std.numpy())
+    check_units(seq.imu, name, loaded.model.input_std.numpy(), loaded.model.input_mean.numpy())
     check_gaps(seq.stamp_ns, sample_rate(loaded), name)
 
 
