@@ -16,6 +16,7 @@ import warnings
 from .asl import read_asl
 from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
                              needs_alignment, not_following)
+from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
 from .timebase import onto_imu_stamps
 from .trajectory import read_tum, trajectory_file, with_trajectory
 from ..core.errors import DatasetError, DataWarning
@@ -74,7 +75,8 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     ``check-data`` does) or ``{time_offset_s, imu_from_pose_rotation_xyzw}``; what was
     applied is kept in :attr:`Sequence.pose_alignment`. ``check``: none, but poses found
     off the IMU's clock or frame are an error (figures against them would be wrong).
-    ``poses``: as for :func:`load_recording`.
+    ``poses``: as for :func:`load_recording`. Pose jumps the gyro cannot explain are
+    masked and said (:mod:`~denoise_imu_ros.data.pose_jumps`).
     """
     rec = load_recording(path, imu_topic, pose_topic, poses)
     used = None
@@ -100,4 +102,7 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     if used is not None:
         rec = apply_pose_alignment(rec, used['time_offset_s'], used['imu_from_pose_rotation_xyzw'])
     seq = onto_imu_stamps(rec, max_gt_gap_s=max_gt_gap_s, min_samples=min_samples)
-    return dataclasses.replace(seq, pose_alignment=used)
+    jumps = find_jumps(seq)
+    if jumps:
+        warnings.warn(f'{path}: {describe_jumps(jumps)}', DataWarning, stacklevel=2)
+    return dataclasses.replace(mask_jumps(seq, jumps), pose_alignment=used)

@@ -37,6 +37,8 @@ COARSE_WINDOWS = 2000      # rate windows the coarse offset search scores
 COARSE_STEP_S = 4e-3       # its step: the 50 ms rate windows make minima wider
 OFFSET_XTOL_S = 1e-5       # precision of the final offset search
 TIE_RAD_S = 1e-9           # offsets whose rate residuals differ by less than this tie
+JUMP_RATE_FACTOR = 2.0     # pose rates beyond this times the gyro's fastest, plus
+JUMP_RATE_MARGIN_RAD_S = 0.2  # this, are jumps: left out of the comparison
 OFFSET_TOLERANCE_S = 1e-3  # above, and SIGNIFICANCE standard errors: apply the offset
 ROTATION_TOLERANCE_DEG = 0.2  # above, and SIGNIFICANCE standard errors: apply the rotation
 SIGNIFICANCE = 2.0
@@ -69,6 +71,11 @@ class Rates:
         self.imu_t = t[:-n] - 0.5 * np.diff(t)[:len(t) - n]
         self.imu = (cs[n:] - cs[:-n]) / (t[n:] - t[:-n])[:, None]
         self.window_s = n * float(np.median(np.diff(t)))
+        # a pose jump (a VIO re-initialising, a placeholder pose) turns faster than the
+        # gyro ever does: those windows are not compared (norms: any frame, any clock)
+        fastest = float(np.linalg.norm(self.imu, axis=1).max())
+        self.pose_ok &= np.linalg.norm(self.pose, axis=1) <= JUMP_RATE_FACTOR * fastest + \
+            JUMP_RATE_MARGIN_RAD_S
 
     def matched(self, offset_s: float, part: slice = slice(None)) -> tuple[np.ndarray, ...]:
         """Gyro and pose rates of the IMU windows that trusted poses cover, at an offset."""

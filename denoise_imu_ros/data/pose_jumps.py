@@ -1,0 +1,84 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+Jumps in a trajectory: pose increments the gyro cannot explain, found and masked.
+
+A VIO re-initialising, a SLAM relocalising or a placeholder pose written before tracking
+starts moves the poses by tens of degrees between two stamps while the gyro turns by a
+fraction of one. Over blocks of JUMP_WINDOW_S the angle between the poses' increment and
+the gyro's is small where the poses track (motion capture ~0.01 deg, a VIO 0.1-0.3 deg);
+a block beyond JUMP_MIN_DEG and JUMP_FACTOR times the median is a jump, and its samples
+lose their trusted poses (the loss drops every increment across it). Blocks across an
+IMU hole are not judged (the gyro does not cover it). Poses on another
+clock or in another frame disagree everywhere: beyond JUMP_MAX_FRACTION of the blocks
+nothing is masked (alignment, not masking, is what they need).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..core.metrics import increment_residuals, trusted_blocks
+from ..core.records import Sequence
+
+JUMP_WINDOW_S = 0.2
+JUMP_MIN_DEG = 5.0         # motion capture's glitches (TUM-VI's: 2-3 deg) stay below
+JUMP_FACTOR = 10.0
+JUMP_MAX_FRACTION = 0.2
+HOLE_FACTOR = 1.5          # a block lasting longer than this times its length holds a hole
+
+
+class Jump(NamedTuple):
+    """A span of the recording whose poses jumped, from its first sample (s)."""
+
+    start_s: float
+    end_s: float
+    angle_deg: float      # the largest block error in it
+
+
+def find_jumps(seq: Sequence) -> list[Jump]:
+    """Spans whose pose increments the gyro cannot explain (merged where they touch)."""
+    n = max(2, round(JUMP_WINDOW_S * seq.rate_hz))
+    starts = trusted_blocks(seq.gt_valid, n)
+    if len(starts) < 2:
+        return []
+    res, duration = increment_residuals(seq.gt_quat, seq.gt_valid, seq.imu[:, :3], seq.dt, n)
+    angle = np.degrees(np.linalg.norm(res, axis=1))
+    covered = duration <= HOLE_FACTOR * n * float(np.median(seq.dt))
+    bad = covered & (angle > max(JUMP_MIN_DEG, JUMP_FACTOR * float(np.median(angle))))
+    if bad.mean() > JUMP_MAX_FRACTION:
+        return []
+    t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
+    jumps: list[Jump] = []
+    for k in np.flatnonzero(bad):
+        start, end = float(t[starts[k]]), float(t[starts[k] + n])
+        if jumps and start <= jumps[-1].end_s:
+            jumps[-1] = Jump(jumps[-1].start_s, end, max(jumps[-1].angle_deg, angle[k]))
+        else:
+            jumps.append(Jump(start, end, float(angle[k])))
+    return jumps
+
+
+def mask_jumps(seq: Sequence, jumps: list[Jump]) -> Sequence:
+    """``seq`` with its poses untrusted over every jump's span."""
+    if not jumps:
+        return seq
+    t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
+    valid = seq.gt_valid.copy()
+    for jump in jumps:
+        valid[(t >= jump.start_s) & (t <= jump.end_s)] = False
+    return dataclasses.replace(seq, gt_valid=valid)
+
+
+def describe(jumps: list[Jump], most: int = 3) -> str:
+    """Return the jumps in words: how many, and the first few spans."""
+    spans = ', '.join(f'{j.start_s:.1f}-{j.end_s:.1f} s ({j.angle_deg:.0f} deg)'
+                      for j in jumps[:most])
+    more = f' and {len(jumps) - most} more' if len(jumps) > most else ''
+    return (f'{len(jumps)} pose jump{"s" if len(jumps) > 1 else ""} the gyro cannot explain '
+            f'(a VIO re-initialising, a placeholder pose?), masked: {spans}{more}; '
+            f'{math.fsum(j.end_s - j.start_s for j in jumps):.1f} s in all')

@@ -1,0 +1,54 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""Pose jumps: a re-initialisation or a placeholder pose found, said and masked; none else."""
+
+import dataclasses
+
+from denoise_imu_ros.core.errors import DataWarning
+from denoise_imu_ros.data.asl import read_asl
+from denoise_imu_ros.data.bags import write_bag
+from denoise_imu_ros.data.check import check
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.data.pose_jumps import find_jumps, mask_jumps
+from denoise_imu_ros.data.timebase import onto_imu_stamps
+import pytest
+from scipy.spatial.transform import Rotation
+
+
+def _reinitialised(rec, at_s=30.0):
+    """Turn the world of ``rec``'s poses 40 deg and move it 3 m from ``at_s`` on."""
+    after = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9 >= at_s
+    world = Rotation.from_rotvec([0.0, 0.0, 40.0], degrees=True)
+    quat, pos = rec.gt_quat.copy(), rec.gt_pos.copy()
+    quat[after] = (world * Rotation.from_quat(quat[after])).as_quat()
+    pos[after] += [3.0, 0.0, 0.0]
+    return dataclasses.replace(rec, gt_quat=quat, gt_pos=pos)
+
+
+def test_motion_capture_has_no_jumps_and_a_reinitialisation_is_one(euroc):
+    rec = read_asl(euroc / 'MH_04_difficult')
+    assert find_jumps(onto_imu_stamps(rec)) == []
+    seq = onto_imu_stamps(_reinitialised(rec))
+    jumps = find_jumps(seq)
+    assert len(jumps) == 1
+    t0 = (rec.gt_stamp_ns[0] - seq.stamp_ns[0]) * 1e-9
+    assert jumps[0].start_s <= 30.0 - t0 <= jumps[0].end_s <= jumps[0].start_s + 0.5
+    assert 35 < jumps[0].angle_deg < 45
+    masked = mask_jumps(seq, jumps)
+    assert 0 < (seq.gt_valid & ~masked.gt_valid).sum() <= 0.5 * seq.rate_hz
+
+
+def test_a_placeholder_first_pose_and_a_jump_are_said_masked_and_judged_without(
+        euroc, tmp_path):
+    rec = _reinitialised(read_asl(euroc / 'MH_04_difficult'))
+    quat = rec.gt_quat.copy()
+    quat[0] = [0.0, 0.0, 0.0, 1.0]  # identity written before tracking started
+    rec = dataclasses.replace(rec, gt_quat=quat)
+    write_bag(rec, tmp_path / 'vio')
+    with pytest.warns(DataWarning, match=r'2 pose jumps the gyro cannot explain .*masked: '
+                                         r'0\.0-0\.2 s \(\d+ deg\), 2\d\.\d-\d\d\.\d s'):
+        seq = load_sequence(tmp_path / 'vio')
+    assert not seq.gt_valid[:5].any() and seq.gt_valid[100:1000].all()
+    report = check(rec)
+    assert len(report['pose_jumps']) == 2 and report['usable'] != 'no'
+    assert report['supervision']['helps']
