@@ -6,11 +6,9 @@ Training speed of the EuRoC recipe (6 sequences x 16,000 samples per step).
 Runs the real trainer twice per variant, for a few and for more steps, and reports the
 difference per step, which leaves out loading and validation. Variants, side by side in
 the same run so that ratios are meaningful on a shared machine:
-  - float32, one process with 2 threads;
-  - float32, 2 data-parallel worker processes with 1 thread each (the step before
-    ``precision``);
-  - the recipe as shipped: ``precision: auto`` (bfloat16 hidden layers where the CPU has
-    it natively), ``workers: auto``.
+  - one process with 2 threads;
+  - 2 data-parallel worker processes with 1 thread each;
+  - the recipe as shipped (``workers: auto``, ``threads: auto``: what this machine has).
 Prints seconds per step and the projected time of the full recipe, and a floor: the
 recipe's convolution arithmetic (forward and backward) at the speed this machine
 multiplies large float32 matrices, every core busy, nothing else counted. Then the
@@ -80,11 +78,9 @@ def main() -> None:
     args = parser.parse_args()
     recipe = load_config(RECIPE)
     full = recipe.steps
-    rows = [('float32, 1 process, 2 threads',
-             seconds_per_step(args.steps, precision='float32', workers=1, threads=2)),
-            ('float32, 2 workers, 1 thread each',
-             seconds_per_step(args.steps, precision='float32', workers=2, threads=2)),
-            (f'recipe: {recipe.precision}, {recipe.workers} workers',
+    rows = [('1 process, 2 threads', seconds_per_step(args.steps, workers=1, threads=2)),
+            ('2 workers, 1 thread each', seconds_per_step(args.steps, workers=2, threads=2)),
+            (f'recipe: {recipe.workers} workers, {recipe.threads} threads',
              seconds_per_step(args.steps))]
     macs = conv_macs_per_step(len(recipe.sequences), recipe.window)
     floor = macs / (usable_cores() * gemm_macs_per_second())

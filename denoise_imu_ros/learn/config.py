@@ -25,7 +25,6 @@ from ..core.errors import TrainingError
 RUN_KEYS = ('data', 'threads', 'workers', 'device')  # where it runs, not what it learns
 OPTIONS = ('seed', 'data', 'steps', 'workers', 'device')  # keys train's options override
 DEVICE = re.compile(r'cpu|cuda(:\d+)?')             # the devices training supports
-PRECISIONS = ('float32', 'bfloat16', 'auto')          # of the hidden layers in training
 AUTO = 'auto'                                         # workers and threads: from the machine
 
 
@@ -116,9 +115,6 @@ class TrainConfig:
     swa_start: int = 0                 # > 0: average weights from this step on (SWA)
     select: str = 'best_validation'    # kept: best_validation (of all candidates), final, swa
     seed: int = 0
-    # the hidden layers' arithmetic while training (model.GyroNet.features): float32,
-    # bfloat16, or auto (bfloat16 where the device computes it natively, else float32)
-    precision: str = 'float32'
     threads: int = 2                   # torch intra-op threads, shared by the workers
     workers: int = 1                   # data-parallel processes (parallel.py), CPU only
     device: str | None = None          # cpu or cuda[:N]; None: cuda when available
@@ -275,9 +271,6 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
                             'time_offset_s (seconds, at most 60 either way) and '
                             'imu_from_pose_rotation_xyzw (a unit quaternion)')
     cfg.workers = min(cfg.workers, len(cfg.sequences))  # each worker needs a sequence
-    if cfg.precision not in PRECISIONS:
-        raise TrainingError(f'{source("precision")}: precision must be one of '
-                            f'{", ".join(PRECISIONS)}, not {cfg.precision!r}')
     if cfg.device is not None and not DEVICE.fullmatch(cfg.device):
         raise TrainingError(f'device {cfg.device!r}: not a torch device (use cpu or cuda)')
     if cfg.select not in ('best_validation', 'final', 'swa') or (

@@ -50,9 +50,8 @@ class Dropout(nn.Module):
         words = torch.randint(-2**63, 2**63 - 1, ((n + 3) // 4,), dtype=torch.int64,
                               device=x.device)
         keep = (words.view(torch.int16)[:n] >= self.threshold).view(x.shape)
-        # one mask of x's type, 0 or 1 / (1 - p): a single multiply forward and backward
-        scale = torch.full((), 1.0 / (1.0 - self.p), dtype=x.dtype, device=x.device)
-        return x * torch.where(keep, scale, torch.zeros_like(scale))
+        # one float mask, 0 or 1 / (1 - p): a single multiply forward and backward
+        return x * torch.where(keep, 1.0 / (1.0 - self.p), 0.0).to(x.dtype)
 
 
 class GyroNet(nn.Module):
@@ -61,9 +60,6 @@ class GyroNet(nn.Module):
     def __init__(self, config: ModelConfig) -> None:
         super().__init__()
         self.config = config
-        # None: float32 throughout; a lower precision (torch.bfloat16) runs the hidden
-        # layers after the first in autocast while training (see :meth:`features`)
-        self.train_dtype: torch.dtype | None = None
         # Input normalisation, set from the training data before training starts.
         self.register_buffer('input_mean', torch.zeros(config.in_channels))
         self.register_buffer('input_std', torch.ones(config.in_channels))
@@ -104,48 +100,10 @@ class GyroNet(nn.Module):
             return self.bias.expand(u.shape[0], u.shape[1], 3)
         x = ((u - self.input_mean) / self.input_std).transpose(1, 2)  # (B, 6, T)
         x = F.pad(x, (self.receptive_field - 1, 0), mode='replicate')  # (B, 6, T + 510)
-        out = self.features(x)                                          # (B, 3 K, T)
+        out = self.net(x)                                               # (B, 3 K, T)
         if self.config.members > 1:
             out = out.unflatten(1, (self.config.members, 3)).mean(1)
         return out.transpose(1, 2)  # (B, T, 3)
-
-    def features(self, x: torch.Tensor) -> torch.Tensor:
-        """
-        Run the layers of f on normalised, padded input: (B, 6, T + 510) -> (B, 3 K, T).
-
-        With ``train_dtype`` set and in training mode, every hidden block but the first
-        runs in that precision (autocast: products in it, sums and BatchNorm statistics in
-        float32): those blocks hold nearly all the arithmetic. The first block keeps the
-        input's float32 resolution (its fine gyro noise is what bfloat16's 8 bits would
-        round away), the last 1x1 layer the output's. The file stores float32 weights and
-        evaluation runs in float32, as every deployment does.
-        """
-        if self.train_dtype is None or not self.training:
-            return self.net(x)
-        first, hidden, last = self.net[:BLOCK], self.net[BLOCK:-1], self.net[-1]
-        x = first(x)
-        with torch.autocast(x.device.type, dtype=self.train_dtype):
-            x = hidden(x)
-        return last(x.float())
-
-    @torch.no_grad()
-    def recentre(self) -> None:
-        """
-        Move each hidden convolution's mean output into its bias, leaving f unchanged.
-
-        BatchNorm removes a convolution's mean, so its bias changes nothing but the level
-        of the output it normalises; here the bias takes the running estimate of that
-        level away (and BatchNorm's running mean with it), keeping outputs near zero.
-        bfloat16 rounds a value to 2^-9 of its size: a channel that varies by less than
-        that around a larger level would be flat in training and not in evaluation (the
-        same weights, in float32), which BatchNorm's running variance turns into outputs
-        hundreds of times too large. Training calls it after every step in bfloat16.
-        """
-        for i in range(len(self.config.channels)):
-            conv, norm = self.net[BLOCK * i], self.net[BLOCK * i + 1]
-            shift = norm.running_mean.clone()
-            conv.bias -= shift
-            norm.running_mean -= shift
 
     def forward(self, u: torch.Tensor) -> torch.Tensor:
         """Corrected angular velocity (B, T, 3) in rad/s from raw IMU samples (B, T, 6)."""

@@ -94,17 +94,6 @@ def all_reduce_grads(params: list[nn.Parameter], loss: torch.Tensor) -> torch.Te
     return flat[-1]
 
 
-def _local_statistics(x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """Per-channel mean and biased variance of (B, C, T) in float32, whatever x's type."""
-    if x.dtype == torch.float32:  # BatchNorm's own kernel: ~5x faster than torch.var_mean
-        return torch.batch_norm_update_stats(x, None, None, 0.0)
-    # a lower precision (autocast): the kernel would round its results to x's type;
-    # BatchNorm's training pass with float32 weights returns them in float32
-    ones = torch.ones(x.shape[1], device=x.device)
-    _, mean, invstd = torch.native_batch_norm(x, ones, None, None, None, True, 0.0, 0.0)
-    return mean, invstd.pow(-2)
-
-
 class _SyncBatchNormFn(torch.autograd.Function):
     """Training-mode batch norm over (B, C, T) whose statistics span every process."""
 
@@ -112,7 +101,8 @@ class _SyncBatchNormFn(torch.autograd.Function):
     def forward(ctx: Any, x: torch.Tensor, weight: torch.Tensor, bias: torch.Tensor,
                 eps: float) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """Return the output, the batch mean and the unbiased batch variance."""
-        mean, var = _local_statistics(x)
+        # BatchNorm's own per-channel kernel: ~5x faster here than torch.var_mean
+        mean, var = torch.batch_norm_update_stats(x, None, None, 0.0)  # var: biased
         n = x.shape[0] * x.shape[2]
         mean64 = mean.double()
         # per-channel sums of x and x^2, and the count, in float64: the cancellation in

@@ -104,8 +104,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         poses=None if poses is None else str(poses), increments=increments,
         increment_weights=[1.0, 0.5], window=window, gyro_std_deg=gyro_std,
         align='auto' if off else 'none', swa_start=1200, select='swa',
-        rest_bias=False,
-        workers=min(2, len(sequences)))
+        rest_bias=False, workers='auto', threads='auto')
     why = [f'IMU rate {rate:.1f} Hz (the model is for this rate only; receptive field '
            f'511 samples = {511 / rate:.2f} s)',
            f'increments {increments} samples '

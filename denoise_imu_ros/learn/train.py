@@ -65,18 +65,6 @@ def resolve_device(device: str | None) -> str:
     return str(dev)
 
 
-def resolve_precision(precision: str, device: str) -> torch.dtype | None:
-    """Return the hidden layers' training type: None (float32) or torch.bfloat16."""
-    if precision == 'float32':
-        return None
-    if precision == 'bfloat16':
-        return torch.bfloat16
-    native = (torch.cuda.is_bf16_supported() if torch.device(device).type == 'cuda'
-              else torch.backends.mkldnn.is_available()
-              and torch.ops.mkldnn._is_mkldnn_bf16_supported())
-    return torch.bfloat16 if native else None
-
-
 def _setup_process(cfg: TrainConfig, rank: int) -> None:
     """Seed, share the threads, and flush denormal floats, in every process alike."""
     # the same initial weights everywhere; denormals: tiny gradients far in GELU's tail
@@ -233,7 +221,6 @@ def build_model(cfg: TrainConfig, seqs: list[Sequence],
                         dtype=torch.float32)
     model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
     model.to(cfg.device)
-    model.train_dtype = resolve_precision(cfg.precision, cfg.device)
     if cfg.workers > 1:
         parallel.sync_batch_norm(model)
         torch.manual_seed(cfg.seed + RANK_SEED_STRIDE * rank)  # its own dropout masks
@@ -275,7 +262,7 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
         if not torch.isfinite(omega).all():
             raise TrainingError(f'{s.name}: the network gives non-finite rates on its '
                                 'validation tail: the training diverged (lower the learning '
-                                'rate, or train in float32: precision: float32)')
+                                'rate)')
         n = (len(s) - 1 - start) // loss_cfg.span * loss_cfg.span
         sl = slice(start, start + n)
         losses.append(float(increment_loss(
@@ -339,9 +326,7 @@ def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[s
         'rest_bias': None if rest is None else rest.to_dict(),
         'pose_alignment': {s.name: s.pose_alignment for s in seqs
                            if s.pose_alignment is not None},
-        'run': dict(cfg.run_environment(),
-                    precision=str(resolve_precision(cfg.precision, cfg.device)
-                                  or torch.float32).removeprefix('torch.')),
+        'run': cfg.run_environment(),
         'selected': chosen,
         'validation': candidates[chosen],
         'candidates': candidates,
@@ -461,8 +446,6 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
                                     f'{scheduler.get_last_lr()[0]:.3g}); lower the learning '
                                     'rate or check the data')
             optimizer.step()
-            if model.train_dtype is not None:
-                model.recentre()
             scheduler.step()
             bar.set_postfix(loss=f'{loss.item():.4g}')
             if swa is not None and step >= cfg.swa_start:
@@ -478,9 +461,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
             if step > 0 and val['loss'] < best['loss']:
                 best = dict(val, step=step, state=copy.deepcopy(model.state_dict()))
     if swa is not None:
-        # BatchNorm statistics of the averaged weights: recomputed on training windows,
-        # in float32 as the model will run
-        swa.module.train_dtype = None
+        # BatchNorm statistics of the averaged weights: recomputed on training windows.
         torch.optim.swa_utils.update_bn(
             [batch(split, cfg, gen)[0].to(cfg.device) for _ in range(8)], swa)
     if rank > 0:

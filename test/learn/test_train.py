@@ -11,8 +11,8 @@ from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn import train as train_module
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.config import load_config, machine_share
-from denoise_imu_ros.learn.train import (batch, build_model, resolve_device,
-                                         resolve_precision, train, training_split)
+from denoise_imu_ros.learn.train import (batch, build_model, resolve_device, train,
+                                         training_split)
 from helpers import ROOT
 import numpy as np
 import pytest
@@ -148,8 +148,7 @@ def test_automatic_workers_give_the_busiest_the_fewest_recordings(recordings, co
     assert machine_share(recordings, cores) == share
 
 
-def test_workers_and_threads_auto_follow_the_machine_and_precision_is_checked(
-        tmp_path, monkeypatch):
+def test_workers_and_threads_auto_follow_the_machine(tmp_path, monkeypatch):
     from denoise_imu_ros.learn import config as config_module
     monkeypatch.setattr(config_module, 'usable_cores', lambda: 4)
     (tmp_path / 'a.yaml').write_text('sequences: [a, b, c, d, e, f]\nworkers: auto\n'
@@ -157,21 +156,6 @@ def test_workers_and_threads_auto_follow_the_machine_and_precision_is_checked(
     cfg = load_config(tmp_path / 'a.yaml')
     assert (cfg.workers, cfg.threads) == (3, 4)
     assert load_config(tmp_path / 'a.yaml', workers=1).workers == 1  # --workers wins
-    (tmp_path / 'p.yaml').write_text('sequences: [a]\nprecision: float16\n')
-    with pytest.raises(TrainingError, match='precision must be one of float32, bfloat16, '
-                                            "auto, not 'float16'"):
-        load_config(tmp_path / 'p.yaml')
-
-
-def test_precision_auto_is_bfloat16_only_where_the_device_has_it(monkeypatch):
-    assert resolve_precision('float32', 'cpu') is None
-    assert resolve_precision('bfloat16', 'cpu') is torch.bfloat16
-    monkeypatch.setattr(torch.ops.mkldnn, '_is_mkldnn_bf16_supported', lambda: False)
-    assert resolve_precision('auto', 'cpu') is None
-    monkeypatch.setattr(torch.ops.mkldnn, '_is_mkldnn_bf16_supported', lambda: True)
-    assert resolve_precision('auto', 'cpu') is torch.bfloat16
-    monkeypatch.setattr(torch.cuda, 'is_bf16_supported', lambda: False)
-    assert resolve_precision('auto', 'cuda') is None
 
 
 def test_workers_option_takes_a_count_or_auto(capsys):
