@@ -20,6 +20,7 @@ from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
 from .timebase import onto_imu_stamps
 from .trajectory import read_tum, trajectory_file, with_trajectory
 from ..core.errors import DatasetError, DataWarning
+from ..core.limits import check_rate
 from ..core.records import check_recording, Recording, Sequence
 
 
@@ -67,7 +68,7 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
                   pose_topic: str | None = None,
                   max_gt_gap_s: float | None = None,
                   min_samples: int = 1, align_poses: str | dict = 'none',
-                  poses: str | Path | None = None) -> Sequence:
+                  poses: str | Path | None = None, rate_hz: float | None = None) -> Sequence:
     """
     Read an ASL folder or a bag and align it; topics are auto-detected when None.
 
@@ -76,9 +77,12 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     applied is kept in :attr:`Sequence.pose_alignment`. ``check``: none, but poses found
     off the IMU's clock or frame are an error (figures against them would be wrong).
     ``poses``: as for :func:`load_recording`. Pose jumps the gyro cannot explain are
-    masked and said (:mod:`~denoise_imu_ros.data.pose_jumps`).
+    masked and said (:mod:`~denoise_imu_ros.data.pose_jumps`). ``rate_hz``: a model's
+    rate, which the IMU stream must have before anything is judged against its poses.
     """
     rec = load_recording(path, imu_topic, pose_topic, poses)
+    if rate_hz is not None:
+        check_rate(rec.imu_stamp_ns, rate_hz, path)
     used = None
     if align_poses == 'check':
         found = estimate_pose_alignment(rec)

@@ -124,7 +124,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     for given, name in zip(sequences, names):
         seq = load_sequence(Path(data) / given, imu_topic, pose_topic,
                             min_samples=loaded.model.receptive_field, align_poses=align_poses,
-                            poses=poses)
+                            poses=poses, rate_hz=sample_rate(loaded))
         check_inputs(seq, loaded, name)
         if start_sample >= len(seq) - 1:
             raise OptionError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')

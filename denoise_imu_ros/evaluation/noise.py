@@ -278,7 +278,8 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
           pose_topic: str | None = None, poses: str | None = None,
           align_poses: str = 'none') -> dict[str, Any]:
     """Run the noise figures of raw, calibrated and corrected gyro; write and return them."""
-    from ..core.modelfile import fitting_note, gyro_covariance, scored_on_training_samples
+    from ..core.modelfile import (fitting_note, gyro_covariance, sample_rate,
+                                  scored_on_training_samples)
     from ..data.load import load_sequence
     from ..learn.checkpoint import check_baseline, load_model
     from .evaluate import check_inputs, default_baseline, recording_names
@@ -296,7 +297,7 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     for name, short in zip(sequences, names):
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
                             min_samples=net.model.receptive_field, poses=poses,
-                            align_poses=align_poses)
+                            align_poses=align_poses, rate_hz=sample_rate(net))
         check_inputs(seq, net, short)
         seqs.append(seq)
         gyros['raw'].append(seq.imu[:, :3])
