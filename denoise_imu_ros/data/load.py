@@ -14,8 +14,8 @@ from pathlib import Path
 import warnings
 
 from .asl import read_asl
-from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
-                             needs_alignment, not_following)
+from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment, level,
+                             LEVEL_TOLERANCE_DEG, needs_alignment, not_following)
 from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
 from .timebase import onto_imu_stamps
 from .trajectory import read_tum, trajectory_file, with_trajectory
@@ -77,7 +77,8 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     applied is kept in :attr:`Sequence.pose_alignment`. ``check``: none, but poses found
     off the IMU's clock or frame are an error (figures against them would be wrong).
     ``poses``: as for :func:`load_recording`. Pose jumps the gyro cannot explain are
-    masked and said (:mod:`~denoise_imu_ros.data.pose_jumps`). ``rate_hz``: a model's
+    masked and said (:mod:`~denoise_imu_ros.data.pose_jumps`); a world whose z is not up
+    is turned level (:func:`~denoise_imu_ros.data.pose_alignment.level`). ``rate_hz``: a model's
     rate, which the IMU stream must have before anything is judged against its poses.
     """
     rec = load_recording(path, imu_topic, pose_topic, poses)
@@ -109,4 +110,10 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     jumps = find_jumps(seq)
     if jumps:
         warnings.warn(f'{path}: {describe_jumps(jumps)}', DataWarning, stacklevel=2)
-    return dataclasses.replace(mask_jumps(seq, jumps), pose_alignment=used)
+    seq, tilt = level(mask_jumps(seq, jumps))
+    if tilt > LEVEL_TOLERANCE_DEG:
+        warnings.warn(f"{path}: the poses' world has its z {tilt:.0f} deg from up (the "
+                      'accelerometer says; a SLAM starting in its first camera frame?): '
+                      'turned level for the gravity-aided filters; relative rotations, and so '
+                      'training, are unchanged', DataWarning, stacklevel=2)
+    return dataclasses.replace(seq, pose_alignment=used)

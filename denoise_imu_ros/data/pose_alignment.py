@@ -16,6 +16,7 @@ four consecutive quarters of the recording (standard error of their mean).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 import warnings
@@ -26,7 +27,7 @@ from scipy.spatial.transform import Rotation
 
 from .timebase import poses_at
 from ..core.errors import DatasetError
-from ..core.records import Recording
+from ..core.records import Recording, Sequence
 from ..core.rotation import conjugate_arrays, multiply_arrays
 
 RATE_WINDOW_S = 0.05       # window of the mean rates compared (at least two pose periods)
@@ -37,6 +38,7 @@ COARSE_WINDOWS = 2000      # rate windows the coarse offset search scores
 COARSE_STEP_S = 4e-3       # its step: the 50 ms rate windows make minima wider
 OFFSET_XTOL_S = 1e-5       # precision of the final offset search
 TIE_RAD_S = 1e-9           # offsets whose rate residuals differ by less than this tie
+LEVEL_TOLERANCE_DEG = 5.0  # a world whose up is further from its z than this is levelled
 JUMP_RATE_FACTOR = 2.0     # pose rates beyond this times the gyro's fastest, plus
 JUMP_RATE_MARGIN_RAD_S = 0.2  # this, are jumps: left out of the comparison
 OFFSET_TOLERANCE_S = 1e-3  # above, and SIGNIFICANCE standard errors: apply the offset
@@ -209,6 +211,32 @@ def estimate_pose_alignment(rec: Recording,
         'rate_residual_rms_deg_s': math.degrees(rms),
         'rate_window_s': rates.window_s,
     }
+
+
+def level(seq: Sequence) -> tuple[Sequence, float]:
+    """
+    Turn the poses into a world whose z is up; return them and how far up was from z.
+
+    A SLAM's world is often its first camera frame: relative rotations (training, the
+    attitude error from a first pose) do not care, a gravity-aided filter's tilt and an
+    accelerometer-bias fit do. Up in the poses' world is the mean of the accelerometer
+    turned into it (its motion averages out over a recording); a world more than
+    LEVEL_TOLERANCE_DEG from it is turned level. Poses that do not turn the accelerometer
+    into a steady up (another frame, no alignment) are left as they are.
+    """
+    valid = seq.gt_valid
+    if valid.sum() < 2:
+        return seq, 0.0
+    up = Rotation.from_quat(seq.gt_quat[valid]).apply(seq.imu[valid, 3:]).mean(axis=0)
+    size = float(np.linalg.norm(up))
+    if size < 0.5 * float(np.linalg.norm(seq.imu[valid, 3:], axis=1).mean()):
+        return seq, 0.0
+    tilt = math.degrees(math.acos(min(1.0, max(-1.0, up[2] / size))))
+    if tilt <= LEVEL_TOLERANCE_DEG:
+        return seq, tilt
+    turn = Rotation.align_vectors([[0.0, 0.0, 1.0]], [up / size])[0]
+    return dataclasses.replace(seq, gt_quat=(turn * Rotation.from_quat(seq.gt_quat)).as_quat(),
+                               gt_pos=turn.apply(seq.gt_pos)), tilt
 
 
 def apply_pose_alignment(rec: Recording, time_offset_s: float,

@@ -1,6 +1,6 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
-"""Pose jumps: a re-initialisation or a placeholder pose found, said and masked; none else."""
+"""Poses from an estimator: jumps found, said and masked; a world off level turned level."""
 
 import dataclasses
 
@@ -11,6 +11,7 @@ from denoise_imu_ros.data.check import check
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.data.pose_jumps import find_jumps, mask_jumps
 from denoise_imu_ros.data.timebase import onto_imu_stamps
+import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
@@ -52,3 +53,21 @@ def test_a_placeholder_first_pose_and_a_jump_are_said_masked_and_judged_without(
     report = check(rec)
     assert len(report['pose_jumps']) == 2 and report['usable'] != 'no'
     assert report['supervision']['helps']
+
+
+def test_a_world_far_from_level_is_turned_level_and_said(euroc, tmp_path):
+    from denoise_imu_ros.data.pose_alignment import level
+    rec = read_asl(euroc / 'MH_01_easy')
+    assert level(onto_imu_stamps(rec))[1] < 1.0  # motion capture's world is level
+    world = Rotation.from_rotvec([100.0, 0.0, 20.0], degrees=True)  # a first camera frame
+    write_bag(dataclasses.replace(
+        rec, gt_quat=(world * Rotation.from_quat(rec.gt_quat)).as_quat(),
+        gt_pos=world.apply(rec.gt_pos)), tmp_path / 'slam')
+    with pytest.warns(DataWarning, match=r"the poses' world has its z (99|10\d) deg from up"):
+        seq = load_sequence(tmp_path / 'slam')
+    original = load_sequence(euroc / 'MH_01_easy')
+    tilt = Rotation.from_quat(seq.gt_quat).apply([0.0, 0.0, 1.0], inverse=True)
+    true = Rotation.from_quat(original.gt_quat).apply([0.0, 0.0, 1.0], inverse=True)
+    n = min(len(tilt), len(true))  # up in the body frame: as the motion capture's, to 1 deg
+    angle = np.degrees(np.arccos(np.clip(np.sum(tilt[:n] * true[:n], axis=1), -1, 1)))
+    assert angle.max() < 1.0
