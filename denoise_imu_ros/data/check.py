@@ -61,8 +61,7 @@ ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'tim
              'imu_from_pose_rotation_std_deg', 'gyro_bias_vs_pose_deg_s',
              'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
              'rate_window_s', 'judged_after_alignment', 'pose_jumps', 'pose_jumps_summary',
-             'paper_increments',
-             'shortest_clean_increment', 'label_noise', 'supervision')
+             'paper_increments', 'shortest_clean_increment', 'label_noise', 'supervision')
 
 
 def paper_increments(rate_hz: float) -> tuple[int, int]:
