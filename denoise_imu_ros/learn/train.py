@@ -24,6 +24,7 @@ import signal
 import threading
 import time
 from typing import Any
+import warnings
 
 import numpy as np
 import torch
@@ -35,7 +36,7 @@ from .checkpoint import save_model
 from .config import LossConfig, TrainConfig
 from .loss import increment_loss
 from .model import GyroNet
-from ..core.errors import TrainingError
+from ..core.errors import DataWarning, TrainingError
 from ..core.limits import check_gaps, check_gyro_against_poses, check_units, common_rate
 from ..core.metrics import (increment_residuals, RESIDUAL_BLOCK, sequence_errors,
                             trusted_blocks)
@@ -409,6 +410,8 @@ def _worker(cfg: TrainConfig, rank: int, port: int) -> None:
     # tqdm's default lock is a multiprocessing semaphore: terminated with this process on
     # Ctrl-C, it would be reported leaked at exit; this process shows no progress bar
     tqdm.set_lock(threading.RLock())
+    # what the recordings' reading warns of, the first process has said once already
+    warnings.filterwarnings('ignore', category=DataWarning)
     parallel.join(rank, cfg.workers, port)
     try:
         _run(cfg, rank, load_sequences(cfg), False)

@@ -143,3 +143,22 @@ def test_torchrun_trains_the_same_model_as_the_built_in_workers(tmp_path):
         h['val_loss'] for h in built_in.meta['history']]
     for name, array in built_in.arrays.items():
         np.testing.assert_array_equal(launched.arrays[name], array, err_msg=name)
+
+
+def test_what_reading_the_recordings_warns_of_is_said_by_the_first_process_only(
+        tmp_path, capfd):
+    from denoise_imu_ros.core.errors import DataWarning
+    from helpers import T0, write_asl
+    (tmp_path / 'vio').mkdir()
+    for i in range(2):
+        write_asl(tmp_path / f'rec{i}', n_imu=2400, yaw_rate=0.2, gyro_bias=0.01)
+        t = np.arange(0, 12.0, 0.05)
+        rows = [f'{T0 * 1e-9 + s:.9f} 0 0 0 0 0 {np.sin(0.1 * s):.12f} {np.cos(0.1 * s):.12f}'
+                for s in t]
+        (tmp_path / 'vio' / f'rec{i}.txt').write_text('\n'.join(rows + rows[-1:]) + '\n')
+    cfg = load_config(CONFIG, data=str(tmp_path), sequences=['rec0', 'rec1'], window=1024,
+                      steps=2, val_every=2, restart_period=2, swa_start=1, workers=2,
+                      poses=str(tmp_path / 'vio'))
+    with pytest.warns(DataWarning, match='dropped 1 duplicate stamps'):
+        train(cfg, progress=False)
+    assert 'DataWarning' not in capfd.readouterr().err  # the worker process said nothing
