@@ -67,7 +67,7 @@ def run(kind, rates, seconds, imu, model='euroc'):
     cmd = ([sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args',
             '-p', f'model:={model}', '--log-level', 'error'] if kind == 'node'
            else [sys.executable, '-c', RELAY])
-    step_ns = int(round(1e9 / (read_model_file(model).meta['sample_rate_hz'] if kind == 'node'
+    step_ns = int(round(1e9 / (read_model_file(model).meta.sample_rate_hz if kind == 'node'
                                else 200.0)))  # the stamps' step: the model's period
     proc = start(cmd)
     rclpy.init()

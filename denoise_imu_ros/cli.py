@@ -193,20 +193,20 @@ def _ensemble(args: argparse.Namespace) -> None:
     missing = {'fusion': ("imu/data's filter settings", 'tune-fusion --attach'),
                'crossval': ('cross-recording verdict', 'crossval --attach')}
     for key in SHARED_BY_MEMBERS:
-        if key not in loaded.meta:
+        if key not in loaded.meta.raw:
             what, how = missing[key]
             print(f'warning: the ensemble has no {what} (its members carry none, or not the '
                   f'same): {how} stores its own', file=sys.stderr)
 
 
 def _rest_model(args: argparse.Namespace) -> None:
-    from .core.modelfile import read_model_file
+    from .core.modelfile import read_model_file, sample_rate
     from .data.rest_bias import write_rest_only_model
     like = read_model_file(args.like)
     _guard_output(args.out, [like.path], args.overwrite)
     write_rest_only_model(like, args.out)
     print(f'wrote {args.out}: the gyro less its turn-on bias, nothing learnt '
-          f'({like.meta["sample_rate_hz"]:g} Hz, the estimator of {like.path.name})')
+          f'({sample_rate(like):g} Hz, the estimator of {like.path.name})')
 
 
 def _check_data(args: argparse.Namespace) -> None:
@@ -243,7 +243,8 @@ def _noise(args: argparse.Namespace) -> None:
 
 
 def _warn_if_not_recommended(model: str) -> None:
-    from .core.modelfile import deployment_warning, read_model_file
+    from .core.modelfile import read_model_file
+    from .runtime.advice import deployment_warning
     warning = deployment_warning(read_model_file(model))
     if warning:
         print(f'warning: {warning}', file=sys.stderr)
@@ -295,9 +296,24 @@ def _play(args: argparse.Namespace) -> None:
     play(args.bag, args.imu_topic, args.topic, args.rate, args.clock, args.wait)
 
 
+class _Version(argparse.Action):
+    """``--version``: the running code's version, as a model file's ``code_version`` says it."""
+
+    def __init__(self, option_strings: list[str], dest: str, **kwargs: Any) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS,
+                         help="print the running code's version (a model file records that "
+                              'of the code that wrote it) and exit')
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: Any) -> None:
+        from .core.modelfile import code_version
+        print(f'denoise-imu {code_version()}')
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser (exposed for tests and documentation)."""
     parser = argparse.ArgumentParser(prog='denoise-imu', description=__doc__.splitlines()[0])
+    parser.add_argument('--version', action=_Version)
     sub = parser.add_subparsers(dest='command', required=True)
 
     p = sub.add_parser('convert', help='ASL folder -> ROS 2 bag (IMU + ground-truth pose)')

@@ -73,7 +73,7 @@ def _errors(seq: Sequence, stamps: np.ndarray, quats: np.ndarray,
 
 def _calibrated(model: str, imu: np.ndarray) -> np.ndarray | None:
     """Return the gyro of ``<dataset>_calibrated``, the model's calibrated IMU, if shipped."""
-    name = f'{read_model_file(model).meta.get("dataset")}_calibrated'
+    name = f'{read_model_file(model).meta.dataset}_calibrated'
     if name not in shipped_models():
         return None
     calib = read_model_file(name)

@@ -11,6 +11,7 @@ from denoise_imu_ros.learn.model import correct_gyro
 from helpers import SAMPLE
 from helpers import write_asl
 import numpy as np
+import pytest
 
 SAMPLE_DIR = SAMPLE.parent
 
@@ -40,7 +41,7 @@ def test_correct_writes_every_sample_of_a_bag_as_csv(model_file, tmp_path):
 def test_a_model_its_validation_advises_against_runs_with_a_warning(tmp_path, capsys):
     assert main(['correct', '--model', 'tumvi', '--input', str(SAMPLE),
                  '--output', str(tmp_path / 'c.csv')]) == 0
-    verdict = load_model('tumvi').meta['crossval']['verdict']
+    verdict = load_model('tumvi').meta.crossval.verdict
     assert verdict.endswith('deploy no correction')
     advice, mounting = capsys.readouterr().err.splitlines()
     assert advice == (  # its own figure beside the recommended one
@@ -220,3 +221,11 @@ def test_an_imu_mounted_unlike_the_models_is_said_in_one_line(tmp_path, capsys):
         err = capsys.readouterr().err
         assert (f"warning: {source}: gravity is 90 deg from where the model's training IMU "
                 'had it' in err) == said, err
+
+
+def test_version_is_the_code_version_a_model_file_records(capsys):
+    from denoise_imu_ros.core.modelfile import code_version
+    with pytest.raises(SystemExit) as done:
+        main(['--version'])
+    assert done.value.code == 0
+    assert capsys.readouterr().out == f'denoise-imu {code_version()}\n'

@@ -17,98 +17,42 @@ Every path uses it identically: the model's input gyro is the raw gyro minus the
 estimate at that sample (:func:`remove_rest_bias` over arrays for training, ``eval``,
 ``correct``; :class:`RestBias` per sample for the node and ``process-bag``; both run
 VQF's one C++ update, equal bit for bit). A model trained that way records its settings
-under the ``rest_bias`` metadata key (:func:`settings_of`).
+under the ``rest_bias`` metadata key (:class:`~denoise_imu_ros.core.schema.RestBiasSettings`).
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields, replace
-import math
+from dataclasses import replace
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Iterable
 
 import numpy as np
 from vqf import VQF
 
 from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
-from ..core.modelfile import code_version, ModelFile, REST_ONLY, write_model_file
+from ..core.modelfile import code_version, Described, ModelFile, sample_rate, write_model_file
+from ..core.schema import ModelMeta, REST_ONLY, RestBiasSettings
 
-__all__ = ['baseline_gyro', 'baseline_settings', 'CHOICES', 'model_input', 'nominal_bias',
-           'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch', 'RestBiasSettings',
-           'settings_of', 'write_rest_only_model']
+__all__ = ['baseline_gyro', 'baseline_settings', 'CHOICES', 'estimator', 'model_input',
+           'nominal_bias', 'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch',
+           'RestBiasSettings', 'write_rest_only_model']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
 
 
-@dataclass(frozen=True)
-class RestBiasSettings:
-    """
-    The stillness detector and the estimate's start, as VQF's parameters name them.
-
-    The time constants were chosen on BROAD's session-B trials (docs/method.md):
-    0.5 s of stillness and a 0.25 s low-pass start the estimate earlier than VQF's
-    defaults (1.5 s, 0.5 s), which lowered the open-loop error of the rest-bias gyro;
-    the gyro and accelerometer thresholds are VQF's. ``bias_clip_deg_s`` also bounds
-    what counts as still: a steady turn faster than it is never taken for a bias.
-    """
-
-    rest_min_s: float = 0.5               # stillness lasting this long is rest
-    filter_tau_s: float = 0.25            # low-pass of the rest detector and estimate
-    gyro_threshold_deg_s: float = 2.0     # gyro deviation from its low-pass
-    accel_threshold_m_s2: float = 0.5     # accelerometer deviation from its low-pass
-    bias_clip_deg_s: float = 2.0          # largest bias estimated; faster is motion
-    prior_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the estimate before rest
-    prior_sigma_rad_s: float = math.radians(0.5)  # its standard deviation (VQF's default)
-
-    def to_dict(self) -> dict[str, Any]:
-        """Return the settings as the model file stores them (JSON types)."""
-        return dict(asdict(self), prior_rad_s=list(self.prior_rad_s))
-
-    @classmethod
-    def from_dict(cls, value: Any, where: str) -> RestBiasSettings:
-        """Read stored settings; anything malformed is a ModelFileError naming ``where``."""
-        names = {f.name for f in fields(cls)}
-        if not isinstance(value, dict) or not set(value) <= names:
-            raise ModelFileError(f'{where}: rest_bias {value!r} is not a mapping of '
-                                 f'{", ".join(sorted(names))}')
-        prior = value.get('prior_rad_s', [0.0] * 3)
-        scalars = [v for k, v in value.items() if k != 'prior_rad_s']
-        if not (isinstance(prior, list) and len(prior) == 3
-                and all(_number(v) for v in [*prior, *scalars])):
-            raise ModelFileError(f'{where}: rest_bias {value!r} holds a value that is not a '
-                                 'finite number (prior_rad_s: three)')
-        settings = cls(**dict(value, prior_rad_s=tuple(float(v) for v in prior)))
-        if min(settings.rest_min_s, settings.filter_tau_s, settings.gyro_threshold_deg_s,
-               settings.accel_threshold_m_s2, settings.bias_clip_deg_s,
-               settings.prior_sigma_rad_s) <= 0:
-            raise ModelFileError(f'{where}: rest_bias {value!r}: its thresholds, time '
-                                 'constants and prior_sigma_rad_s must be positive')
-        return settings
-
-    def estimator(self, rate_hz: float) -> VQF:
-        """Return a VQF that estimates the rest bias alone, started at the prior."""
-        vqf = VQF(1.0 / rate_hz, motionBiasEstEnabled=False, restBiasEstEnabled=True,
-                  restMinT=self.rest_min_s, restFilterTau=self.filter_tau_s,
-                  restThGyr=self.gyro_threshold_deg_s, restThAcc=self.accel_threshold_m_s2,
-                  biasClip=self.bias_clip_deg_s)
-        vqf.setBiasEstimate(np.array(self.prior_rad_s, dtype=float), self.prior_sigma_rad_s)
-        return vqf
+def estimator(settings: RestBiasSettings, rate_hz: float) -> VQF:
+    """Return a VQF that estimates the rest bias alone, started at the prior."""
+    vqf = VQF(1.0 / rate_hz, motionBiasEstEnabled=False, restBiasEstEnabled=True,
+              restMinT=settings.rest_min_s, restFilterTau=settings.filter_tau_s,
+              restThGyr=settings.gyro_threshold_deg_s,
+              restThAcc=settings.accel_threshold_m_s2, biasClip=settings.bias_clip_deg_s)
+    vqf.setBiasEstimate(np.array(settings.prior_rad_s, dtype=float), settings.prior_sigma_rad_s)
+    return vqf
 
 
-def _number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def settings_of(meta: dict[str, Any], where: str = 'model file') -> RestBiasSettings | None:
-    """Return the rest-bias settings a model was trained with, or None (raw gyro input)."""
-    value = meta.get('rest_bias')
-    return None if value is None else RestBiasSettings.from_dict(value, where)
-
-
-def resolve(meta: dict[str, Any], choice: str, where: str = 'model file'
-            ) -> RestBiasSettings | None:
+def resolve(meta: ModelMeta, choice: str) -> RestBiasSettings | None:
     """
     Return the settings to run with, given ``model``, ``on`` or ``off``.
 
@@ -118,7 +62,7 @@ def resolve(meta: dict[str, Any], choice: str, where: str = 'model file'
     """
     if choice not in CHOICES:
         raise ValueError(f'rest_bias {choice!r}: must be one of {", ".join(CHOICES)}')
-    stored = settings_of(meta, where)
+    stored = meta.rest_bias
     if choice == 'off' or (choice == 'model' and stored is None):
         return None
     return stored or RestBiasSettings()
@@ -130,14 +74,14 @@ class RestBias:
     def __init__(self, settings: RestBiasSettings, rate_hz: float) -> None:
         self.settings = settings
         self._rate_hz = rate_hz
-        self._vqf = settings.estimator(rate_hz)
+        self._vqf = estimator(settings, rate_hz)
         self._gyro = np.zeros(3)
         self._accel = np.zeros(3)
         self.still_samples = 0  # samples detected still since the last reset
 
     def reset(self) -> None:
         """Start again from the prior (a new run: another power-on, a bag loop)."""
-        self._vqf = self.settings.estimator(self._rate_hz)
+        self._vqf = estimator(self.settings, self._rate_hz)
         self.still_samples = 0
 
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
@@ -166,7 +110,7 @@ def rest_bias_batch(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings
 
     Equal to :meth:`RestBias.update` sample by sample (one C++ update, the same order).
     """
-    out = settings.estimator(rate_hz).updateBatch(
+    out = estimator(settings, rate_hz).updateBatch(
         np.ascontiguousarray(imu[:, :3], dtype=float),
         np.ascontiguousarray(imu[:, 3:], dtype=float))
     return {'bias': out['bias'], 'sigma': out['biasSigma'],
@@ -183,7 +127,7 @@ def remove_rest_bias(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings
     return out
 
 
-def baseline_settings(meta: dict[str, Any], where: str = 'model file') -> RestBiasSettings:
+def baseline_settings(meta: ModelMeta) -> RestBiasSettings:
     """
     Return the estimator of the "rest bias" baseline rows of ``eval`` and ``crossval``.
 
@@ -192,23 +136,20 @@ def baseline_settings(meta: dict[str, Any], where: str = 'model file') -> RestBi
     2 deg/s (EuRoC's ADIS16448: 4.6 deg/s about z) is still measured at rest: a baseline
     as strong as averaging the still start, not the node's cautious ``rest_bias:=on``.
     """
-    return settings_of(meta, where) or RestBiasSettings(bias_clip_deg_s=WIDE_CLIP_DEG_S)
+    return meta.rest_bias or RestBiasSettings(bias_clip_deg_s=WIDE_CLIP_DEG_S)
 
 
-def baseline_gyro(meta: dict[str, Any], imu: np.ndarray, where: str = 'model file'
-                  ) -> np.ndarray:
+def baseline_gyro(loaded: Described, imu: np.ndarray) -> np.ndarray:
     """Return the "rest bias" row's gyro (N, 3): the raw gyro less its turn-on bias."""
-    settings = baseline_settings(meta, where)
-    return remove_rest_bias(imu, float(meta['sample_rate_hz']), settings)[:, :3]
+    return remove_rest_bias(imu, sample_rate(loaded), baseline_settings(loaded.meta))[:, :3]
 
 
-def model_input(meta: dict[str, Any], imu: np.ndarray, choice: str = 'model',
-                where: str = 'model file') -> np.ndarray:
+def model_input(loaded: Described, imu: np.ndarray, choice: str = 'model') -> np.ndarray:
     """Return what a model is fed for a recording's raw samples (N, 6), at its own rate."""
-    settings = resolve(meta, choice, where)
+    settings = resolve(loaded.meta, choice)
     if settings is None:
         return imu
-    return remove_rest_bias(imu, float(meta['sample_rate_hz']), settings)
+    return remove_rest_bias(imu, sample_rate(loaded), settings)
 
 
 def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,
@@ -242,7 +183,7 @@ def write_rest_only_model(like: ModelFile, path: str | Path) -> None:
     prior, recordings, recipe and cross-recording report, so that every tool runs it as
     any model (the node, ``process-bag``, ``eval``, ``tune-fusion``).
     """
-    settings = settings_of(like.meta, str(like.path))
+    settings = like.meta.rest_bias
     if settings is None:
         raise ModelFileError(f'{like.path}: not trained with rest_bias: it has no turn-on '
                              'bias estimator (settings and prior) to run alone')
@@ -251,7 +192,7 @@ def write_rest_only_model(like: ModelFile, path: str | Path) -> None:
               'gyro_std': np.array(config.gyro_std, np.float32),
               'delta': np.zeros((3, 3), np.float32), 'bias': np.zeros(3, np.float32)}
     keep = ('dataset', 'sample_rate_hz', 'train_sequences', 'train_config', 'crossval')
-    meta = {k: like.meta[k] for k in keep if k in like.meta}
+    meta = {k: like.meta.raw[k] for k in keep if k in like.meta.raw}
     meta.update(kind=REST_ONLY, rest_bias=settings.to_dict(), made_from=like.path.name,
                 code_version=code_version())
     write_model_file(path, config, arrays, meta)

@@ -30,7 +30,7 @@ def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch',
     ``rest`` (``model``, ``on``, ``off``): whether the turn-on bias is removed from the
     gyro first, as the node's ``rest_bias`` parameter.
     """
-    imu = rest_bias.model_input(mf.meta, imu, rest, str(mf.path))
+    imu = rest_bias.model_input(mf, imu, rest)
     if engine == 'streaming':
         return StreamingCorrector(mf.config, mf.arrays).process(imu)
     from ..learn.checkpoint import load_model  # torch: the batch engine only

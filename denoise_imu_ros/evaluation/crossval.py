@@ -26,6 +26,7 @@ from ..core import jsonio
 from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
+from ..core.schema import ModelMeta, parse_meta
 from ..data import rest_bias
 from ..data.load import load_sequence
 from ..learn import parallel
@@ -130,8 +131,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                 min_samples=models[0][0].model.receptive_field,
                                 align_poses=recipe.align, poses=recipe.poses)
             raw = {'raw': score(seq, seq.imu[:, :3]),
-                   'rest bias': score(seq, rest_bias.baseline_gyro(
-                       models[0][0].meta, seq.imu, str(models[0][0].path)))}
+                   'rest bias': score(seq, rest_bias.baseline_gyro(models[0][0], seq.imu))}
             gyros = [{'calibrated': calib.correct(seq.imu), 'network': net.correct(seq.imu)}
                      for net, calib in models]
             per_recording[name] = {**raw, **{
@@ -163,7 +163,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
 NOT_THE_RECIPE = {'sequences', 'seed', 'steps', 'calibration_only'}
 
 
-def attach_mismatches(report: dict[str, Any], meta: dict[str, Any]) -> list[str]:
+def attach_mismatches(report: dict[str, Any], meta: ModelMeta) -> list[str]:
     """
     Return what makes a cross-recording report not that of a model's own training.
 
@@ -173,14 +173,14 @@ def attach_mismatches(report: dict[str, Any], meta: dict[str, Any]) -> list[str]
     """
     why = []
     held_out = sorted(name for fold in report.get('folds', []) for name in fold)
-    trained_on = sorted(meta.get('train_sequences') or [])
+    trained_on = sorted(meta.train_sequences)
     if trained_on and held_out != trained_on:
         why.append(f'its folds hold out {held_out}, the model was trained on {trained_on}')
-    steps = (meta.get('train_config') or {}).get('steps')
+    steps = meta.recipe('steps')
     if steps is not None and report.get('steps') not in (None, steps):
         why.append(f'its folds trained {report["steps"]} steps, the model {steps}')
     folds = json.loads(jsonio.dumps(report.get('train_config') or {}))
-    model = meta.get('train_config') or {}
+    model = meta.train_config
     differ = sorted(k for k in set(folds) & set(model) - NOT_THE_RECIPE if folds[k] != model[k])
     if differ:
         why.append(f'its folds trained another recipe (they differ in {", ".join(differ)})')
@@ -199,8 +199,9 @@ def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
     if folder is not None:
         net.save(folder / 'network.safetensors')
         calib.save(folder / 'calibrated.safetensors')
-    return (LoadedModel(net.model, net.meta, Path(f'{label}, network')),
-            LoadedModel(calib.model, calib.meta, Path(f'{label}, calibration')))
+    return (LoadedModel(net.model, parse_meta(net.meta, label), Path(f'{label}, network')),
+            LoadedModel(calib.model, parse_meta(calib.meta, label),
+                        Path(f'{label}, calibration')))
 
 
 def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any
@@ -217,7 +218,7 @@ def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any
     models = []
     for path, want in zip(paths, (cfg, calib_cfg)):
         loaded = load_model(path)
-        if loaded.meta.get('train_config') != json.loads(jsonio.dumps(want.recipe())):
+        if loaded.meta.train_config != json.loads(jsonio.dumps(want.recipe())):
             raise TrainingError(f'{path}: trained by another recipe than this fold uses '
                                 '(remove it, or use another --out)')
         models.append(loaded)

@@ -18,26 +18,27 @@ from scipy.spatial.transform import Rotation
 
 from .filters import eval_filters, run, score
 from .plots import plot_roe, plot_sequence
-from .reports import crossval_table, eval_table, fused_table, growth_table
+from .reports import (crossval_table, eval_table, fitting_note, fused_table, growth_table,
+                      scored_on_training_samples)
 from ..core import jsonio
 from ..core.atomic import write_text
 from ..core.errors import OptionError, OutputError
 from ..core.limits import check_gaps, check_rate, check_units
 from ..core.metrics import (align_yaw, error_components, sequence_errors,
                             tilt_growth_deg_min)
-from ..core.modelfile import (fitting_note, REST_ONLY, sample_rate,
-                              scored_on_training_samples, shipped_models, training_span)
+from ..core.modelfile import sample_rate, shipped_models
 from ..core.records import Sequence
+from ..core.schema import ModelMeta, REST_ONLY
 from ..data import rest_bias
 from ..data.load import load_sequence
 from ..learn.checkpoint import check_baseline, load_model, LoadedModel
 
 
-def default_baseline(meta: dict[str, Any], baseline: str | None) -> str | None:
+def default_baseline(meta: ModelMeta, baseline: str | None) -> str | None:
     """Return the calibrated-IMU model to compare with, given or shipped for the dataset."""
     if baseline is not None:
         return baseline
-    candidate = f'{meta.get("dataset")}_calibrated'
+    candidate = f'{meta.dataset}_calibrated'
     return candidate if candidate in shipped_models() else None
 
 
@@ -60,7 +61,7 @@ def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndar
     """
     net = models['network']
     gyros = {'raw': seq.imu[:, :3],
-             'rest bias': rest_bias.baseline_gyro(net.meta, seq.imu, str(net.path))}
+             'rest bias': rest_bias.baseline_gyro(net, seq.imu)}
     gyros.update({m: lm.correct(seq.imu) for m, lm in models.items()})
     return gyros
 
@@ -113,7 +114,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         raise OutputError(f'{out_dir}: cannot create the output folder ({err.strerror})'
                           ) from err
     fitted_on = scored_on_training_samples(loaded.meta, names, start_sample)
-    note = fitting_note(fitted_on, training_span(loaded.meta)) if fitted_on else None
+    note = fitting_note(fitted_on, loaded.meta.training_span) if fitted_on else None
     if note:
         print(f'warning: {note}', file=sys.stderr)
     results: dict[str, Any] = {}
@@ -159,10 +160,9 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
                    for k in ('aoe_deg', 'aoe_yaw_deg', 'tilt_deg')} for m in methods}
     fused_average = {m: {k: float(np.mean([fused[s][m][k] for s in fused]))
                          for k in ('aoe_deg', 'tilt_deg', 'aoe_yaw_deg')} for m in rows}
-    report = {'model': str(loaded.path), 'model_code_version': loaded.meta.get('code_version'),
+    report = {'model': str(loaded.path), 'model_code_version': loaded.meta.code_version,
               'baseline': baseline,
-              'rest_bias_input': {m: rest_bias.settings_of(lm.meta, str(lm.path)) is not None
-                                  for m, lm in models.items()},
+              'rest_bias_input': {m: lm.meta.rest_bias is not None for m, lm in models.items()},
               'data': str(data), 'start_sample': start_sample,
               'training_fit_note': note,
               'sequences': results,
@@ -175,20 +175,19 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
                              'Fused (gravity-aided) rows: the filter starts at the first '
                              'stamp, its yaw is aligned to the ground truth once 1.5 s in, '
                              'its tilt never; scored from there on.'}
-    crossval = loaded.meta.get('crossval')
-    if isinstance(crossval, dict) and 'verdict' in crossval:
-        report['crossval'] = crossval
+    if loaded.meta.crossval is not None and loaded.meta.crossval.verdict:
+        report['crossval'] = loaded.meta.crossval.report
     write_text(out_dir / 'results.json', jsonio.dumps(report, indent=2))
     table = (eval_table(results, average) + fused_table(fused, fused_average)
              + growth_table(results, fused))
-    table += rest_note(report['rest_bias_input'], loaded.meta.get('kind') == REST_ONLY)
+    table += rest_note(report['rest_bias_input'], loaded.meta.kind == REST_ONLY)
     if start_sample:
         table += f'\nScored from sample {start_sample} on of every recording.\n'
     if note:
         table += f'\nNote: {note}\n'
     if 'crossval' in report:
         table += '\nThe recipe on recordings it never saw (stored in the model file):\n\n'
-        table += crossval_table(crossval)
+        table += crossval_table(report['crossval'])
     write_text(out_dir / 'results.md', table)
     if plots:
         plot_roe(out_dir / 'roe.png', roe_all)

@@ -27,13 +27,13 @@ from scipy.spatial.transform import Rotation
 from ..core.errors import DatasetError, ModelFileError
 from ..core.limits import check_rate, GRAVITY_M_S2
 from ..core.metrics import fused_errors, FusedErrors
-from ..core.modelfile import read_model_file, sample_rate, training_span
+from ..core.modelfile import read_model_file, sample_rate
 from ..core.records import Sequence
 from ..core.rotation import from_gravity
+from ..core.schema import MAX_ACCEL_BIAS_M_S2, ModelMeta
 from ..data.load import load_sequence
 from ..learn.checkpoint import check_baseline, load_model
-from ..runtime.fusion import (fuse, FusionSettings, MAX_ACCEL_BIAS_M_S2, settings_of,
-                              step_periods)
+from ..runtime.fusion import fuse, FusionSettings, step_periods
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
@@ -240,11 +240,9 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
     net = load_model(model_spec)
     calib = load_model(baseline_spec)
     check_baseline(net, calib)
-    cfg = net.meta.get('train_config') or {}
-    names = net.meta.get('train_sequences') or []
-    folder = data or (net.meta.get('run') or {}).get('data')
-    start = training_span(net.meta)
-    if (net.meta.get('train_config') or {}).get('whole_sequences'):
+    meta = net.meta
+    names, folder, start = meta.train_sequences, data or meta.data, meta.training_span
+    if meta.recipe('whole_sequences'):
         raise DatasetError(f'{net.path}: trained on whole recordings (whole_sequences): it '
                            'has no validation tail to choose filter settings on')
     if not names or folder is None or start is None:
@@ -252,9 +250,9 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
                            'recordings, their folder and its window (pass --data)')
     tails, seqs, gyros = [], [], {source: [] for source in KINDS}
     for name in names:
-        seq = load_sequence(f'{folder}/{name}', cfg.get('imu_topic'), cfg.get('pose_topic'),
-                            cfg.get('max_gt_gap_s'), align_poses=cfg.get('align', 'none'),
-                            poses=cfg.get('poses'))
+        seq = load_sequence(f'{folder}/{name}', meta.recipe('imu_topic'),
+                            meta.recipe('pose_topic'), meta.recipe('max_gt_gap_s'),
+                            align_poses=meta.recipe('align', 'none'), poses=meta.recipe('poses'))
         check_rate(seq.stamp_ns, sample_rate(net), f'{folder}/{name}')  # --data: its own?
         if len(seq) - start < 2:
             continue
@@ -315,7 +313,7 @@ DEFAULTS = {'imufusion': Filter('imufusion', gain=0.5), 'madgwick': Filter('madg
 LABELS = {'vqf': 'VQF', 'imufusion': 'imufusion', 'madgwick': 'Madgwick'}
 
 
-def eval_filters(net_meta: dict[str, Any], calib_meta: dict[str, Any] | None
+def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None
                  ) -> dict[str, tuple[str, Filter]]:
     """
     Return the fused rows of ``eval``: name -> (gyro source, filter with its settings).
@@ -323,15 +321,15 @@ def eval_filters(net_meta: dict[str, Any], calib_meta: dict[str, Any] | None
     Each model file's own VQF settings for its gyro; for the raw gyro and the other
     filters the settings ``tune-fusion`` stored in the network's file (defaults if none).
     """
-    stored = (net_meta.get('fusion') or {}).get('filters') or {}
+    stored = net_meta.fusion.filters
 
     def chosen(source: str, kind: str) -> Filter:
         if f'{source} {kind}' in stored:
             return Filter.from_dict(stored[f'{source} {kind}'], f'fusion.filters.{source} {kind}')
         return DEFAULTS.get(kind, Filter('vqf'))
 
-    def own(meta: dict[str, Any]) -> Filter:  # a model file's settings for its own gyro
-        settings = settings_of(meta)
+    def own(meta: ModelMeta) -> Filter:  # a model file's settings for its own gyro
+        settings = meta.fusion.chosen
         return Filter('vqf', settings.tau_acc_s, settings.bias_estimation,
                       accel_bias_m_s2=settings.accel_bias_m_s2)
 

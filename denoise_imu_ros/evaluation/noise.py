@@ -278,11 +278,11 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
           pose_topic: str | None = None, poses: str | None = None,
           align_poses: str = 'none') -> dict[str, Any]:
     """Run the noise figures of raw, calibrated and corrected gyro; write and return them."""
-    from ..core.modelfile import (fitting_note, gyro_covariance, sample_rate,
-                                  scored_on_training_samples)
+    from ..core.modelfile import gyro_covariance, sample_rate
     from ..data.load import load_sequence
     from ..learn.checkpoint import check_baseline, load_model
     from .evaluate import check_inputs, default_baseline, recording_names
+    from .reports import fitting_note, scored_on_training_samples
     names = recording_names(sequences)  # before the slow part: a name twice is refused
     net = load_model(model_spec)
     baseline = default_baseline(net.meta, baseline)

@@ -5,11 +5,38 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 from ..core.metrics import ROE_DISTANCES_M
+from ..core.schema import ModelMeta
 
 CROSSVAL_METHODS = ('raw', 'rest bias', 'calibrated', 'network')
+
+
+def scored_on_training_samples(meta: ModelMeta, names: list[str],
+                               start_sample: int) -> list[str]:
+    """
+    Which of ``names`` are training recordings of this model scored on its training span.
+
+    Figures there measure the fit, not what a robot will see: a report says so.
+    """
+    trained = {Path(n).name for n in meta.train_sequences}
+    span = meta.training_span
+    return [n for n in names if Path(n).name in trained
+            and (span is None or start_sample < span)]
+
+
+def fitting_note(names: list[str], span: int | None) -> str:
+    """Say that figures on a model's own training samples measure its fit."""
+    which = ', '.join(Path(n).name for n in names)
+    verb = 'was' if len(names) == 1 else 'were'
+    if span is None:
+        return (f'{which} {verb} used to train this model: these figures include that fit, '
+                'not only what unseen recordings will show')
+    return (f'{which} {verb} used to train this model (samples 0-{span - 1}): these '
+            'whole-recording figures include that fit; --start-sample '
+            f'{span} scores only the unseen tail')
 
 
 def eval_table(results: dict[str, Any], average: dict[str, Any]) -> str:

@@ -18,8 +18,8 @@ import torch
 
 from .model import correct_gyro, GyroNet, merge
 from ..core.errors import ModelFileError
-from ..core.modelfile import (code_version, read_model_file, REST_ONLY, sample_rate,
-                              write_model_file)
+from ..core.modelfile import code_version, read_model_file, sample_rate, write_model_file
+from ..core.schema import ModelMeta, REST_ONLY
 from ..data import rest_bias
 
 
@@ -32,13 +32,12 @@ class LoadedModel(NamedTuple):
     """A torch model in eval mode plus the metadata it was saved with."""
 
     model: GyroNet
-    meta: dict[str, Any]
+    meta: ModelMeta
     path: Path
 
     def correct(self, imu: np.ndarray) -> np.ndarray:
         """Corrected gyro (N, 3) of a recording's raw samples (N, 6), fed as online."""
-        return correct_gyro(self.model, rest_bias.model_input(self.meta, imu,
-                                                              where=str(self.path)))
+        return correct_gyro(self.model, rest_bias.model_input(self, imu))
 
 
 def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:
@@ -47,11 +46,10 @@ def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:
                                           for k, v in model.state_dict().items()}, meta)
 
 
-def _recipe(meta: dict[str, Any]) -> dict[str, Any]:
+def _recipe(meta: ModelMeta) -> dict[str, Any]:
     """Return a member's dataset and recipe, less what trainings of one recipe differ in."""
-    cfg = {k: v for k, v in (meta.get('train_config') or {}).items()
-           if k not in ('seed', 'sequences')}
-    return cfg | ({'dataset': meta['dataset']} if meta.get('dataset') else {})
+    cfg = {k: v for k, v in meta.train_config.items() if k not in ('seed', 'sequences')}
+    return cfg | ({'dataset': meta.dataset} if meta.dataset else {})
 
 
 def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
@@ -66,9 +64,9 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
     members = [load_model(spec) for spec in specs]
     if len(members) < 2:
         raise ModelFileError('an ensemble needs at least two model files')
-    rates = [m.meta.get('sample_rate_hz') for m in members]
+    rates = [m.meta.sample_rate_hz for m in members]
     rate = sample_rate(members[0])
-    if any(not isinstance(r, (int, float)) or abs(r / rate - 1) > 1e-3 for r in rates):
+    if any(r is None or abs(r / rate - 1) > 1e-3 for r in rates):
         shown = ', '.join(f'{r:.2f} Hz' if isinstance(r, (int, float)) else repr(r)
                           for r in rates)
         raise ModelFileError(f'ensemble members were trained at different rates: {shown}')
@@ -84,31 +82,31 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
         if differ:
             raise ModelFileError(f'ensemble members {members[0].path} and {m.path} are not '
                                  f'trainings of one recipe (they differ in {", ".join(differ)})')
-    rests = [rest_bias.settings_of(m.meta, str(m.path)) for m in members]
+    rests = [m.meta.rest_bias for m in members]
     for m, rest in zip(members[1:], rests[1:]):  # one input for all: each was trained on its own
         if rest != rests[0]:
             raise ModelFileError(f'ensemble members {members[0].path} and {m.path} remove '
                                  'different turn-on biases (rest_bias settings, or priors of '
                                  'other training recordings)')
-    stds = [(m.meta.get('validation') or {}).get('gyro_residual_std') for m in members]
+    stds = [m.meta.validation.gyro_residual_std for m in members]
     residual = (np.mean(stds, axis=0).tolist() if all(v is not None for v in stds)
                 else None)  # a member that measured none: no figure, not a zero in the mean
     meta = {
-        'dataset': first.get('dataset'), 'sample_rate_hz': rate,
+        'dataset': first.dataset, 'sample_rate_hz': rate,
         # every member's (fold models trained on different ones): what eval warns about
         'train_sequences': list(dict.fromkeys(
-            s for m in members for s in m.meta.get('train_sequences') or [])) or None,
-        'train_config': first.get('train_config'),
+            s for m in members for s in m.meta.train_sequences)) or None,
+        'train_config': first.raw.get('train_config'),
         'rest_bias': None if rests[0] is None else rests[0].to_dict(),
         'validation': {} if residual is None else {'gyro_residual_std': residual},
-        'members': [{'file': str(m.path), 'seed': (m.meta.get('train_config') or {}).get('seed'),
-                     'validation': m.meta.get('validation'),
-                     'code_version': m.meta.get('code_version')} for m in members],
+        'members': [{'file': str(m.path), 'seed': m.meta.recipe('seed'),
+                     'validation': m.meta.raw.get('validation'),
+                     'code_version': m.meta.code_version} for m in members],
         'code_version': code_version(),
         'created': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
     }
     for key in SHARED_BY_MEMBERS:  # what every member says alike describes the ensemble
-        values = [m.meta.get(key) for m in members]
+        values = [m.meta.raw.get(key) for m in members]
         if values[0] is not None and all(v == values[0] for v in values):
             meta[key] = values[0]
     save_model(path, model, meta)
@@ -123,7 +121,7 @@ def check_baseline(model: LoadedModel, baseline: LoadedModel) -> None:
     file, and of the model's IMU rate: the "calibrated" rows and the filter settings
     stored crosswise would otherwise be wrong without a word.
     """
-    role = ('a rest-only model' if baseline.meta.get('kind') == REST_ONLY else
+    role = ('a rest-only model' if baseline.meta.kind == REST_ONLY else
             None if baseline.model.config.calibration_only else 'a network')
     if role:
         raise ModelFileError(f'--baseline {baseline.path}: {role}, not a calibration (train '

@@ -9,4 +9,5 @@ only, ``fusion`` adds VQF; ``process_bag`` adds rosbags; ``node`` and
 that process-bag never loads rclpy.
 """
 
-__all__ = ['fusion', 'node', 'online', 'player', 'process_bag', 'streaming']
+__all__ = ['advice', 'fusion', 'node', 'online', 'outputs', 'player', 'process_bag',
+           'rclpy_internals', 'streaming']

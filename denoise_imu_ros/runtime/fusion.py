@@ -30,60 +30,12 @@ yaw 0 as ``imu/attitude``'s (Rz(0) Ry(pitch) Rx(roll)): both topics start in one
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
-import math
-from typing import Any
-
 import numpy as np
 from vqf import VQF
 
-from ..core.errors import ModelFileError
 from ..core.limits import MAX_GAP_FACTOR
 from ..core.rotation import hamilton, level_heading, Quat
-
-
-MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
-
-
-@dataclass(frozen=True)
-class FusionSettings:
-    """The filter's choices; defaults are VQF's own time constant, no bias removed or estimated."""
-
-    tau_acc_s: float = 3.0         # accelerometer time constant: longer trusts the gyro more
-    bias_estimation: bool = False  # VQF's rest and motion gyro-bias estimators
-    accel_bias_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)  # removed before the filter
-
-    def __post_init__(self) -> None:
-        """Refuse settings the filter cannot run with (model files are user input)."""
-        if not (isinstance(self.tau_acc_s, (int, float)) and 0 < self.tau_acc_s < 1e6):
-            raise ValueError(f'tau_acc_s must be a positive number of seconds, '
-                             f'not {self.tau_acc_s!r}')
-        if not isinstance(self.bias_estimation, bool):
-            raise ValueError(f'bias_estimation must be true or false, not '
-                             f'{self.bias_estimation!r}')
-        bias = self.accel_bias_m_s2
-        if not (isinstance(bias, (list, tuple)) and len(bias) == 3 and all(
-                isinstance(b, (int, float)) and not isinstance(b, bool) and math.isfinite(b)
-                and abs(b) <= MAX_ACCEL_BIAS_M_S2 for b in bias)):
-            raise ValueError(f'accel_bias_m_s2 must be three numbers within '
-                             f'±{MAX_ACCEL_BIAS_M_S2:g} m/s^2, not {bias!r}')
-        object.__setattr__(self, 'accel_bias_m_s2', tuple(float(b) for b in bias))
-
-    def as_dict(self) -> dict[str, Any]:
-        """Return the settings as stored in a model file."""
-        return dict(asdict(self), accel_bias_m_s2=list(self.accel_bias_m_s2))
-
-
-def settings_of(meta: dict[str, Any], path: object = 'model file') -> FusionSettings:
-    """Return the settings a model file stores (``fusion.settings``), or the defaults."""
-    stored = meta.get('fusion', {})
-    stored = stored.get('settings') if isinstance(stored, dict) else None
-    if stored is None:
-        return FusionSettings()
-    try:
-        return FusionSettings(**stored)
-    except (TypeError, ValueError) as err:
-        raise ModelFileError(f'{path}: inconsistent fusion settings ({err})') from err
+from ..core.schema import FusionSettings, ModelMeta
 
 
 def _vqf(rate_hz: float, settings: FusionSettings) -> VQF:
@@ -170,7 +122,7 @@ def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
 DEFAULT_ORIENTATION_STD_RAD = 0.05  # used when a model file stores no fused-error figures
 
 
-def orientation_covariance(meta: dict[str, Any], stddev: float = -1.0) -> list[float]:
+def orientation_covariance(meta: ModelMeta, stddev: float = -1.0) -> list[float]:
     """
     Row-major 3x3 orientation_covariance of the fused orientation (``imu/data``).
 
@@ -178,10 +130,7 @@ def orientation_covariance(meta: dict[str, Any], stddev: float = -1.0) -> list[f
     fused orientation the model file stores (measured where its settings were chosen),
     else DEFAULT_ORIENTATION_STD_RAD.
     """
-    stored = meta.get('fusion', {})
-    std = stored.get('orientation_std_rad') if isinstance(stored, dict) else None
-    usable = (isinstance(std, list) and len(std) == 3 and all(
-        isinstance(v, (int, float)) and math.isfinite(v) and v >= 0 for v in std))
-    if stddev >= 0 or not usable:
+    std = meta.fusion.orientation_std_rad
+    if stddev >= 0 or std is None:
         std = [stddev if stddev >= 0 else DEFAULT_ORIENTATION_STD_RAD] * 3
     return [float(std[i]) ** 2 if i == j else 0.0 for i in range(3) for j in range(3)]

@@ -29,7 +29,6 @@ import rclpy
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
@@ -37,13 +36,16 @@ from rclpy.utilities import remove_ros_args
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
-from .fusion import FusionSettings, orientation_covariance, settings_of
+from .advice import deployment_warning
+from .fusion import FusionSettings, orientation_covariance
 from .online import Drop, DROP_CAUSES, Event, OnlineDenoiser
 from .outputs import Outputs
+from .rclpy_internals import (integer_given_for_double, RCLError, RCLInvalidROSArgsError,
+                              take_waiting)
 from ..core import msgs
 from ..core.errors import DenoiseError
 from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE, stream_rate_hz
-from ..core.modelfile import deployment_warning, gyro_covariance, ModelFile, read_model_file
+from ..core.modelfile import gyro_covariance, ModelFile, read_model_file
 
 
 def _param(description: str, read_only: bool = False, floats: tuple | None = None,
@@ -126,10 +128,9 @@ class GyroDenoiser(Node):
             self.declare_parameters('', PARAMETERS)
         except ParameterException as err:  # a wrong type or range given at start-up
             why = ' '.join(str(err).split())
-            given = re.search(r"parameter '([^']+)' to '(-?\d+)' of type 'INTEGER', "
-                              r"expecting type 'DOUBLE'", why)
+            given = integer_given_for_double(err)
             if given:  # ROS does not convert: say how to write it
-                why += f' (write a decimal with a point: {given[1]}:={given[2]}.0)'
+                why += f' (write a decimal with a point: {given[0]}:={given[1]}.0)'
             raise DenoiseError(f'bad parameter: {why}') from err
         p = self.get_parameter
         if not p('fixed_frame').value.strip():
@@ -155,7 +156,7 @@ class GyroDenoiser(Node):
                                    f'{value.value}')
         try:  # the QoS overrides given as parameters are read here
             self._create_topics(fusion is not None)
-        except (RuntimeError, ParameterException, _rclpy.RCLError) as err:
+        except (RuntimeError, ParameterException, RCLError) as err:
             why = ' '.join(str(err).split())
             raise DenoiseError(f'bad parameter: a qos_overrides value rclpy cannot use ({why}; '
                                'depth: a positive integer, reliability: reliable or '
@@ -194,7 +195,7 @@ class GyroDenoiser(Node):
                f'{[round(b, 4) for b in fusion.accel_bias_m_s2]} m/s^2)'))
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)
-        if rest is None and loaded.meta.get('rest_bias') is not None:
+        if rest is None and loaded.meta.rest_bias is not None:
             self.get_logger().warning('rest_bias off: the model was trained on the gyro less '
                                       'its turn-on bias, it now gets the raw gyro')
         # rclpy ignores a value given for a parameter no node declares: say so, since a
@@ -252,7 +253,7 @@ class GyroDenoiser(Node):
     def _fusion_settings(self, loaded: ModelFile) -> FusionSettings:
         """Return the model file's filter settings with the node's overrides applied."""
         p = self.get_parameter
-        settings = settings_of(loaded.meta, loaded.path)
+        settings = loaded.meta.fusion.chosen
         bias = self._model_or_switch('fusion_bias_estimation', (True, False))
         accel = self._model_or_switch('fusion_accel_bias', (False,))
         return FusionSettings(
@@ -286,11 +287,10 @@ class GyroDenoiser(Node):
         """
         self._handle(msg)
         for _ in range(DRAIN_MAX):
-            with self._sub.handle:  # rclpy's own take, as its executor does
-                taken = self._sub.handle.take_message(Imu, False)
+            taken = take_waiting(self._sub, Imu)
             if taken is None:
                 return
-            self._handle(taken[0])
+            self._handle(taken)
 
     def _handle(self, msg: Imu) -> None:
         if self._waiting_timer is not None:
@@ -434,7 +434,7 @@ def main(args: list[str] | None = None) -> int:
     # args, as in tests, holds no program name; sys.argv does
     try:
         rest = remove_ros_args(sys.argv)[1:] if args is None else remove_ros_args(args)
-    except _rclpy.RCLInvalidROSArgsError as err:  # e.g. a missing or malformed params file
+    except RCLInvalidROSArgsError as err:  # e.g. a missing or malformed params file
         where = re.sub(r',? at \S+:\d+', '', str(err))  # rcl's source locations
         print(f'gyro_denoiser: error: {" ".join(where.split())}', file=sys.stderr)
         return 1
@@ -460,7 +460,7 @@ def main(args: list[str] | None = None) -> int:
         return 1
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except _rclpy.RCLError:  # a signal shut rclpy down as the executor built its wait set
+    except RCLError:  # a signal shut rclpy down as the executor built its wait set
         if rclpy.ok():
             raise
     finally:
@@ -474,7 +474,7 @@ def shutdown_rclpy() -> None:
     """Shut rclpy down unless a signal did: ``try_shutdown`` can race the signal's own."""
     try:
         rclpy.try_shutdown()
-    except _rclpy.RCLError:  # the signal's shutdown landed between its check and its call
+    except RCLError:  # the signal's shutdown landed between its check and its call
         if rclpy.ok():
             raise
 

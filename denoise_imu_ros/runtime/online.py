@@ -129,7 +129,7 @@ class OnlineDenoiser:
         rate = sample_rate(model)
         if fusion is not None:
             options.setdefault('accel_bias', fusion.accel_bias_m_s2)
-        settings = rest_bias.resolve(model.meta, rest_choice, str(model.path))
+        settings = rest_bias.resolve(model.meta, rest_choice)
         return cls(StreamingCorrector(model.config, model.arrays), rate,
                    fusion=None if fusion is None else GravityFilter(rate, fusion),
                    rest=None if settings is None else rest_bias.RestBias(settings, rate),

@@ -22,7 +22,7 @@ from rosbags.convert import convert, ConverterError
 from rosbags.rosbag2 import (CompressionFormat, CompressionMode, StoragePlugin, Writer,
                              WriterError)
 
-from .fusion import orientation_covariance, settings_of
+from .fusion import orientation_covariance
 from .online import Drop, DROP_CAUSES, FORWARD_JUMP_S, OnlineDenoiser
 from .outputs import Outputs
 from ..core.atomic import atomic_output
@@ -126,7 +126,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
         raise DatasetError(f'{src}: bag not found')
     names = output_topics(namespace)
     loaded = read_model_file(model_spec)
-    den = OnlineDenoiser.from_model_file(loaded, settings_of(loaded.meta, loaded.path), rest)
+    den = OnlineDenoiser.from_model_file(loaded, loaded.meta.fusion.chosen, rest)
     cov = np.array(gyro_covariance(loaded))
     fused_cov = np.array(orientation_covariance(loaded.meta))
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3

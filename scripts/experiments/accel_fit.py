@@ -15,21 +15,21 @@ Usage: .venv/bin/python scripts/experiments/accel_fit.py MODEL DATA_DIR
 from pathlib import Path
 import sys
 
+from denoise_imu_ros.core.modelfile import sample_rate
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation import filters
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
-from denoise_imu_ros.runtime.fusion import settings_of
 import numpy as np
 
 
 def main(model: str, data: str) -> None:
     """Print the fits, then one line of tail errors per accelerometer model."""
     net = load_model(model)
-    cfg, names = net.meta['train_config'], net.meta['train_sequences']
-    start = int(cfg['window']) + int(cfg.get('max_offset', 0))
-    seqs = [load_sequence(f'{data}/{n}', cfg.get('imu_topic'), cfg.get('pose_topic'),
-                          cfg.get('max_gt_gap_s'), align_poses=cfg.get('align', 'none'))
+    meta = net.meta
+    names, start = meta.train_sequences, meta.training_span
+    seqs = [load_sequence(f'{data}/{n}', meta.recipe('imu_topic'), meta.recipe('pose_topic'),
+                          meta.recipe('max_gt_gap_s'), align_poses=meta.recipe('align', 'none'))
             for n in names]  # as tune-fusion reads them
     for name, seq in zip(names, seqs):
         fitted = filters.fit_accel_bias([seq], start)
@@ -50,15 +50,15 @@ def main(model: str, data: str) -> None:
           f'{np.round((read - should - bias).std(0), 3).tolist()}')
     print(f'affine: A {np.round(a, 3).tolist()}, b {np.round(b, 3).tolist()}, residual std '
           f'{np.round((read - should @ a.T - b).std(0), 3).tolist()}')
-    settings = settings_of(net.meta)
+    settings = meta.fusion.chosen
     flt = filters.Filter('vqf', settings.tau_acc_s, settings.bias_estimation)
     tails = [s.tail(start) for s in seqs]
     gyros = [correct_gyro(net.model, s.imu)[start:] for s in seqs]
     inverse = np.linalg.inv(a)
     for label, accel in (('as it came', lambda x: x), ('bias removed', lambda x: x - bias),
                          ('affine inverted', lambda x: (x - b) @ inverse.T)):
-        errs = [filters.score(t, filters.run(flt, g, accel(t.imu[:, 3:]), net.meta[
-            'sample_rate_hz'])) for t, g in zip(tails, gyros)]
+        errs = [filters.score(t, filters.run(flt, g, accel(t.imu[:, 3:]), sample_rate(net)))
+                for t, g in zip(tails, gyros)]
         print(f'{flt.label}, accelerometer {label}: 3-D {np.mean([e.aoe for e in errs]):.3f} '
               f'tilt {np.mean([e.tilt for e in errs]):.3f} yaw '
               f'{np.mean([e.aoe_yaw for e in errs]):.3f}')

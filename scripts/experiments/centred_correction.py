@@ -28,10 +28,10 @@ import torch
 def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
     """Print the mean correction, then one line per held-out recording."""
     net = load_model(model)
-    align = (net.meta.get('train_config') or {}).get('align', 'none')
+    align = net.meta.recipe('align', 'none')
 
     def correction(imu: np.ndarray) -> np.ndarray:
-        u = torch.as_tensor(rest_bias.model_input(net.meta, imu), dtype=torch.float32)
+        u = torch.as_tensor(rest_bias.model_input(net, imu), dtype=torch.float32)
         with torch.no_grad():
             return (net.model.gyro_std * net.model.correction(u[None]))[0].double().numpy()
     mean = np.concatenate([correction(load_sequence(Path(data) / n, align_poses=align).imu)
@@ -41,7 +41,7 @@ def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
     for name in held:
         seq = load_sequence(Path(data) / name, align_poses=align)
         gyro = net.correct(seq.imu)
-        rest = rest_bias.remove_rest_bias(seq.imu, net.meta['sample_rate_hz'], settings)
+        rest = rest_bias.remove_rest_bias(seq.imu, net.meta.sample_rate_hz, settings)
         figures = [score(seq, g)['aoe_deg'] for g in (rest[:, :3], gyro, gyro - mean)]
         print(f'{name}: rest bias {figures[0]:.2f}, network {figures[1]:.2f}, centred '
               f'{figures[2]:.2f} deg', flush=True)

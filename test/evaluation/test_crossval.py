@@ -6,6 +6,7 @@ import json
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import TrainingError
+from denoise_imu_ros.core.schema import parse_meta
 from denoise_imu_ros.evaluation.crossval import attach_mismatches, folds, summarize
 from denoise_imu_ros.learn.checkpoint import load_model
 from helpers import write_asl
@@ -56,10 +57,10 @@ def test_verdict_follows_the_figures():
 
 def test_attaching_a_report_of_other_recordings_or_a_shorter_training_is_named():
     report = {'folds': [['b'], ['a']], 'steps': 30}
-    assert attach_mismatches(report, {'train_sequences': ['a', 'b'],
-                                      'train_config': {'steps': 30}}) == []
-    assert attach_mismatches(report, {'train_sequences': ['a', 'c'],
-                                      'train_config': {'steps': 1800}}) == [
+    assert attach_mismatches(report, parse_meta({'train_sequences': ['a', 'b'],
+                                                 'train_config': {'steps': 30}}, 'm')) == []
+    assert attach_mismatches(report, parse_meta({'train_sequences': ['a', 'c'],
+                                                 'train_config': {'steps': 1800}}, 'm')) == [
         "its folds hold out ['a', 'b'], the model was trained on ['a', 'c']",
         'its folds trained 30 steps, the model 1800']
 
@@ -99,11 +100,11 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
         # the bias is a constant of every day: the fitted calibration removes most of it
         assert figures['calibrated']['aoe_deg'] < 0.5 * figures['raw']['aoe_deg']
     for i in range(3):
-        trained_on = load_model(out / f'fold{i}' / 'network.safetensors').meta['train_sequences']
+        trained_on = load_model(out / f'fold{i}' / 'network.safetensors').meta.train_sequences
         assert f'rec{i}' not in trained_on and len(trained_on) == 2
     printed = capsys.readouterr().out
     assert report['verdict'] in printed and 'rec2' in printed
-    assert load_model(model_file).meta['crossval'] == report
+    assert load_model(model_file).meta.crossval.report == report
     assert main(['eval', '--model', str(model_file), '--data', str(data), '--sequences',
                  'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0
     assert json.loads((tmp_path / 'ev' / 'results.json').read_text())['crossval'] == report
@@ -180,8 +181,8 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     assert 'fold 2/2, seed 5: its models are in' in printed.err  # resumed, not retrained
     seq = load_sequence(data / 'rec0')
     nets = [load_model(out / f'seed{s}' / 'fold0' / 'network.safetensors') for s in (3, 5)]
-    assert [n.meta['train_config']['seed'] for n in nets] == [3, 5]
-    assert nets[0].meta['train_sequences'] == ['rec1']
+    assert [n.meta.recipe('seed') for n in nets] == [3, 5]
+    assert nets[0].meta.train_sequences == ('rec1',)
     # the ensemble row is what `denoise-imu ensemble` of the fold's two seeds would score
     ensemble = score(seq, correct_gyro(merge([n.model for n in nets]), seq.imu))
     assert report['recordings']['rec0']['network']['aoe_deg'] == pytest.approx(
@@ -256,6 +257,7 @@ def test_a_verdict_of_another_recipe_or_of_one_fold_is_not_attached(tmp_path, ca
     assert attach_mismatches({'folds': [['rec0'], ['rec1']], 'steps': 1800,
                               'train_config': {'window': 2048, 'increments': [8, 16],
                                                'seed': 0, 'calibration_only': True}},
-                             {'train_sequences': ['rec0', 'rec1'],
-                              'train_config': {'steps': 1800, 'window': 2048,
-                                               'increments': [8, 16], 'seed': 3}}) == []
+                             parse_meta({'train_sequences': ['rec0', 'rec1'],
+                                         'train_config': {'steps': 1800, 'window': 2048,
+                                                          'increments': [8, 16], 'seed': 3}},
+                                        'm')) == []

@@ -85,16 +85,17 @@ def test_eval_says_when_it_scores_a_recording_the_model_was_fitted_on(
 
 
 def test_only_a_training_recordings_fitted_span_is_flagged():
-    from denoise_imu_ros.core.modelfile import scored_on_training_samples
-    meta = {'train_sequences': ['MH_01_easy'], 'train_config': {'window': 16000,
-                                                                'max_offset': 32}}
+    from denoise_imu_ros.core.schema import parse_meta
+    from denoise_imu_ros.evaluation.reports import scored_on_training_samples
+    meta = parse_meta({'train_sequences': ['MH_01_easy'],
+                       'train_config': {'window': 16000, 'max_offset': 32}}, 'm')
     names = ['MH_01_easy', 'data/MH_02_easy']
     assert scored_on_training_samples(meta, names, 0) == ['MH_01_easy']
     assert scored_on_training_samples(meta, names, 16031) == ['MH_01_easy']
     assert scored_on_training_samples(meta, names, 16032) == []  # the validation tail
-    assert scored_on_training_samples({}, names, 0) == []
-    assert scored_on_training_samples({'train_sequences': ['MH_02_easy']}, names,
-                                      10 ** 6) == ['data/MH_02_easy']  # span unknown
+    assert scored_on_training_samples(parse_meta({}, 'm'), names, 0) == []
+    assert scored_on_training_samples(parse_meta({'train_sequences': ['MH_02_easy']}, 'm'),
+                                      names, 10 ** 6) == ['data/MH_02_easy']  # span unknown
 
 
 def test_one_recording_given_twice_is_refused_not_averaged_twice(model_file, tmp_path, capsys):

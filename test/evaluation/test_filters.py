@@ -4,6 +4,7 @@
 
 from denoise_imu_ros.core.metrics import fused_errors
 from denoise_imu_ros.core.records import Sequence
+from denoise_imu_ros.core.schema import parse_meta
 from denoise_imu_ros.evaluation import filters
 from denoise_imu_ros.evaluation.filters import eval_filters, Filter, run
 import numpy as np
@@ -49,14 +50,15 @@ def test_eval_uses_the_settings_the_model_files_store():
                       'filters': {'raw vqf': Filter('vqf', 1.0).as_dict(),
                                   'calibrated madgwick': Filter('madgwick', gain=0.1).as_dict()}}}
     calib = {'fusion': {'settings': {'tau_acc_s': 4.0, 'bias_estimation': True}}}
-    rows = eval_filters(net, calib)
+    rows = eval_filters(parse_meta(net, 'm'), parse_meta(calib, 'c'))
     assert rows == {'raw + VQF': ('raw', Filter('vqf', 1.0)),
                     'rest bias + VQF': ('rest bias', Filter('vqf', 1.0)),
                     'calibrated + VQF': ('calibrated', Filter('vqf', 4.0, True)),
                     'calibrated + imufusion': ('calibrated', Filter('imufusion', gain=0.5)),
                     'calibrated + Madgwick': ('calibrated', Filter('madgwick', gain=0.1)),
                     'network + VQF': ('network', Filter('vqf', 7.0))}
-    assert set(eval_filters({}, None)) == {'raw + VQF', 'rest bias + VQF', 'network + VQF'}
+    rows = eval_filters(parse_meta({}, 'm'), None)
+    assert set(rows) == {'raw + VQF', 'rest bias + VQF', 'network + VQF'}
 
 
 def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):

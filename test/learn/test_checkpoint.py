@@ -29,8 +29,8 @@ def test_round_trip_rebuilds_the_same_model_from_the_file_alone(tmp_path):
     loaded = load_model(tmp_path / 'm.safetensors')
     u = torch.randn(1, 800, 6)
     assert torch.equal(loaded.model(u), model(u))
-    assert loaded.meta['sample_rate_hz'] == 200.0
-    assert loaded.meta['receptive_field'] == 511
+    assert loaded.meta.sample_rate_hz == 200.0
+    assert loaded.meta.raw['receptive_field'] == 511
     assert not loaded.model.training
 
 
@@ -39,7 +39,8 @@ def test_round_trip_rebuilds_the_same_model_from_the_file_alone(tmp_path):
     (True, 'calibration', False), (True, 'network', True), (False, None, False)])
 def test_a_model_of_another_kind_than_its_validation_recommends_says_so(
         tmp_path, calibration_only, deploy, warns):
-    from denoise_imu_ros.core.modelfile import deployment_warning, read_model_file
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.runtime.advice import deployment_warning
     model = GyroNet(ModelConfig(calibration_only=calibration_only)).eval()
     meta = {'sample_rate_hz': 200.0}
     if deploy:
@@ -101,8 +102,8 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
                  '--out', str(out)]) == 0
     ens = load_model(out)
     assert ens.model.config.members == 2 and ens.model.receptive_field == 511
-    assert [m['seed'] for m in ens.meta['members']] == [None, 7]
-    assert ens.meta['validation']['gyro_residual_std'] == pytest.approx([0.02] * 3)
+    assert [m['seed'] for m in ens.meta.raw['members']] == [None, 7]
+    assert ens.meta.validation.gyro_residual_std == pytest.approx([0.02] * 3)
     u = np.random.default_rng(0).normal(0, 1, (800, 6))
     mean = (correct_gyro(load_model(model_file).model, u) + correct_gyro(second, u)) / 2
     np.testing.assert_allclose(correct_gyro(ens.model, u), mean, rtol=0, atol=1e-6)
@@ -117,7 +118,7 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
     np.testing.assert_allclose(correct_gyro(load_model(tmp_path / 'x.safetensors').model, u),
                                mean, rtol=0, atol=1e-6)
     # a member without a residual figure: none stored, not a zero in the mean
-    assert load_model(tmp_path / 'x.safetensors').meta['validation'] == {}
+    assert load_model(tmp_path / 'x.safetensors').meta.raw['validation'] == {}
     # another architecture cannot be averaged in
     save_model(tmp_path / 'd.safetensors', GyroNet(ModelConfig(channels=(8, 16, 32, 64))),
                {'sample_rate_hz': 200.0})
@@ -134,7 +135,7 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
                    {'sample_rate_hz': 200.0, 'train_sequences': seqs})
     union = save_ensemble(tmp_path / 'u.safetensors', [tmp_path / 'f1.safetensors',
                                                        tmp_path / 'f2.safetensors'])
-    assert union.meta['train_sequences'] == ['a', 'b', 'c']
+    assert union.meta.train_sequences == ('a', 'b', 'c')
     # trainings of two recipes: the file could describe only the first one's
     save_model(tmp_path / 'r1.safetensors', second, {
         'dataset': 'tumvi', 'sample_rate_hz': 200.0, 'train_config': {'seed': 1, 'window': 4000}})
@@ -155,7 +156,7 @@ def test_copied_metadata_never_overrides_the_architecture(tmp_path):
     from denoise_imu_ros.learn.model import merge
     single = _model().eval()
     save_model(tmp_path / 'a.safetensors', single, {'sample_rate_hz': 200.0})
-    meta = load_model(tmp_path / 'a.safetensors').meta  # holds model_config (members 1)
+    meta = load_model(tmp_path / 'a.safetensors').meta.raw  # holds model_config (members 1)
     save_model(tmp_path / 'b.safetensors', merge([single, single]), meta)
     assert load_model(tmp_path / 'b.safetensors').model.config.members == 2
 
@@ -166,7 +167,7 @@ def test_copied_metadata_never_overrides_the_architecture(tmp_path):
     ({'sample_rate_hz': 1e20}, 'sample_rate_hz 1e[+]20 is not a rate'),  # no deque of 2e20
     ({'validation': {'gyro_residual_std': ['a', 1, 2]}}, 'gyro_residual_std'),
     ({'validation': [1, 2]}, r'validation \[1, 2\] is not a mapping'),
-    ({'validation': {'gyro_residual_std': None}}, 'gyro_residual_std None is not three'),
+    ({'validation': {'gyro_residual_std': [0.1, -1, 0]}}, 'is not three non-negative'),
     ({'train_config': 3}, 'train_config 3 is not a mapping'),
 ])
 def test_malformed_metadata_is_refused_on_reading(tmp_path, meta, message):
@@ -236,17 +237,19 @@ def test_a_negative_batchnorm_variance_is_refused_on_reading(tmp_path):
 
 
 def test_a_model_trained_on_whole_recordings_has_no_unseen_tail():
-    from denoise_imu_ros.core.modelfile import scored_on_training_samples, training_span
-    head = {'train_config': {'window': 16000, 'max_offset': 32}, 'train_sequences': ['a']}
-    whole = {'train_config': dict(head['train_config'], whole_sequences=True),
-             'train_sequences': ['a']}
-    assert training_span(head) == 16032 and training_span(whole) is None
+    from denoise_imu_ros.core.schema import parse_meta
+    from denoise_imu_ros.evaluation.reports import scored_on_training_samples
+    cfg = {'window': 16000, 'max_offset': 32}
+    head = parse_meta({'train_config': cfg, 'train_sequences': ['a']}, 'm')
+    whole = parse_meta({'train_config': dict(cfg, whole_sequences=True),
+                        'train_sequences': ['a']}, 'm')
+    assert head.training_span == 16032 and whole.training_span is None
     assert scored_on_training_samples(head, ['a'], 16032) == []
     assert scored_on_training_samples(whole, ['a'], 16032) == ['a']
 
 
 def test_an_ensemble_keeps_its_members_turn_on_bias_settings_or_refuses_two(tmp_path):
-    from denoise_imu_ros.data.rest_bias import RestBiasSettings, settings_of
+    from denoise_imu_ros.data.rest_bias import RestBiasSettings
     from helpers import untrained_model
     paths = []
     for name, prior in (('a', 0.01), ('b', 0.01), ('c', 0.02)):
@@ -254,7 +257,7 @@ def test_an_ensemble_keeps_its_members_turn_on_bias_settings_or_refuses_two(tmp_
         save_model(paths[-1], untrained_model(), {'sample_rate_hz': 200.0, 'rest_bias': (
             RestBiasSettings(prior_rad_s=(prior, 0.0, 0.0)).to_dict())})
     ens = save_ensemble(tmp_path / 'ab.safetensors', paths[:2])
-    assert settings_of(ens.meta) == RestBiasSettings(prior_rad_s=(0.01, 0.0, 0.0))
+    assert ens.meta.rest_bias == RestBiasSettings(prior_rad_s=(0.01, 0.0, 0.0))
     with pytest.raises(ModelFileError, match='remove different turn-on biases'):
         save_ensemble(tmp_path / 'ac.safetensors', [paths[0], paths[2]])
     save_model(tmp_path / 'raw.safetensors', untrained_model(), {'sample_rate_hz': 200.0})
@@ -273,11 +276,11 @@ def test_an_ensemble_keeps_the_filter_settings_and_verdict_its_members_share(tmp
             'fusion': dict(fusion, settings={'tau_acc_s': tau, 'bias_estimation': False})})
     alike = save_ensemble(tmp_path / 'ab.safetensors',
                           [tmp_path / 'a.safetensors', tmp_path / 'b.safetensors'])
-    assert alike.meta['fusion'] == fusion and alike.meta['crossval'] == verdict
+    assert alike.meta.raw['fusion'] == fusion and alike.meta.raw['crossval'] == verdict
     assert main(['ensemble', str(tmp_path / 'a.safetensors'), str(tmp_path / 'c.safetensors'),
                  '--out', str(tmp_path / 'ac.safetensors')]) == 0
     differ = load_model(tmp_path / 'ac.safetensors')
-    assert 'fusion' not in differ.meta and differ.meta['crossval'] == verdict
+    assert 'fusion' not in differ.meta.raw and differ.meta.raw['crossval'] == verdict
     err = capsys.readouterr().err
     assert ("the ensemble has no imu/data's filter settings (its members carry none, or not the "
             'same): tune-fusion --attach stores its own') in err and 'verdict' not in err

@@ -138,9 +138,9 @@ def test_torchrun_trains_the_same_model_as_the_built_in_workers(tmp_path):
                    check=True, env=env, cwd=tmp_path, timeout=300)
     launched = read_model_file(tmp_path / 'torchrun.safetensors')
     built_in = read_model_file(tmp_path / 'workers.safetensors')
-    assert launched.meta['run']['workers'] == 2
-    assert [h['val_loss'] for h in launched.meta['history']] == [
-        h['val_loss'] for h in built_in.meta['history']]
+    assert launched.meta.raw['run']['workers'] == 2
+    assert [h['val_loss'] for h in launched.meta.raw['history']] == [
+        h['val_loss'] for h in built_in.meta.raw['history']]
     for name, array in built_in.arrays.items():
         np.testing.assert_array_equal(launched.arrays[name], array, err_msg=name)
 

@@ -41,7 +41,7 @@ def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
     assert meta['validation'] == meta['candidates']['swa']
     for name in ('best_checkpoint', 'final', 'swa'):
         cand = load_model(tmp_path / f'{name}.safetensors')
-        assert cand.meta['validation']['loss'] == meta['candidates'][name]['loss']
+        assert cand.meta.validation.loss == meta['candidates'][name]['loss']
     assert meta['train_sequences'] == ['MH_01_easy', 'V1_02_medium']
     assert 199 < meta['sample_rate_hz'] < 201
     assert len(meta['validation']['gyro_residual_std']) == 3
@@ -109,7 +109,7 @@ def test_calibration_baseline_trains_from_the_same_command(euroc, tmp_path):
                  '--calibration-only', '--quiet', '--out', str(out)]) == 0
     loaded = load_model(out)
     assert loaded.model.num_trainable() == 12
-    assert loaded.meta['train_config']['calibration_only'] is True
+    assert loaded.meta.recipe('calibration_only') is True
 
 
 def test_config_typos_and_bad_windows_are_refused(tmp_path):
@@ -324,7 +324,7 @@ def test_a_finished_training_is_never_lost_when_its_output_cannot_be_written(
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and 'No space left on device' in err
     kept = Path(err.split('the trained model was kept at ')[1])
-    assert kept.name == 'model.safetensors' and load_model(kept).meta['selected'] == 'swa'
+    assert kept.name == 'model.safetensors' and load_model(kept).meta.raw['selected'] == 'swa'
 
 
 def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path, capsys, monkeypatch):
@@ -355,5 +355,5 @@ def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc
         raw, None)
     result = train(cfg, progress=False)
     result.save(tmp_path / 'rest.safetensors')
-    stored = rest_bias.settings_of(load_model(tmp_path / 'rest.safetensors').meta)
+    stored = load_model(tmp_path / 'rest.safetensors').meta.rest_bias
     assert stored == settings

@@ -2,12 +2,11 @@
 # SPDX-License-Identifier: Apache-2.0
 """The gravity-aided orientation: VQF online equals offline, the time convention, settings."""
 
-from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.modelfile import read_model_file
+from denoise_imu_ros.core.schema import parse_meta
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.runtime.fusion import (fuse, FusionSettings, GravityFilter,
-                                            orientation_covariance, settings_of,
-                                            step_periods)
+                                            orientation_covariance, step_periods)
 from denoise_imu_ros.runtime.online import OnlineDenoiser
 from helpers import SAMPLE
 import numpy as np
@@ -128,20 +127,8 @@ def test_the_online_pipeline_fuses_its_own_corrected_gyro(model_file, imu):
         is None
 
 
-def test_settings_and_covariance_come_from_the_model_file_or_defaults():
-    assert settings_of({}) == FusionSettings()
-    meta = {'fusion': {'settings': {'tau_acc_s': 12.0, 'bias_estimation': False},
-                       'orientation_std_rad': [0.01, 0.02, 0.03]}}
-    assert settings_of(meta) == FusionSettings(12.0, False)
-    stored = FusionSettings(4.0, False, [0.1, -0.2, 0.05]).as_dict()
-    assert stored['accel_bias_m_s2'] == [0.1, -0.2, 0.05]  # JSON: a list
-    assert settings_of({'fusion': {'settings': stored}}).accel_bias_m_s2 == (0.1, -0.2, 0.05)
+def test_covariance_comes_from_the_model_file_or_the_node_or_a_default():
+    meta = parse_meta({'fusion': {'orientation_std_rad': [0.01, 0.02, 0.03]}}, 'm')
     assert orientation_covariance(meta)[::4] == pytest.approx([1e-4, 4e-4, 9e-4])
     assert orientation_covariance(meta, 0.1)[::4] == pytest.approx([0.01] * 3)
-    assert orientation_covariance({})[::4] == pytest.approx([0.0025] * 3)
-    for bad in ({'tau_acc_s': -1.0}, {'tau_acc_s': 'long'}, {'bias_estimation': 'yes'},
-                {'tau': 3.0}, {'accel_bias_m_s2': [0.1, 0.2]},
-                {'accel_bias_m_s2': [0.0, 9.81, 0.0]}, {'accel_bias_m_s2': [0.0, None, 0.0]},
-                {'accel_bias_m_s2': [float('nan'), 0.0, 0.0]}):
-        with pytest.raises(ModelFileError, match='m.safetensors: inconsistent fusion settings'):
-            settings_of({'fusion': {'settings': bad}}, 'm.safetensors')
+    assert orientation_covariance(parse_meta({}, 'm'))[::4] == pytest.approx([0.0025] * 3)

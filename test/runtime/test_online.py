@@ -2,8 +2,11 @@
 # SPDX-License-Identifier: Apache-2.0
 """The ROS-free online pipeline: equals offline integration, handles bad stamps."""
 
+from types import SimpleNamespace
+
 from denoise_imu_ros.core.metrics import integrate
 from denoise_imu_ros.core.rotation import from_gravity
+from denoise_imu_ros.core.schema import parse_meta
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn.model import correct_gyro
 from denoise_imu_ros.runtime.online import DROP_CAUSES, Event, OnlineDenoiser, Output
@@ -253,8 +256,8 @@ def test_with_a_rest_bias_the_model_sees_what_the_batch_path_feeds_it(seq, model
                          rest=RestBias(settings, 200.0))
     outs = _run(den, seq.stamp_ns[:n], seq.imu[:n])
     fed = remove_rest_bias(seq.imu[:n], 200.0, settings)
-    meta = {'sample_rate_hz': 200.0, 'rest_bias': settings.to_dict()}
-    assert np.array_equal(model_input(meta, seq.imu[:n]), fed)
+    meta = parse_meta({'sample_rate_hz': 200.0, 'rest_bias': settings.to_dict()}, 'm')
+    assert np.array_equal(model_input(SimpleNamespace(meta=meta, path='m'), seq.imu[:n]), fed)
     assert not np.array_equal(fed, seq.imu[:n])
     np.testing.assert_allclose(np.array([o.gyro for o in outs]), correct_gyro(model, fed),
                                atol=1e-6)

@@ -7,10 +7,11 @@ import subprocess
 import sys
 
 from denoise_imu_ros.cli import main
-from denoise_imu_ros.core.modelfile import deployment_warning, read_model_file
+from denoise_imu_ros.core.modelfile import read_model_file
 from denoise_imu_ros.data.bags import read_bag
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.config import load_config
+from denoise_imu_ros.runtime.advice import deployment_warning
 from diagnostic_msgs.msg import DiagnosticStatus
 from helpers import imu_msg, ROOT
 import numpy as np
@@ -47,8 +48,8 @@ def test_train_on_your_robot_at_100_hz_with_20_hz_poses(euroc, tmp_path, capsys)
     assert main(['crossval', '--config', str(recipe), '--workers', '1', '--attach',
                  str(model), '--quiet']) == 0  # as long as the model: the folds judge it
     loaded = load_model(model)
-    assert abs(loaded.meta['sample_rate_hz'] - 100) < 0.5
-    assert set(loaded.meta['crossval']['recordings']) == {'V1_02_medium', 'V2_01_easy'}
+    assert abs(loaded.meta.sample_rate_hz - 100) < 0.5
+    assert set(loaded.meta.crossval.report['recordings']) == {'V1_02_medium', 'V2_01_easy'}
     # eval on a recording it never saw: the network beats the raw gyro by far
     out = tmp_path / 'eval'
     capsys.readouterr()

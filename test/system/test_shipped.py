@@ -2,10 +2,11 @@
 # SPDX-License-Identifier: Apache-2.0
 """Pins of the shipped models: provenance, accuracy on the bundled sample, streaming."""
 
-from denoise_imu_ros.core.modelfile import deployment_warning, read_model_file, shipped_models
+from denoise_imu_ros.core.modelfile import read_model_file, shipped_models
 from denoise_imu_ros.evaluation import evaluate as evaluate_module
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.runtime.advice import deployment_warning
 from denoise_imu_ros.runtime.streaming import StreamingCorrector
 from helpers import SAMPLE
 import numpy as np
@@ -18,7 +19,7 @@ SAMPLE_DIR = SAMPLE.parent
 def test_shipped_models_load_by_name_with_their_provenance(name):
     assert name in shipped_models()
     loaded = load_model(name)
-    meta = loaded.meta
+    meta = loaded.meta.raw
     for key in ('sample_rate_hz', 'train_sequences', 'train_config', 'validation',
                 'code_version', 'receptive_field'):
         assert key in meta
@@ -45,7 +46,7 @@ def test_shipped_euroc_model_beats_raw_and_calibrated_on_the_shipped_test_sample
 
 @pytest.mark.parametrize('name', ['euroc', 'tumvi', 'euroc_calibrated', 'tumvi_calibrated'])
 def test_shipped_files_store_filter_settings_chosen_on_training_recordings(name):
-    meta = read_model_file(name).meta
+    meta = read_model_file(name).meta.raw
     fusion = meta['fusion']
     assert fusion['chosen_on'].startswith(f'validation tails of {meta["train_sequences"][0]}')
     assert fusion['settings']['bias_estimation'] is False
@@ -69,7 +70,7 @@ def test_shipped_model_streams_the_whole_sample_exactly():
 
 @pytest.mark.parametrize('name', ['euroc', 'tumvi', 'euroc_calibrated', 'tumvi_calibrated'])
 def test_every_shipped_model_carries_its_cross_recording_report(name):
-    report = load_model(name).meta['crossval']
+    report = load_model(name).meta.raw['crossval']
     assert report['verdict'].startswith('the network ')
     assert set(report['mean']) == {'raw', 'calibrated', 'network'}
     assert len(report['recordings']) == (6 if name.startswith('euroc') else 3)
@@ -84,25 +85,25 @@ def test_every_shipped_model_carries_its_cross_recording_report(name):
 def test_shipped_euroc_is_the_ensemble_of_five_trainings():
     loaded = load_model('euroc')
     assert loaded.model.config.members == 5
-    assert sorted(m['seed'] for m in loaded.meta['members']) == [0, 1, 2, 3, 4]
+    assert sorted(m['seed'] for m in loaded.meta.raw['members']) == [0, 1, 2, 3, 4]
 
 
 def test_shipped_tumvi_is_the_ensemble_of_eleven_family_trainings_and_its_folds_verdict():
     loaded = load_model('tumvi')
     assert loaded.model.config.members == 11
-    assert sorted(m['seed'] for m in loaded.meta['members']) == list(range(11))
-    assert loaded.meta['train_config']['increments'] == [16, 32, 64, 128]
-    report = loaded.meta['crossval']  # the folds' ensembles of seeds, as what ships
+    assert sorted(m['seed'] for m in loaded.meta.raw['members']) == list(range(11))
+    assert loaded.meta.recipe('increments') == [16, 32, 64, 128]
+    report = loaded.meta.raw['crossval']  # the folds' ensembles of seeds, as what ships
     assert report['recipe'].endswith('train_tumvi_family.yaml')
     assert report['seeds'] == [0, 1, 2] and set(report['per_seed']) == {'0', '1', '2'}
 
 
 def test_shipped_broad_removes_the_turn_on_bias_alone_as_its_session_folds_say():
-    from denoise_imu_ros.data.rest_bias import settings_of
     broad, network = read_model_file('broad'), load_model('broad_network')
-    assert broad.meta['kind'] == 'rest bias' and broad.config.calibration_only
-    report = broad.meta['crossval']
-    assert report == network.meta['crossval'] == load_model('broad_calibrated').meta['crossval']
+    assert broad.meta.kind == 'rest bias' and broad.config.calibration_only
+    report = broad.meta.raw['crossval']
+    assert report == network.meta.raw['crossval'] == load_model(
+        'broad_calibrated').meta.raw['crossval']
     assert report['fold_kind'] == 'leave one power-on session out'
     assert len(report['folds']) == 2 and report['seeds'] == [0, 1, 2]
     assert set(report['mean']) == {'raw', 'rest bias', 'calibrated', 'network'}
@@ -110,12 +111,12 @@ def test_shipped_broad_removes_the_turn_on_bias_alone_as_its_session_folds_say()
     assert deployment_warning(read_model_file('broad_network')).endswith(
         'deploy no learnt correction, only the turn-on bias removed (rest_bias)')
     assert network.model.config.members == 3
-    assert sorted(m['seed'] for m in network.meta['members']) == [0, 1, 2]
+    assert sorted(m['seed'] for m in network.meta.raw['members']) == [0, 1, 2]
     # one estimator, its prior between the two sessions' turn-on biases (rad/s)
-    settings = settings_of(broad.meta)
-    assert settings == settings_of(network.meta)
+    settings = broad.meta.rest_bias
+    assert settings == network.meta.rest_bias
     for axis, (b, c) in enumerate(((3.6e-3, 8.6e-3), (2.1e-3, -3.3e-3), (-4.0e-3, -4.4e-3))):
         assert min(b, c) - 3e-4 < settings.prior_rad_s[axis] < max(b, c) + 3e-4
     for name in ('broad', 'broad_network', 'broad_calibrated'):  # imu/data's settings
-        assert read_model_file(name).meta['fusion']['chosen_on'].startswith(
+        assert read_model_file(name).meta.raw['fusion']['chosen_on'].startswith(
             'validation tails of 02_undisturbed_slow_rotation_B')

@@ -1,0 +1,294 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The model file's metadata as typed records, parsed and checked once when a file is read.
+
+A model file is user input: every entry a tool computes with is checked here, with one
+policy (a malformed entry is a :class:`~denoise_imu_ros.core.errors.ModelFileError` that
+names the file and the entry; an absent one is ``None`` or the documented default), so
+that no tool meets a string where it expects a rate. The stored JSON is kept whole in
+:attr:`ModelMeta.raw`: writing a file again copies it along, entries this version does
+not know included.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields
+import math
+from typing import Any
+
+from .errors import ModelFileError
+from .limits import MAX_RATE_HZ
+
+__all__ = ['Fusion', 'FusionSettings', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'parse_meta',
+           'REST_ONLY', 'RestBiasSettings', 'Validation', 'Verdict']
+
+REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
+MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
+DEPLOY_CHOICES = ('network', 'calibration', REST_ONLY, 'none')
+
+
+def number(v: Any) -> bool:
+    """Say whether ``v`` is a finite JSON number; a bool is not one."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _triple(v: Any, minimum: float = -math.inf) -> bool:
+    return isinstance(v, (list, tuple)) and len(v) == 3 and all(
+        number(x) and x >= minimum for x in v)
+
+
+@dataclass(frozen=True)
+class RestBiasSettings:
+    """
+    The stillness detector and the estimate's start, as VQF's parameters name them.
+
+    The time constants were chosen on BROAD's session-B trials (docs/method.md):
+    0.5 s of stillness and a 0.25 s low-pass start the estimate earlier than VQF's
+    defaults (1.5 s, 0.5 s), which lowered the open-loop error of the rest-bias gyro;
+    the gyro and accelerometer thresholds are VQF's. ``bias_clip_deg_s`` also bounds
+    what counts as still: a steady turn faster than it is never taken for a bias.
+    """
+
+    rest_min_s: float = 0.5               # stillness lasting this long is rest
+    filter_tau_s: float = 0.25            # low-pass of the rest detector and estimate
+    gyro_threshold_deg_s: float = 2.0     # gyro deviation from its low-pass
+    accel_threshold_m_s2: float = 0.5     # accelerometer deviation from its low-pass
+    bias_clip_deg_s: float = 2.0          # largest bias estimated; faster is motion
+    prior_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the estimate before rest
+    prior_sigma_rad_s: float = math.radians(0.5)  # its standard deviation (VQF's default)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the settings as the model file stores them (JSON types)."""
+        return dict(asdict(self), prior_rad_s=list(self.prior_rad_s))
+
+    @classmethod
+    def from_dict(cls, value: Any, where: str) -> RestBiasSettings:
+        """Read stored settings; anything malformed is a ModelFileError naming ``where``."""
+        names = {f.name for f in fields(cls)}
+        if not isinstance(value, dict) or not set(value) <= names:
+            raise ModelFileError(f'{where}: rest_bias {value!r} is not a mapping of '
+                                 f'{", ".join(sorted(names))}')
+        prior = value.get('prior_rad_s', [0.0] * 3)
+        scalars = [v for k, v in value.items() if k != 'prior_rad_s']
+        if not (_triple(prior) and all(number(v) for v in scalars)):
+            raise ModelFileError(f'{where}: rest_bias {value!r} holds a value that is not a '
+                                 'finite number (prior_rad_s: three)')
+        settings = cls(**dict(value, prior_rad_s=tuple(float(v) for v in prior)))
+        if min(settings.rest_min_s, settings.filter_tau_s, settings.gyro_threshold_deg_s,
+               settings.accel_threshold_m_s2, settings.bias_clip_deg_s,
+               settings.prior_sigma_rad_s) <= 0:
+            raise ModelFileError(f'{where}: rest_bias {value!r}: its thresholds, time '
+                                 'constants and prior_sigma_rad_s must be positive')
+        return settings
+
+
+@dataclass(frozen=True)
+class FusionSettings:
+    """The filter's choices; defaults are VQF's own time constant, no bias removed or estimated."""
+
+    tau_acc_s: float = 3.0         # accelerometer time constant: longer trusts the gyro more
+    bias_estimation: bool = False  # VQF's rest and motion gyro-bias estimators
+    accel_bias_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)  # removed before the filter
+
+    def __post_init__(self) -> None:
+        """Refuse settings the filter cannot run with (model files are user input)."""
+        if not (number(self.tau_acc_s) and 0 < self.tau_acc_s < 1e6):
+            raise ValueError(f'tau_acc_s must be a positive number of seconds, '
+                             f'not {self.tau_acc_s!r}')
+        if not isinstance(self.bias_estimation, bool):
+            raise ValueError(f'bias_estimation must be true or false, not '
+                             f'{self.bias_estimation!r}')
+        bias = self.accel_bias_m_s2
+        if not (_triple(bias) and all(abs(b) <= MAX_ACCEL_BIAS_M_S2 for b in bias)):
+            raise ValueError(f'accel_bias_m_s2 must be three numbers within '
+                             f'±{MAX_ACCEL_BIAS_M_S2:g} m/s^2, not {bias!r}')
+        object.__setattr__(self, 'accel_bias_m_s2', tuple(float(b) for b in bias))
+
+    def as_dict(self) -> dict[str, Any]:
+        """Return the settings as stored in a model file."""
+        return dict(asdict(self), accel_bias_m_s2=list(self.accel_bias_m_s2))
+
+
+@dataclass(frozen=True)
+class Validation:
+    """Figures of the selected weights on the training recordings' validation tails."""
+
+    step: int | None = None
+    loss: float | None = None
+    aoe_mean_deg: float | None = None
+    gyro_residual_std: tuple[float, float, float] | None = None  # rad/s, per sample
+
+
+@dataclass(frozen=True)
+class Fusion:
+    """What ``tune-fusion`` stored: ``imu/data``'s filter, its error, every filter's settings."""
+
+    settings: FusionSettings | None = None                    # None: the filter's defaults
+    orientation_std_rad: tuple[float, float, float] | None = None  # the fused error, per axis
+    filters: dict[str, dict[str, Any]] = field(default_factory=dict)  # "<gyro> <filter>"
+
+    @property
+    def chosen(self) -> FusionSettings:
+        """Return the settings ``imu/data`` runs with: the stored ones, else the defaults."""
+        return self.settings or FusionSettings()
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The cross-recording report (``crossval --attach``): what to deploy and why."""
+
+    deploy: str | None              # one of DEPLOY_CHOICES; None in a report that chose none
+    verdict: str                    # its one sentence
+    mean_aoe_deg: dict[str, float]  # row ("raw", "calibrated", ...) -> mean AOE, unseen data
+    held_out: tuple[str, ...]       # every recording a fold held out
+    steps: int | None               # how long the folds trained
+    train_config: dict[str, Any]    # the folds' recipe
+    report: dict[str, Any]          # the whole report, as stored
+
+
+@dataclass(frozen=True)
+class ModelMeta:
+    """A model file's metadata: typed entries the tools use, and everything as stored."""
+
+    raw: dict[str, Any]
+    sample_rate_hz: float | None = None
+    dataset: str | None = None
+    kind: str | None = None                     # REST_ONLY, else the architecture says
+    train_sequences: tuple[str, ...] = ()
+    train_config: dict[str, Any] = field(default_factory=dict)  # the recipe, as trained
+    data: str | None = None                     # the folder it was trained from
+    validation: Validation = Validation()
+    fusion: Fusion = Fusion()
+    crossval: Verdict | None = None
+    rest_bias: RestBiasSettings | None = None   # None: the model is fed the raw gyro
+    code_version: str | None = None
+    members: int = 0                            # an ensemble's trainings; 0 for one
+
+    @property
+    def training_span(self) -> int | None:
+        """
+        How many samples of each training recording the network was fitted on, or None.
+
+        The recipe draws its windows from the first ``window + max_offset`` samples of
+        every training recording; what follows is its validation tail. None when the file
+        does not say, or when it drew windows from whole recordings (``whole_sequences``:
+        no sample of them is unseen).
+        """
+        cfg = self.train_config
+        if 'window' not in cfg or cfg.get('whole_sequences'):
+            return None
+        return int(cfg['window']) + int(cfg.get('max_offset', 0))
+
+    def recipe(self, key: str, default: Any = None) -> Any:
+        """Return one entry of the training recipe, ``default`` where it has none."""
+        return self.train_config.get(key, default)
+
+
+def _fail(where: str, key: str, value: Any, what: str) -> ModelFileError:
+    return ModelFileError(f'{where}: inconsistent model file ({key} {value!r} is not {what})')
+
+
+def _mapping(raw: dict[str, Any], key: str, where: str) -> dict[str, Any]:
+    value = raw.get(key)
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise _fail(where, key, value, 'a mapping')
+    return value
+
+
+def _optional(raw: dict[str, Any], key: str, where: str, kind: type | tuple[type, ...],
+              what: str) -> Any:
+    value = raw.get(key)
+    if value is not None and (not isinstance(value, kind) or isinstance(value, bool)):
+        raise _fail(where, key, value, what)
+    return value
+
+
+def _validation(raw: dict[str, Any], where: str) -> Validation:
+    value = _mapping(raw, 'validation', where)
+    std = value.get('gyro_residual_std')
+    if std is not None and not _triple(std, 0.0):
+        raise _fail(where, 'validation.gyro_residual_std', std, 'three non-negative numbers')
+    for key in ('step', 'loss', 'aoe_mean_deg'):
+        if value.get(key) is not None and not number(value[key]):
+            raise _fail(where, f'validation.{key}', value[key], 'a number')
+    return Validation(step=value.get('step'), loss=value.get('loss'),
+                      aoe_mean_deg=value.get('aoe_mean_deg'),
+                      gyro_residual_std=None if std is None else tuple(float(v) for v in std))
+
+
+def _fusion(raw: dict[str, Any], where: str) -> Fusion:
+    value = _mapping(raw, 'fusion', where)
+    settings = value.get('settings')
+    if settings is not None:
+        if not isinstance(settings, dict):
+            raise _fail(where, 'fusion.settings', settings, 'a mapping')
+        try:
+            settings = FusionSettings(**settings)
+        except (TypeError, ValueError) as err:
+            raise ModelFileError(f'{where}: inconsistent fusion settings ({err})') from err
+    std = value.get('orientation_std_rad')
+    if std is not None and not _triple(std, 0.0):
+        raise _fail(where, 'fusion.orientation_std_rad', std, 'three non-negative numbers')
+    filters = value.get('filters') or {}
+    if not (isinstance(filters, dict) and all(isinstance(v, dict) for v in filters.values())):
+        raise _fail(where, 'fusion.filters', filters, 'a mapping of filter settings')
+    return Fusion(settings, None if std is None else tuple(float(v) for v in std), filters)
+
+
+def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
+    report = raw.get('crossval')
+    if report is None:
+        return None
+    if not isinstance(report, dict):
+        raise _fail(where, 'crossval', report, 'a mapping')
+    deploy = report.get('deploy')
+    if deploy is not None and deploy not in DEPLOY_CHOICES:
+        raise _fail(where, 'crossval.deploy', deploy, f'one of {", ".join(DEPLOY_CHOICES)}')
+    mean = report.get('mean') or {}
+    if not isinstance(mean, dict):
+        raise _fail(where, 'crossval.mean', mean, 'a mapping of rows')
+    aoe = {row: float(v['aoe_deg']) for row, v in mean.items()
+           if isinstance(v, dict) and number(v.get('aoe_deg'))}
+    folds = report.get('folds') or []
+    if not (isinstance(folds, list) and all(isinstance(f, list) for f in folds)):
+        raise _fail(where, 'crossval.folds', folds, 'a list of recording lists')
+    steps = report.get('steps')
+    if steps is not None and not number(steps):
+        raise _fail(where, 'crossval.steps', steps, 'a number')
+    cfg = report.get('train_config') or {}
+    if not isinstance(cfg, dict):
+        raise _fail(where, 'crossval.train_config', cfg, 'a mapping')
+    return Verdict(deploy, str(report.get('verdict', '')), aoe,
+                   tuple(str(n) for fold in folds for n in fold), steps, cfg, report)
+
+
+def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
+    """Return the typed metadata of a model file's entries; ``where`` names it in errors."""
+    rate = raw.get('sample_rate_hz')
+    if rate is not None and not (number(rate) and 0 < rate <= MAX_RATE_HZ):
+        raise _fail(where, 'sample_rate_hz', rate, f'a rate from 0 to {MAX_RATE_HZ:g} Hz')
+    names = raw.get('train_sequences') or []
+    if not (isinstance(names, list) and all(isinstance(n, str) for n in names)):
+        raise _fail(where, 'train_sequences', names, 'a list of recording names')
+    kind = _optional(raw, 'kind', where, str, 'a model kind')
+    rest = raw.get('rest_bias')
+    members = raw.get('members') or []
+    if not isinstance(members, list):
+        raise _fail(where, 'members', members, 'a list')
+    return ModelMeta(
+        raw=raw,
+        sample_rate_hz=None if rate is None else float(rate),
+        dataset=_optional(raw, 'dataset', where, str, 'a dataset name'),
+        kind=kind,
+        train_sequences=tuple(names),
+        train_config=_mapping(raw, 'train_config', where),
+        data=_optional(_mapping(raw, 'run', where), 'data', where, str, 'a folder'),
+        validation=_validation(raw, where),
+        fusion=_fusion(raw, where),
+        crossval=_verdict(raw, where),
+        rest_bias=None if rest is None else RestBiasSettings.from_dict(rest, where),
+        code_version=_optional(raw, 'code_version', where, str, 'a version'),
+        members=len(members))

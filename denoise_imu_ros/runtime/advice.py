@@ -1,0 +1,40 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""What a model's own cross-recording verdict says against running it: the node's warning."""
+
+from __future__ import annotations
+
+from ..core.modelfile import ModelFile
+from ..core.schema import REST_ONLY
+
+__all__ = ['deployment_warning', 'model_kind']
+
+_ROWS = {'network': 'network', 'calibration': 'calibrated', REST_ONLY: 'rest bias',
+         'none': 'raw'}  # the report's row of each kind of model
+
+
+def model_kind(loaded: ModelFile) -> str:
+    """Return what the file corrects with: ``network``, ``calibration`` or ``rest bias``."""
+    if loaded.meta.kind == REST_ONLY:
+        return REST_ONLY
+    return 'calibration' if loaded.config.calibration_only else 'network'
+
+
+def deployment_warning(loaded: ModelFile) -> str | None:
+    """
+    Why this model should not be deployed, from its cross-recording validation, or None.
+
+    The stored report names what did best on unseen recordings (the network, the
+    calibration, the turn-on bias alone or no correction); a model of another kind still
+    runs (benchmarks and comparisons need it) but says so. None when it is the kind
+    recommended, or when the file has no report (``crossval --attach`` stores one).
+    """
+    verdict, kind = loaded.meta.crossval, model_kind(loaded)
+    if verdict is None or verdict.deploy is None or verdict.deploy == kind:
+        return None
+    figures = [verdict.mean_aoe_deg.get(_ROWS[k]) for k in (kind, verdict.deploy)]
+    label = {'none': 'no correction'}.get(verdict.deploy, verdict.deploy)
+    said = (f' ({kind} {figures[0]:.2f}° against {label} {figures[1]:.2f}° in mean AOE on '
+            'unseen recordings)' if None not in figures else '')
+    return (f'{loaded.path.name} is a {kind} model, but the cross-recording validation of '
+            f'its recipe says{said}: {verdict.verdict}')

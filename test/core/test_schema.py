@@ -1,0 +1,74 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""The model file's metadata: typed once on reading, every malformed entry refused in one line."""
+
+from denoise_imu_ros.core.errors import ModelFileError
+from denoise_imu_ros.core.modelfile import read_model_file, shipped_models
+from denoise_imu_ros.core.schema import (FusionSettings, parse_meta, RestBiasSettings,
+                                         Validation)
+import pytest
+
+
+def test_absent_entries_are_none_or_the_documented_defaults():
+    meta = parse_meta({}, 'm')
+    assert meta.sample_rate_hz is None and meta.rest_bias is None and meta.crossval is None
+    assert meta.validation == Validation() and meta.fusion.chosen == FusionSettings()
+    assert meta.train_sequences == () and meta.training_span is None
+    assert parse_meta({'train_config': {'window': 100, 'max_offset': 8}}, 'm').training_span \
+        == 108
+    assert parse_meta({'train_config': {'window': 100, 'whole_sequences': True}},
+                      'm').training_span is None
+
+
+def test_typed_entries_and_what_this_version_does_not_know_survive_a_copy():
+    stored = {'sample_rate_hz': 200, 'dataset': 'euroc', 'train_sequences': ['a', 'b'],
+              'rest_bias': RestBiasSettings(prior_rad_s=(0.001, 0.0, 0.0)).to_dict(),
+              'fusion': {'settings': FusionSettings(4.0, False, [0.1, -0.2, 0.05]).as_dict(),
+                         'orientation_std_rad': [0.01, 0.02, 0.03]},
+              'crossval': {'deploy': 'network', 'verdict': 'deploy the network',
+                           'mean': {'raw': {'aoe_deg': 9.0}, 'network': {'aoe_deg': 2.0}},
+                           'folds': [['a'], ['b']], 'steps': 10},
+              'a_future_entry': {'x': 1}}
+    meta = parse_meta(stored, 'm')
+    assert meta.sample_rate_hz == 200.0 and isinstance(meta.sample_rate_hz, float)
+    assert meta.rest_bias.prior_rad_s == (0.001, 0.0, 0.0)
+    assert meta.fusion.chosen.accel_bias_m_s2 == (0.1, -0.2, 0.05)
+    assert meta.fusion.orientation_std_rad == (0.01, 0.02, 0.03)
+    assert meta.crossval.mean_aoe_deg == {'raw': 9.0, 'network': 2.0}
+    assert meta.crossval.held_out == ('a', 'b') and meta.raw is stored
+
+
+@pytest.mark.parametrize('raw, message', [
+    ({'rest_bias': [1, 2]}, 'rest_bias'), ({'rest_bias': {'rest_min_s': 'long'}}, 'rest_bias'),
+    ({'rest_bias': {'prior_rad_s': [0.0, 0.0]}}, 'rest_bias'),
+    ({'rest_bias': {'threshold': 1.0}}, 'rest_bias'),
+    ({'rest_bias': {'prior_rad_s': [0.0, float('nan'), 0.0]}}, 'rest_bias'),
+    ({'rest_bias': {'rest_min_s': 0.0}}, 'rest_bias'),
+    ({'rest_bias': {'bias_clip_deg_s': True}}, 'rest_bias'),
+    ({'fusion': {'settings': {'tau_acc_s': -1.0}}}, 'inconsistent fusion settings'),
+    ({'fusion': {'settings': {'tau_acc_s': 'long'}}}, 'inconsistent fusion settings'),
+    ({'fusion': {'settings': {'bias_estimation': 'yes'}}}, 'inconsistent fusion settings'),
+    ({'fusion': {'settings': {'tau': 3.0}}}, 'inconsistent fusion settings'),
+    ({'fusion': {'settings': {'accel_bias_m_s2': [0.1, 0.2]}}}, 'inconsistent fusion'),
+    ({'fusion': {'settings': {'accel_bias_m_s2': [0.0, 9.81, 0.0]}}}, 'inconsistent fusion'),
+    ({'fusion': {'settings': {'accel_bias_m_s2': [float('nan'), 0, 0]}}}, 'inconsistent fusion'),
+    ({'fusion': {'orientation_std_rad': 'small'}}, 'fusion.orientation_std_rad'),
+    ({'fusion': {'orientation_std_rad': [0.01, -0.02, 0.03]}}, 'fusion.orientation_std_rad'),
+    ({'fusion': {'filters': {'raw vqf': 3}}}, 'fusion.filters'),
+    ({'fusion': 'tuned'}, "fusion 'tuned' is not a mapping"),
+    ({'crossval': {'deploy': 'everything'}}, 'crossval.deploy'),
+    ({'crossval': {'folds': 'a'}}, 'crossval.folds'),
+    ({'train_sequences': 'MH_01'}, 'train_sequences'),
+    ({'kind': 3}, 'kind 3 is not a model kind'),
+    ({'validation': {'step': 'last'}}, 'validation.step'),
+])
+def test_malformed_entries_are_refused_in_one_line_naming_the_file(raw, message):
+    with pytest.raises(ModelFileError, match=message) as err:
+        parse_meta(raw, 'm.safetensors')
+    assert str(err.value).startswith('m.safetensors: ') and '\n' not in str(err.value)
+
+
+@pytest.mark.parametrize('name', shipped_models())
+def test_every_shipped_model_parses(name):
+    meta = read_model_file(name).meta
+    assert meta.sample_rate_hz is not None and meta.train_sequences
