@@ -14,10 +14,14 @@ def test_live_demo_runs_node_player_and_monitor(tmp_path, monkeypatch, capsys):
     assert '3000/3000 samples corrected live over DDS' in out
     rms = {line.split(':')[0].strip(): float(line.split(':')[1].split('/')[0])
            for line in out.splitlines() if ' / ' in line and line.startswith('  ')}
-    assert set(rms) == {'raw gyro', 'calibrated IMU', 'gyro_denoiser imu/attitude'}
+    assert set(rms) == {'raw gyro', 'calibrated IMU', 'gyro_denoiser imu/attitude',
+                        'calibrated IMU + VQF', 'gyro_denoiser imu/data'}
     assert rms['gyro_denoiser imu/attitude'] < rms['raw gyro'] / 10
     assert rms['calibrated IMU'] < rms['raw gyro'] / 10  # the baseline a user would use
-    assert (tmp_path / 'live_attitude_error.png').read_bytes()[:4] == b'\x89PNG'
+    # the orientation a robot should use, beside the standard filter it would otherwise run
+    assert rms['gyro_denoiser imu/data'] < 3.0 and rms['calibrated IMU + VQF'] < 3.0
+    for png in ('live_attitude_error.png', 'live_fused_error.png'):
+        assert (tmp_path / png).read_bytes()[:4] == b'\x89PNG'
 
 
 def test_a_bad_rate_is_one_line_and_starts_no_node(tmp_path, monkeypatch, capsys):
