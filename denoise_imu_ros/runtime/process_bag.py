@@ -15,7 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 import re
 import tempfile
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 from rosbags.convert import convert, ConverterError
@@ -28,7 +28,7 @@ from .outputs import Outputs
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
 from ..core.limits import check_rate
-from ..core.modelfile import gyro_covariance, read_model_file
+from ..core.modelfile import gyro_covariance, ModelFile, read_model_file
 from ..core.msgs import stamp_ns
 from ..data.bags import (BAG_TYPES, CORRUPT, IMU_TYPE, is_compressed, open_bag,
                          pick_connections, TYPESTORE)
@@ -101,6 +101,77 @@ def check_one_clock(stamps: np.ndarray, turn: np.ndarray, src: object) -> None:
                            'topic? Re-stamp the IMU on one clock, or keep one publisher')
 
 
+def _check_free(rd: Any, names: tuple[str, ...], src: Path) -> None:
+    """Refuse a bag that has an output topic already: the two would mix on one topic."""
+    taken = sorted({c.topic for c in rd.connections} & set(names))
+    if taken:
+        raise DatasetError(f'{src}: it has {", ".join(taken)} already, which the output would '
+                           'mix with the new one: write the outputs in another namespace, '
+                           'e.g. --namespace /denoised (/denoised/imu/corrected, ...)')
+
+
+def _writer(path: Path, rd: Any, plugin: StoragePlugin, compress: bool | None) -> Writer:
+    """Return the output bag's writer; zstd where asked, else where the input has it."""
+    wr = Writer(path, version=9, storage_plugin=plugin)
+    if is_compressed(rd) if compress is None else compress:
+        wr.set_compression(CompressionMode.STORAGE if plugin == StoragePlugin.MCAP
+                           else CompressionMode.MESSAGE, CompressionFormat.ZSTD)
+    return wr
+
+
+class _BagOutputs:
+    """The node's outputs (:class:`Outputs`), written at their input's receive time."""
+
+    def __init__(self, wr: Writer, names: tuple[str, ...], loaded: ModelFile,
+                 fixed_frame: str, embed_attitude: bool) -> None:
+        self._wr, self._received = wr, 0
+        corrected, fused, attitude = (
+            (wr.add_connection(name, msgtype, typestore=TYPESTORE), msgtype)
+            for name, msgtype in zip(names, (IMU_TYPE, IMU_TYPE, ATTITUDE_TYPE)))
+        self.outputs = Outputs(BAG_TYPES, self._sender(*corrected), self._sender(*fused),
+                               self._sender(*attitude), fixed_frame,
+                               np.array(gyro_covariance(loaded)),
+                               np.array(orientation_covariance(loaded.meta)), embed_attitude)
+
+    def _sender(self, topic: Any, msgtype: str) -> Callable[[Any], None]:
+        return lambda m: self._wr.write(topic, self._received,
+                                        TYPESTORE.serialize_cdr(m, msgtype))
+
+    def send(self, msg: Any, out: Any, received: int) -> None:
+        """Write what the node publishes of one sample, at ``received`` (ns)."""
+        self._received = received
+        self.outputs.send(msg, out)
+
+
+def _in_stamp_order(rd: Any, wr: Writer, copy: dict[int, Any], imu_ids: set[int],
+                    stamps: np.ndarray, turn: np.ndarray, src: Path
+                    ) -> Iterator[tuple[Any, int]]:
+    """
+    Copy every message; yield the IMU ones in stamp order, each with its receive time.
+
+    ``stamps`` are the first pass's, ``turn`` their order (the i-th to go): a message is
+    held only until its turn comes.
+    """
+    waiting: dict[int, tuple[Any, int]] = {}  # received, its turn not come
+    k, done = -1, 0
+    for conn, stamp, raw in rd.messages():
+        wr.write(copy[conn.id], stamp, raw)
+        if conn.id not in imu_ids:
+            continue
+        k += 1
+        msg = rd.deserialize(raw, conn.msgtype)
+        if k >= len(stamps) or stamp_ns(msg.header) != stamps[k]:
+            raise DatasetError(f'{src}: its IMU messages came back in another order the '
+                               'second time they were read')
+        waiting[k] = msg, stamp
+        while done < len(turn) and turn[done] in waiting:
+            yield waiting.pop(turn[done])
+            done += 1
+    if done != len(stamps):
+        raise DatasetError(f'{src}: {len(stamps) - done} IMU messages read the first time '
+                           'were not there the second')
+
+
 def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
                 fixed_frame: str = 'odom', compress: bool | None = None,
@@ -127,20 +198,13 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     names = output_topics(namespace)
     loaded = read_model_file(model_spec)
     den = OnlineDenoiser.from_model_file(loaded, loaded.meta.fusion.chosen, rest)
-    cov = np.array(gyro_covariance(loaded))
-    fused_cov = np.array(orientation_covariance(loaded.meta))
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
         try:
             with open_bag(_ros2_source(src, Path(tmp))) as rd:
-                taken = sorted({c.topic for c in rd.connections} & set(names))
-                if taken:
-                    raise DatasetError(
-                        f'{src}: it has {", ".join(taken)} already, which the output would mix '
-                        'with the new one: write the outputs in another namespace, e.g. '
-                        '--namespace /denoised (/denoised/imu/corrected, ...)')
-                imu_conns = pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU', src)
-                imu_ids = {c.id for c in imu_conns}
+                _check_free(rd, names, src)
+                imu_ids = {c.id for c in pick_connections(rd, imu_topic, (IMU_TYPE,), 'IMU',
+                                                          src)}
                 # all topics, as the second pass reads them: the same order, ties included
                 stamps = np.array([stamp_ns(rd.deserialize(raw, c.msgtype).header)
                                    for c, _, raw in rd.messages() if c.id in imu_ids],
@@ -148,49 +212,18 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 turn = stamp_order(stamps, round(den.time_jump_s * 1e9))  # the i-th to go
                 check_one_clock(stamps, turn, src)
                 check_rate(stamps[turn], den.rate_hz, src)
-                wr = Writer(partial, version=9, storage_plugin=plugin)
-                if is_compressed(rd) if compress is None else compress:
-                    wr.set_compression(CompressionMode.STORAGE if plugin == StoragePlugin.MCAP
-                                       else CompressionMode.MESSAGE, CompressionFormat.ZSTD)
-                with wr:
-                    out = {c.id: wr.add_connection(
+                with _writer(partial, rd, plugin, compress) as wr:
+                    copy = {c.id: wr.add_connection(
                         c.topic, c.msgtype, typestore=rd.typestore,
                         offered_qos_profiles=getattr(c.ext, 'offered_qos_profiles', ()))
                         for c in rd.connections}
-                    topics = tuple(wr.add_connection(name, msgtype, typestore=TYPESTORE)
-                                   for name, msgtype in zip(names, (IMU_TYPE, IMU_TYPE,
-                                                                    ATTITUDE_TYPE)))
-                    received = [0]  # the receive time the outputs are written at
-
-                    def writer(topic: Any, msgtype: str) -> Callable[[Any], None]:
-                        return lambda m: wr.write(topic, received[0],
-                                                  TYPESTORE.serialize_cdr(m, msgtype))
-                    outputs = Outputs(BAG_TYPES, writer(topics[0], IMU_TYPE),
-                                      writer(topics[1], IMU_TYPE),
-                                      writer(topics[2], ATTITUDE_TYPE), fixed_frame, cov,
-                                      fused_cov, embed_attitude)
-                    waiting: dict[int, tuple[Any, int]] = {}  # received, its turn not come
-                    k, done = -1, 0
-                    for conn, stamp, raw in rd.messages():
-                        wr.write(out[conn.id], stamp, raw)
-                        if conn.id not in imu_ids:
-                            continue
-                        k += 1
-                        msg = rd.deserialize(raw, conn.msgtype)
-                        if k >= len(stamps) or stamp_ns(msg.header) != stamps[k]:
-                            raise DatasetError(f'{src}: its IMU messages came back in another '
-                                               'order the second time they were read')
-                        waiting[k] = msg, stamp
-                        while done < len(turn) and turn[done] in waiting:
-                            msg, received[0] = waiting.pop(turn[done])
-                            done += 1
-                            res = den.process_imu(msg)
-                            if not isinstance(res, Drop):
-                                outputs.send(msg, res)
-                    if done != len(stamps):
-                        raise DatasetError(f'{src}: {len(stamps) - done} IMU messages read '
-                                           'the first time were not there the second')
+                    outputs = _BagOutputs(wr, names, loaded, fixed_frame, embed_attitude)
+                    for msg, received in _in_stamp_order(rd, wr, copy, imu_ids, stamps, turn,
+                                                         src):
+                        res = den.process_imu(msg)
+                        if not isinstance(res, Drop):
+                            outputs.send(msg, res, received)
         except (*CORRUPT, WriterError, FileExistsError) as err:
             raise DatasetError(f'{src} -> {dst}: {err}') from err
     return {**{k: v for k, v in den.counts.items() if v or k in DROP_CAUSES},
-            **{k: v for k, v in outputs.counts.items() if v}}
+            **{k: v for k, v in outputs.outputs.counts.items() if v}}
