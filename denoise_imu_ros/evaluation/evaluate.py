@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .filters import eval_filters, run, score
+from .filters import eval_filters, Filter, run, score
 from .plots import plot_roe, plot_sequence
 from .reports import (crossval_table, eval_table, fitting_note, fused_table, growth_table,
                       scored_on_training_samples)
@@ -99,12 +99,8 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     poses found off them (the command line's default).
     """
     names = recording_names(sequences)
-    loaded = load_model(model_spec)
-    models = {'network': loaded}
-    baseline = default_baseline(loaded.meta, baseline)
-    if baseline is not None:
-        models = {'calibrated': load_model(baseline), 'network': loaded}
-        check_baseline(loaded, models['calibrated'])
+    models, baseline = _models(model_spec, baseline)
+    loaded = models['network']
     out_dir = Path(out)
     if start_sample < 0:
         raise OptionError(f'--start-sample {start_sample}: must be 0 or more')
@@ -117,10 +113,10 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     note = fitting_note(fitted_on, loaded.meta.training_span) if fitted_on else None
     if note:
         print(f'warning: {note}', file=sys.stderr)
-    results: dict[str, Any] = {}
-    fused: dict[str, Any] = {}
     rows = eval_filters(loaded.meta, models['calibrated'].meta if 'calibrated' in models
                         else None)
+    results: dict[str, Any] = {}
+    fused: dict[str, Any] = {}
     roe_all: dict[str, list[np.ndarray]] = {}
     for given, name in zip(sequences, names):
         seq = load_sequence(Path(data) / given, imu_topic, pose_topic,
@@ -129,32 +125,69 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         check_inputs(seq, loaded, name)
         if start_sample >= len(seq) - 1:
             raise OptionError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')
-        gyros = gyros_of(seq, models)
+        gyros = {m: g[start_sample:] for m, g in gyros_of(seq, models).items()}
         seq = seq.tail(start_sample)
-        gyros = {m: g[start_sample:] for m, g in gyros.items()}
-        estimates, results[name], fused[name] = {}, {}, {}
-        t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
-        for method, gyro in gyros.items():
-            estimates[method], err = sequence_errors(seq, gyro)
-            tilt = error_components(estimates[method], Rotation.from_quat(seq.gt_quat))[1]
-            results[name][method] = {
-                'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw,
-                'tilt_deg': float(np.sqrt(np.mean(tilt[seq.gt_valid] ** 2))),
-                'tilt_growth_deg_min': tilt_growth_deg_min(t, tilt, seq.gt_valid),
-                'roe_median_deg': {str(int(d)): v for d, v in err.roe_median().items()}}
-            roe_all.setdefault(method, []).append(err.roe)
-        for method, (source, flt) in rows.items():
-            quat = run(flt, gyros[source], seq.imu[:, 3:], seq.rate_hz, seq.stamp_ns)
-            err = score(seq, quat)
-            fused[name][method] = {
-                'filter': flt.label, 'aoe_deg': err.aoe, 'tilt_deg': err.tilt,
-                'aoe_yaw_deg': err.aoe_yaw, 'tilt_growth_deg_min': err.tilt_growth_deg_min}
-            estimates[method] = align_yaw(Rotation.from_quat(quat),
-                                          Rotation.from_quat(seq.gt_quat), err.start)
-        if seq.pose_alignment is not None:
-            results[name]['pose_alignment'] = seq.pose_alignment
+        results[name], fused[name], estimates, roe = _score(seq, gyros, rows)
+        for method, errors in roe.items():
+            roe_all.setdefault(method, []).append(errors)
         if plots:
             plot_sequence(out_dir / f'{name}.png', seq, estimates)
+    report = _report(models, baseline, data, start_sample, note, results, fused, rows)
+    _write(out_dir, report, loaded.meta.kind == REST_ONLY)
+    if plots:
+        plot_roe(out_dir / 'roe.png', roe_all)
+    return report
+
+
+def _models(model_spec: str, baseline: str | None
+            ) -> tuple[dict[str, LoadedModel], str | None]:
+    """Return the network and, where one is given or shipped, its calibration baseline."""
+    loaded = load_model(model_spec)
+    baseline = default_baseline(loaded.meta, baseline)
+    if baseline is None:
+        return {'network': loaded}, None
+    models = {'calibrated': load_model(baseline), 'network': loaded}
+    check_baseline(loaded, models['calibrated'])
+    return models, baseline
+
+
+def _score(seq: Sequence, gyros: dict[str, np.ndarray],
+           rows: dict[str, tuple[str, Filter]]) -> tuple[dict, dict, dict, dict]:
+    """
+    Score one recording: open-loop figures per gyro, fused figures per filter row.
+
+    Return them, every method's orientation estimate (for its plot) and the open-loop
+    relative errors (for the ROE plot).
+    """
+    results, fused, estimates, roe = {}, {}, {}, {}
+    t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
+    for method, gyro in gyros.items():
+        estimates[method], err = sequence_errors(seq, gyro)
+        tilt = error_components(estimates[method], Rotation.from_quat(seq.gt_quat))[1]
+        results[method] = {
+            'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw,
+            'tilt_deg': float(np.sqrt(np.mean(tilt[seq.gt_valid] ** 2))),
+            'tilt_growth_deg_min': tilt_growth_deg_min(t, tilt, seq.gt_valid),
+            'roe_median_deg': {str(int(d)): v for d, v in err.roe_median().items()}}
+        roe[method] = err.roe
+    for method, (source, flt) in rows.items():
+        quat = run(flt, gyros[source], seq.imu[:, 3:], seq.rate_hz, seq.stamp_ns)
+        err = score(seq, quat)
+        fused[method] = {
+            'filter': flt.label, 'aoe_deg': err.aoe, 'tilt_deg': err.tilt,
+            'aoe_yaw_deg': err.aoe_yaw, 'tilt_growth_deg_min': err.tilt_growth_deg_min}
+        estimates[method] = align_yaw(Rotation.from_quat(quat),
+                                      Rotation.from_quat(seq.gt_quat), err.start)
+    if seq.pose_alignment is not None:
+        results['pose_alignment'] = seq.pose_alignment
+    return results, fused, estimates, roe
+
+
+def _report(models: dict[str, LoadedModel], baseline: str | None, data: str,
+            start_sample: int, note: str | None, results: dict[str, Any],
+            fused: dict[str, Any], rows: dict[str, Any]) -> dict[str, Any]:
+    """Return ``eval``'s JSON report: every recording's figures and their means."""
+    loaded = models['network']
     methods = [m for m in next(iter(results.values())) if m != 'pose_alignment']
     average = {m: {k: float(np.mean([results[s][m][k] for s in results]))
                    for k in ('aoe_deg', 'aoe_yaw_deg', 'tilt_deg')} for m in methods}
@@ -177,19 +210,22 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
                              'its tilt never; scored from there on.'}
     if loaded.meta.crossval is not None and loaded.meta.crossval.verdict:
         report['crossval'] = loaded.meta.crossval.report
+    return report
+
+
+def _write(out_dir: Path, report: dict[str, Any], rest_only: bool) -> None:
+    """Write ``results.json`` and ``results.md``; print the tables."""
     write_text(out_dir / 'results.json', jsonio.dumps(report, indent=2))
-    table = (eval_table(results, average) + fused_table(fused, fused_average)
-             + growth_table(results, fused))
-    table += rest_note(report['rest_bias_input'], loaded.meta.kind == REST_ONLY)
-    if start_sample:
-        table += f'\nScored from sample {start_sample} on of every recording.\n'
-    if note:
-        table += f'\nNote: {note}\n'
+    results, fused = report['sequences'], report['fused']
+    table = (eval_table(results, report['average'])
+             + fused_table(fused, report['fused_average']) + growth_table(results, fused))
+    table += rest_note(report['rest_bias_input'], rest_only)
+    if report['start_sample']:
+        table += f'\nScored from sample {report["start_sample"]} on of every recording.\n'
+    if report['training_fit_note']:
+        table += f'\nNote: {report["training_fit_note"]}\n'
     if 'crossval' in report:
         table += '\nThe recipe on recordings it never saw (stored in the model file):\n\n'
         table += crossval_table(report['crossval'])
     write_text(out_dir / 'results.md', table)
-    if plots:
-        plot_roe(out_dir / 'roe.png', roe_all)
     sys.stdout.write(table)
-    return report
