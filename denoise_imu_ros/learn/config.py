@@ -15,7 +15,7 @@ import math
 import os
 from pathlib import Path
 import re
-from typing import Any
+from typing import Any, Callable
 
 import yaml
 
@@ -207,19 +207,7 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
     Unknown keys are errors (a typo must not train silently), and so are values of the
     wrong type (``steps: 3.7``, ``calibration_only: "no"``) or out of range.
     """
-    try:
-        raw = yaml.load(Path(path).read_text(encoding='utf-8'), Loader=_RecipeLoader)
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
-        raise TrainingError(f'{path}: cannot read training config '
-                            f'({" ".join(str(err).split())})') from err
-    raw = {} if raw is None else raw
-    if not isinstance(raw, dict):
-        raise TrainingError(f'{path}: a training config is a mapping of keys, '
-                            f'not {type(raw).__name__}')
-    types = {f.name: f.type for f in fields(TrainConfig)}
-    unknown = sorted(set(map(str, raw)) - set(types))
-    if unknown:
-        raise TrainingError(f'{path}: unknown keys {unknown}')
+    raw = _read(path)
     given = {k: v for k, v in overrides.items() if v is not None}
     raw.update(given)
     if AUTO in (raw.get('workers'), raw.get('threads')):
@@ -233,6 +221,43 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
     def source(key: str) -> str:
         """Where a value came from: the command line's option, or the file."""
         return f'--{key.replace("_", "-")}' if key in given and key in OPTIONS else str(path)
+    _check_values(raw, source)
+    if 'gyro_std_deg' in raw and (len(raw['gyro_std_deg']) != 3
+                                  or min(raw['gyro_std_deg']) <= 0):
+        raise TrainingError(f'{path}: gyro_std_deg must be three positive values (deg/s)')
+    cfg = TrainConfig(**raw)
+    _check_recipe(cfg, path, source)
+    cfg.workers = min(cfg.workers, len(cfg.sequences))  # each worker needs a sequence
+    if cfg.swa_start > cfg.steps and 'steps' in given and 'swa_start' not in given:
+        raise TrainingError(f"--steps {cfg.steps}: ends before the recipe's swa_start "
+                            f'{cfg.swa_start} (its weight average starts there): give more '
+                            'steps, or train a copy of the recipe with a lower swa_start')
+    if cfg.swa_start > cfg.steps:
+        raise TrainingError(f'{path}: swa_start {cfg.swa_start} is after the last step '
+                            f'{cfg.steps}')
+    return cfg
+
+
+def _read(path: str | Path) -> dict[str, Any]:
+    """Return a recipe file's mapping; unreadable YAML, a non-mapping, unknown keys refused."""
+    try:
+        raw = yaml.load(Path(path).read_text(encoding='utf-8'), Loader=_RecipeLoader)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+        raise TrainingError(f'{path}: cannot read training config '
+                            f'({" ".join(str(err).split())})') from err
+    raw = {} if raw is None else raw
+    if not isinstance(raw, dict):
+        raise TrainingError(f'{path}: a training config is a mapping of keys, '
+                            f'not {type(raw).__name__}')
+    unknown = sorted(set(map(str, raw)) - {f.name for f in fields(TrainConfig)})
+    if unknown:
+        raise TrainingError(f'{path}: unknown keys {unknown}')
+    return raw
+
+
+def _check_values(raw: dict[str, Any], source: Callable[[str], str]) -> None:
+    """Refuse a value of the wrong type or out of its range, naming where it came from."""
+    types = {f.name: f.type for f in fields(TrainConfig)}
     for key, value in raw.items():
         if not _is(value, types[key]):
             raise TrainingError(f'{source(key)}: {key} must be {types[key]}, not {value!r}')
@@ -243,10 +268,10 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
                 bound = ('at least' if closed else 'above') + f' {low}'
                 bound += f' and below {high}' if high is not None else ''
                 raise TrainingError(f'{source(key)}: {key} must be {bound}, not {value!r}')
-    if 'gyro_std_deg' in raw and (len(raw['gyro_std_deg']) != 3
-                                  or min(raw['gyro_std_deg']) <= 0):
-        raise TrainingError(f'{path}: gyro_std_deg must be three positive values (deg/s)')
-    cfg = TrainConfig(**raw)
+
+
+def _check_recipe(cfg: TrainConfig, path: str | Path, source: Callable[[str], str]) -> None:
+    """Refuse values that are each valid but do not go together (a recipe that cannot run)."""
     try:
         span = cfg.loss_config().span
     except ValueError as err:
@@ -270,18 +295,9 @@ def load_config(path: str | Path, **overrides: Any) -> TrainConfig:
         raise TrainingError(f'{path}: align must be none, auto or a mapping with '
                             'time_offset_s (seconds, at most 60 either way) and '
                             'imu_from_pose_rotation_xyzw (a unit quaternion)')
-    cfg.workers = min(cfg.workers, len(cfg.sequences))  # each worker needs a sequence
     if cfg.device is not None and not DEVICE.fullmatch(cfg.device):
         raise TrainingError(f'device {cfg.device!r}: not a torch device (use cpu or cuda)')
     if cfg.select not in ('best_validation', 'final', 'swa') or (
             cfg.select == 'swa' and cfg.swa_start <= 0):
         raise TrainingError(f'{path}: select must be best_validation, final or swa '
                             '(swa needs swa_start > 0)')
-    if cfg.swa_start > cfg.steps and 'steps' in given and 'swa_start' not in given:
-        raise TrainingError(f"--steps {cfg.steps}: ends before the recipe's swa_start "
-                            f'{cfg.swa_start} (its weight average starts there): give more '
-                            'steps, or train a copy of the recipe with a lower swa_start')
-    if cfg.swa_start > cfg.steps:
-        raise TrainingError(f'{path}: swa_start {cfg.swa_start} is after the last step '
-                            f'{cfg.steps}')
-    return cfg
