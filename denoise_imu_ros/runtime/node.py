@@ -44,7 +44,7 @@ from .rclpy_internals import (integer_given_for_double, RCLError, RCLInvalidROSA
                               take_waiting)
 from ..core import msgs
 from ..core.errors import DenoiseError
-from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE, stream_rate_hz
+from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import gyro_covariance, ModelFile, read_model_file
 
 
@@ -88,8 +88,9 @@ PARAMETERS = [
         's; a stamp this far behind the last one resets everything (bag loop); '
         'smaller backward steps are dropped as out of order.', floats=(0.0, 3600.0))),
     ('rate_tolerance', RATE_TOLERANCE, _param(
-        'Relative input-rate mismatch to the model rate that raises a warning and a '
-        'diagnostics error.', floats=(0.0, 1.0))),
+        "Relative input-rate mismatch to the model rate (the stream's median interval, or "
+        'a run of intervals) that withholds the outputs and is a diagnostics error.',
+        floats=(0.0, 1.0))),
     ('input_queue_depth', 200, _param(
         'Subscription depth (sensor-data reliability); bursts beyond it are lost.',
         read_only=True, ints=(10, 10000))),
@@ -168,8 +169,6 @@ class GyroDenoiser(Node):
         self.create_timer(1.0, self._publish_diagnostics, clock=steady)
         self._waiting_timer = self.create_timer(10.0, self._still_waiting, clock=steady)
 
-        self._stamps: deque[int] = deque(maxlen=int(2 * self._model_rate) + 1)
-        self._rate_error = False  # set by the diagnostics timer from the measured rate
         self._last_input: float | None = None  # time.monotonic() of the last message
         self._infer_s: deque[float] = deque(maxlen=1000)
         self._frame = ''  # the IMU's frame_id, from its last message
@@ -244,8 +243,7 @@ class GyroDenoiser(Node):
             self._loaded.meta, p('fused_orientation_stddev').value))
         self._denoiser.max_gap_factor = p('max_gap_factor').value
         self._denoiser.time_jump_s = p('time_jump_threshold').value
-        self._rate_tolerance = p('rate_tolerance').value
-        self._denoiser.rate_tolerance = self._rate_tolerance
+        self._denoiser.rate_tolerance = p('rate_tolerance').value
 
     def _on_parameters(self, _params: list) -> None:
         self._apply_parameters()
@@ -310,10 +308,9 @@ class GyroDenoiser(Node):
                 + (', attitude re-initialised' if out.event == Event.TIME_JUMP else
                    ', attitude held (not published for this sample)'),
                 throttle_duration_sec=5.0)
-        self._stamps.append(out.stamp_ns)
 
         self._frame = msg.header.frame_id
-        self._outputs.send(msg, out, self._rate_error)  # what it withholds: outputs.py
+        self._outputs.send(msg, out)  # what it withholds: outputs.py
         self._infer_s.append(time.perf_counter() - t0)
 
     @property
@@ -340,12 +337,8 @@ class GyroDenoiser(Node):
 
     # -- monitoring ---------------------------------------------------------------
     def input_rate_hz(self) -> float:
-        """
-        Input rate from the median stamp interval of the last ~2 s (0 if unknown).
-
-        The median, so that one gap (a 2 s dropout) does not read as a slow stream.
-        """
-        return stream_rate_hz(np.array(self._stamps)) if len(self._stamps) >= 3 else 0.0
+        """Return the input rate, the pipeline's: its recent median interval's (0 if unknown)."""
+        return self._denoiser.input_rate_hz
 
     def _imu_frame(self) -> str:
         """Return the IMU's frame_id, from its last message (diagnostics name the device)."""
@@ -360,16 +353,13 @@ class GyroDenoiser(Node):
         fill = min(self._denoiser.engine.samples, self._denoiser.engine.receptive_field)
         silent_s = None if self._last_input is None else time.monotonic() - self._last_input
         stalled = silent_s is not None and silent_s > STALL_S
-        if not stalled:  # a stalled input's last stamps say nothing of its rate now
-            self._rate_error = bool(rate) and (abs(rate / self._model_rate - 1.0)
-                                               > self._rate_tolerance)
-        if stalled:
+        if stalled:  # its last stamps say nothing of its rate now
             rate = 0.0
             status.level = DiagnosticStatus.ERROR
             status.message = (f'no input for {silent_s:.1f} s on '
                               f'{self.resolve_topic_name("imu/data_raw")}')
             self.get_logger().error(status.message, throttle_duration_sec=10.0)
-        elif self._rate_error:
+        elif self._denoiser.rate_suspect:
             status.level = DiagnosticStatus.ERROR
             status.message = (f'input rate {rate:.1f} Hz differs from the model rate '
                               f'{self._model_rate:.1f} Hz: corrections are not valid, '

@@ -24,11 +24,13 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
   upstream or in a subscription queue show there, not only as a lower rate; so is every
   period of the stream's own rate (``skipped_input_periods``, the median of its recent
   intervals), which counts losses of a stream faster than the model too;
-- RATE_RUN consecutive stamp intervals more than ``rate_tolerance`` off the model's
-  period (gaps included: a stream slower than the gap limit is all gaps) make
-  :attr:`rate_suspect` true until an interval is on time again: the node withholds its
-  corrections, attitudes and orientations from that sample on, without waiting for its
-  rate check (and process-bag does not write them).
+- the one rate verdict, :attr:`rate_suspect`: RATE_RUN consecutive stamp intervals more
+  than ``rate_tolerance`` off the model's period (gaps included: a stream slower than the
+  gap limit is all gaps), until an interval is on time again, or the stream's own rate
+  (:attr:`input_rate_hz`, the median of its last INPUT_WINDOW intervals) that far off the
+  model's, until a window is on rate again. The node withholds its corrections, attitudes
+  and orientations while it holds, and says so in ``/diagnostics``; process-bag does not
+  write them.
 
 With a :class:`~denoise_imu_ros.data.rest_bias.RestBias`, the gyro the model sees is the
 raw gyro less the turn-on bias estimated from stillness up to that sample (the model's
@@ -113,6 +115,7 @@ class OnlineDenoiser:
     _off_rate_run: int = 0
     _intervals: list[int] = field(default_factory=list)  # recent ones, ns
     _input_period_ns: float = 0.0  # their median, refreshed every INPUT_WINDOW samples
+    _window_off: bool = False      # that median's rate is off the model's
 
     @classmethod
     def from_model_file(cls, model: ModelFile, fusion: FusionSettings | None = None,
@@ -144,11 +147,17 @@ class OnlineDenoiser:
         if len(self._intervals) == INPUT_WINDOW:
             self._input_period_ns = float(np.median(self._intervals))
             self._intervals.clear()
+            self._window_off = abs(self.input_rate_hz / self.rate_hz - 1) > self.rate_tolerance
+
+    @property
+    def input_rate_hz(self) -> float:
+        """Return the stream's own rate: its recent median interval's (0 until known)."""
+        return 1e9 / self._input_period_ns if self._input_period_ns > 0 else 0.0
 
     @property
     def rate_suspect(self) -> bool:
-        """Whether the last RATE_RUN stamp intervals were all off the model's period."""
-        return self._off_rate_run >= RATE_RUN
+        """Whether the stream is off the model's rate: a run of intervals, or its median."""
+        return self._off_rate_run >= RATE_RUN or self._window_off
 
     def reset_attitude(self) -> None:
         """Re-initialise the attitude (and the orientation) from the next accelerometer."""
@@ -216,7 +225,7 @@ class OnlineDenoiser:
         if not np.isfinite(corrected).all():  # never published: dropped as if lost
             return self._drop(Drop.NON_FINITE_OUTPUT)
         if event in (Event.START, Event.TIME_JUMP):  # another stream: its rate is new too
-            self._off_rate_run, self._input_period_ns = 0, 0.0
+            self._off_rate_run, self._input_period_ns, self._window_off = 0, 0.0, False
             self._intervals.clear()
         if event in (Event.START, Event.TIME_JUMP) or self._pending_reset:
             bx, by, bz = self.accel_bias

@@ -6,9 +6,9 @@ What one accepted sample publishes, and what it withholds: one policy, one messa
 The node sends the messages to its publishers and ``process-bag`` writes them into a
 bag: both only transport what :class:`Outputs` builds, so they publish the same numbers
 by construction. The policy (:func:`withheld`):
-- at a rate the model was not made for (the transport's rate verdict, or a run of stamp
-  intervals off the model's period, ``Output.rate_suspect``) the corrections are not
-  valid: ``imu/corrected``, ``imu/data`` and ``imu/attitude`` are all withheld;
+- at a rate the model was not made for (the pipeline's one rate verdict,
+  ``Output.rate_suspect``) the corrections are not valid: ``imu/corrected``,
+  ``imu/data`` and ``imu/attitude`` are all withheld;
 - the sample after a gap has an attitude held across it, not integrated: ``imu/attitude``
   (and the attitude embedded in ``imu/corrected``) is withheld, the corrected rate and the
   gravity-aided orientation are not.
@@ -45,9 +45,9 @@ class Decision(NamedTuple):
     attitude: Withheld | None
 
 
-def withheld(out: Output, rate_error: bool = False) -> Decision:
-    """Return what to publish of ``out``; ``rate_error``: the transport's rate verdict."""
-    if rate_error or out.rate_suspect:
+def withheld(out: Output) -> Decision:
+    """Return what to publish of ``out``, given the pipeline's one rate verdict."""
+    if out.rate_suspect:
         return Decision(Withheld.OFF_RATE, Withheld.OFF_RATE, Withheld.OFF_RATE)
     return Decision(None, None, Withheld.GAP if out.event == Event.GAP else None)
 
@@ -76,9 +76,9 @@ class Outputs:
     _corrected: Any = None
     _attitude: Any = None
 
-    def send(self, raw: Any, out: Output, rate_error: bool = False) -> Decision:
+    def send(self, raw: Any, out: Output) -> Decision:
         """Send what the policy publishes of one sample (``raw``: its input message)."""
-        decision = withheld(out, rate_error)
+        decision = withheld(out)
         embed = out.attitude if self.embed_attitude and decision.attitude is None else None
         self._corrected = msgs.corrected_imu(
             self.types, raw, out.gyro, self.gyro_cov, embed, self.orientation_cov,

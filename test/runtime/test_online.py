@@ -221,6 +221,21 @@ def test_a_stream_slower_than_the_gap_limit_is_off_rate_too(seq, model):
     assert flags.index(True) == 10 and all(flags[10:])
 
 
+def test_a_stream_whose_median_rate_is_off_is_suspect_though_no_run_of_intervals_is(seq, model):
+    """Intervals of 1 and 2.5 periods in turn: each on-time one ends a run, the median not."""
+    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    t, flags = 10**9, []
+    for k in range(100):
+        t += 5_000_000 if k % 2 else 12_500_000
+        flags.append(den.process(t, seq.imu[k, :3], seq.imu[k, 3:]).rate_suspect)
+    assert den.input_rate_hz == pytest.approx(1e9 / 8_750_000)  # the median of 1 and 2.5
+    assert flags.index(True) == 32 and all(flags[32:])  # from the first full window
+    for k in range(100, 140):  # on rate again: clear at the next full window
+        t += 5_000_000
+        flags.append(den.process(t, seq.imu[k, :3], seq.imu[k, 3:]).rate_suspect)
+    assert not flags[-1] and den.input_rate_hz == pytest.approx(200.0)
+
+
 def test_losses_of_a_stream_faster_than_the_model_are_counted(seq, model):
     """1 kHz into the 200 Hz model, every fifth message lost."""
     den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
