@@ -99,9 +99,10 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     off = [n for n, r in reports.items() if r['usable'] == 'after alignment']
     recipe = {k: v for k, v in asdict(TrainConfig()).items() if k != 'device'}
     recipe.update(
-        dataset=Path(data).name, data=str(data), sequences=list(sequences),
+        # absolute: train, crossval and tune-fusion read them from any working directory
+        dataset=Path(data).name, data=str(Path(data).resolve()), sequences=list(sequences),
         imu_topic=imu_topic, pose_topic=pose_topic,
-        poses=None if poses is None else str(poses), increments=increments,
+        poses=None if poses is None else str(Path(poses).resolve()), increments=increments,
         increment_weights=[1.0, 0.5], window=window, gyro_std_deg=gyro_std,
         align='auto' if off else 'none', swa_start=1200, select='swa',
         rest_bias=False, workers='auto', threads='auto')

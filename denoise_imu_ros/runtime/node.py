@@ -187,11 +187,13 @@ class GyroDenoiser(Node):
             + ('bias not removed' if rest is None else
                'bias removed: estimated from stillness, until then '
                f'{[round(b, 5) for b in rest.settings.prior_rad_s]} rad/s')
-            + '; imu/data_raw -> imu/corrected'
+            + f'; {self._sub.topic_name} -> {self._pub_imu.topic_name}'
             + ('' if fusion is None else
-               f', imu/data (VQF: tau_acc {fusion.tau_acc_s:g} s, bias estimation '
-               f'{"on" if fusion.bias_estimation else "off"}, accelerometer bias removed '
-               f'{[round(b, 4) for b in fusion.accel_bias_m_s2]} m/s^2)'))
+               f', {self._pub_fused.topic_name} (VQF: tau_acc {fusion.tau_acc_s:g} s, bias '
+               f'estimation {"on" if fusion.bias_estimation else "off"}, accelerometer bias '
+               + ('removed: none stored' if not any(fusion.accel_bias_m_s2) else
+                  f'removed {[round(b, 4) for b in fusion.accel_bias_m_s2]} m/s^2') + ')')
+            + f', {self._pub_att.topic_name}')
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)
         if rest is None and loaded.meta.rest_bias is not None:

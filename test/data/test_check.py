@@ -202,7 +202,7 @@ def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
 
 
 def test_init_recipe_leaves_out_what_the_poses_cannot_supervise_and_says_so(
-        data_dir, tmp_path, capsys):
+        data_dir, tmp_path, capsys, monkeypatch):
     """BROAD: the fast trials under slow motion capture no longer refuse the whole set."""
     from denoise_imu_ros.learn.config import load_config
     broad = data_dir / 'broad'
@@ -211,9 +211,12 @@ def test_init_recipe_leaves_out_what_the_poses_cannot_supervise_and_says_so(
     trials = ['02_undisturbed_slow_rotation_B', '07_undisturbed_fast_rotation_B',
               '21_undisturbed_fast_combined']
     out = tmp_path / 'recipe.yaml'
-    assert main(['init-recipe', '--data', str(broad), '--sequences', *trials,
+    monkeypatch.chdir(broad.parent)  # a folder given relative to where the user stands
+    assert main(['init-recipe', '--data', 'broad', '--sequences', *trials,
                  '--out', str(out)]) == 0
+    monkeypatch.chdir(tmp_path)
     cfg = load_config(out)
+    assert cfg.data == str(broad.resolve())  # written absolute: it trains from anywhere
     # 07 at 250 deg/s: its poses' 4.7 ms clock offset made every increment "noise" until
     # the label noise was judged with the offset applied; from 128 samples it is clean
     assert cfg.sequences == trials[:2] and not cfg.rest_bias  # measured, not assumed

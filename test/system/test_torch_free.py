@@ -81,10 +81,10 @@ def test_the_node_starts_and_stops_without_torch(no_torch_env):
                             stderr=subprocess.STDOUT, text=True)
     try:
         line, deadline = '', time.monotonic() + 60
-        while 'imu/data_raw -> imu/corrected' not in line and time.monotonic() < deadline:
+        while '/imu/data_raw -> /imu/corrected' not in line and time.monotonic() < deadline:
             line = node.stdout.readline()
             assert line or node.poll() is None, 'the node exited early'
-        assert 'imu/data_raw -> imu/corrected' in line
+        assert '/imu/data_raw -> /imu/corrected' in line
         node.send_signal(signal.SIGINT)
         out, _ = node.communicate(timeout=30)
         assert node.returncode == 0, out
