@@ -94,6 +94,7 @@ def check_gaps(stamps_ns: np.ndarray, rate_hz: float | None, source: object) -> 
 GRAVITY_M_S2 = 9.80665
 ACCEL_NORM_RANGE = (3.0, 30.0)   # mean |accel| of any recording not in free fall, m/s^2
 GYRO_SCALE_LIMIT = 20.0         # gyro spread this many times the model's: not rad/s
+DEG_S_HINT = 'gyro in deg/s? (rad/s expected)'  # every unit check says it alike
 
 
 def accel_units(norm_m_s2: float) -> str | None:
@@ -125,7 +126,7 @@ def check_units(imu: np.ndarray, source: object, model_input_std: np.ndarray | N
         ratio = float(np.max(np.std(imu[:, :3], axis=0) / model_input_std[:3]))
         if ratio > GYRO_SCALE_LIMIT:
             raise DatasetError(f'{source}: the gyro varies {ratio:.0f} times as much as the '
-                               "model's training data: gyro in deg/s? (rad/s expected)")
+                               f"model's training data: {DEG_S_HINT}")
 
 
 def mounting(imu: np.ndarray, model_input_mean: np.ndarray) -> str | None:
@@ -169,7 +170,22 @@ def check_gyro_against_poses(gyro: np.ndarray, gt_quat: np.ndarray, gt_valid: np
     gyro_rms = float(np.sqrt(np.mean(np.sum(gyro[:-1][ok] ** 2, axis=1))))
     if pose_rms > 0 and gyro_rms / pose_rms > GYRO_SCALE_LIMIT:
         raise DatasetError(f'{source}: the gyro turns {gyro_rms / pose_rms:.0f} times as fast '
-                           'as the poses: gyro in deg/s? (rad/s expected)')
+                           f'as the poses: {DEG_S_HINT}')
+
+
+def check_stream(stamps_ns: np.ndarray, imu: np.ndarray, source: object,
+                 model_rate_hz: float | None = None, model_input_std: np.ndarray | None = None,
+                 model_input_mean: np.ndarray | None = None) -> None:
+    """
+    Run the checks every offline tool runs on a recording before computing with it.
+
+    Its rate against the model's (when there is a model), the units of its samples (and
+    against the model's training data), and its holes.
+    """
+    if model_rate_hz is not None:
+        check_rate(stamps_ns, model_rate_hz, source)
+    check_units(imu, source, model_input_std, model_input_mean)
+    check_gaps(stamps_ns, model_rate_hz, source)
 
 
 def check_rate(stamps_ns: np.ndarray, model_rate_hz: float, source: object) -> None:

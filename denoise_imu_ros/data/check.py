@@ -36,7 +36,7 @@ from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_align
 from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
-from ..core.limits import accel_units, imu_holes, MAX_GAP_FACTOR
+from ..core.limits import accel_units, DEG_S_HINT, imu_holes, MAX_GAP_FACTOR
 from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residuals, integrate,
                             integrate_from_trusted, sequence_errors)
 from ..core.records import Recording, Sequence
@@ -289,7 +289,7 @@ def _units(report: dict[str, Any]) -> list[str]:
     scale = [1 + v / 100 for v in report['gyro_scale_error_percent'] if v is not None]
     if scale and min(scale) > DEG_PER_RAD_LOW:
         reasons.append(f"the gyro reads {np.median(scale):.1f} times the poses' rate "
-                       '(57.3 for degrees): gyro in deg/s? (rad/s expected)')
+                       f'(57.3 for degrees): {DEG_S_HINT}')
     return reasons
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
-from ..core.limits import check_gaps, check_rate, check_units
+from ..core.limits import check_stream
 from ..core.modelfile import ModelFile, read_model_file, sample_rate
 from ..data import rest_bias
 from ..data.load import load_imu
@@ -53,9 +53,8 @@ def correct_to_csv(model_spec: str, source: str, output: str,
     if len(rec.imu) < field:
         raise DatasetError(f'{source}: {len(rec.imu)} IMU samples, shorter than the '
                            f'receptive field ({field})')
-    check_rate(rec.imu_stamp_ns, sample_rate(loaded), source)
-    check_units(rec.imu, source, loaded.arrays['input_std'], loaded.arrays.get('input_mean'))
-    check_gaps(rec.imu_stamp_ns, sample_rate(loaded), source)
+    check_stream(rec.imu_stamp_ns, rec.imu, source, sample_rate(loaded),
+                 loaded.arrays['input_std'], loaded.arrays['input_mean'])
     omega = corrected_gyro(loaded, rec.imu, engine, rest)
     with atomic_output(output, overwrite=True) as tmp, open(tmp, 'w') as f:
         f.write('timestamp_ns,wx,wy,wz\n')

@@ -23,7 +23,7 @@ from .reports import (crossval_table, eval_table, fitting_note, fused_table, gro
 from ..core import jsonio
 from ..core.atomic import write_text
 from ..core.errors import OptionError, OutputError
-from ..core.limits import check_gaps, check_rate, check_units
+from ..core.limits import check_stream
 from ..core.metrics import (align_yaw, error_components, sequence_errors,
                             tilt_growth_deg_min)
 from ..core.modelfile import sample_rate, shipped_models
@@ -78,9 +78,8 @@ def rest_note(rest_input: dict[str, bool], rest_only: bool) -> str:
 
 def check_inputs(seq: Sequence, loaded: LoadedModel, name: str) -> None:
     """Refuse a recording this model cannot score: another rate, unit, or IMU holes."""
-    check_rate(seq.stamp_ns, sample_rate(loaded), name)
-    check_units(seq.imu, name, loaded.model.input_std.numpy(), loaded.model.input_mean.numpy())
-    check_gaps(seq.stamp_ns, sample_rate(loaded), name)
+    check_stream(seq.stamp_ns, seq.imu, name, sample_rate(loaded),
+                 loaded.model.input_std.numpy(), loaded.model.input_mean.numpy())
 
 
 def evaluate(model_spec: str, data: str, sequences: list[str], out: str,

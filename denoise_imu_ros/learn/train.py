@@ -37,7 +37,7 @@ from .config import LossConfig, TrainConfig
 from .loss import increment_loss
 from .model import GyroNet
 from ..core.errors import DataWarning, TrainingError
-from ..core.limits import check_gaps, check_gyro_against_poses, check_units, common_rate
+from ..core.limits import check_gyro_against_poses, check_stream, common_rate
 from ..core.metrics import (increment_residuals, RESIDUAL_BLOCK, sequence_errors,
                             trusted_blocks)
 from ..core.modelfile import code_version
@@ -101,8 +101,7 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
                     f'{Path(cfg.data) / name}: no {cfg.increments[0]}-sample increment with '
                     f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
                     'IMU stamps have trusted ground truth): nothing to supervise the loss')
-        check_gaps(seq.stamp_ns, None, Path(cfg.data) / name)
-        check_units(seq.imu, Path(cfg.data) / name)
+        check_stream(seq.stamp_ns, seq.imu, Path(cfg.data) / name)
         check_gyro_against_poses(seq.imu[:, :3], seq.gt_quat, seq.gt_valid, seq.dt,
                                  Path(cfg.data) / name)
         seqs.append(seq)
