@@ -84,26 +84,7 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     rec = load_recording(path, imu_topic, pose_topic, poses)
     if rate_hz is not None:
         check_rate(rec.imu_stamp_ns, rate_hz, path)
-    used = None
-    if align_poses == 'check':
-        found = estimate_pose_alignment(rec)
-        if needs_alignment(found) and not not_following(found):
-            raise DatasetError(f'{path}: {describe(found)}: figures against them as they are '
-                               'would be wrong; give --align auto to move them first (or '
-                               '--align none to score them as they are)')
-    elif align_poses == 'auto':
-        found = estimate_pose_alignment(rec)
-        why = not_following(found)
-        if why:  # no estimate to apply: say so rather than shift the poses by it
-            raise DatasetError(f'{path}: align auto: {why}')
-        used = {k: found[k] for k in ('time_offset_s', 'time_offset_std_s',
-                                      'imu_from_pose_rotation_xyzw',
-                                      'imu_from_pose_rotation_std_deg')}
-    elif isinstance(align_poses, dict):
-        used = dict(align_poses)
-    elif align_poses != 'none':
-        raise DatasetError('align must be none, check, auto or a mapping, not '
-                           f'{align_poses!r}')
+    used = _alignment(rec, align_poses, path)
     if used is not None:
         rec = apply_pose_alignment(rec, used['time_offset_s'], used['imu_from_pose_rotation_xyzw'])
     seq = onto_imu_stamps(rec, max_gt_gap_s=max_gt_gap_s, min_samples=min_samples)
@@ -117,3 +98,28 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
                       'turned level for the gravity-aided filters; relative rotations, and so '
                       'training, are unchanged', DataWarning, stacklevel=2)
     return dataclasses.replace(seq, pose_alignment=used)
+
+
+def _alignment(rec: Recording, align_poses: str | dict, path: str | Path) -> dict | None:
+    """Return the clock offset and frame rotation to apply to the poses (None: none)."""
+    if align_poses == 'check':
+        found = estimate_pose_alignment(rec)
+        if needs_alignment(found) and not not_following(found):
+            raise DatasetError(f'{path}: {describe(found)}: figures against them as they are '
+                               'would be wrong; give --align auto to move them first (or '
+                               '--align none to score them as they are)')
+        return None
+    if align_poses == 'auto':
+        found = estimate_pose_alignment(rec)
+        why = not_following(found)
+        if why:  # no estimate to apply: say so rather than shift the poses by it
+            raise DatasetError(f'{path}: align auto: {why}')
+        return {k: found[k] for k in ('time_offset_s', 'time_offset_std_s',
+                                      'imu_from_pose_rotation_xyzw',
+                                      'imu_from_pose_rotation_std_deg')}
+    if isinstance(align_poses, dict):
+        return dict(align_poses)
+    if align_poses != 'none':
+        raise DatasetError('align must be none, check, auto or a mapping, not '
+                           f'{align_poses!r}')
+    return None
