@@ -198,6 +198,11 @@ def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_p
     assert main(args) == 1 and 'exists already (pass --overwrite' in _error(capsys)
     assert out.read_text() == 'mine\n'
     assert main(args + ['--overwrite']) == 0 and out.read_text().startswith('timestamp_ns')
+    folder = tmp_path / 'a_folder'
+    folder.mkdir()
+    assert main(args[:-1] + [str(folder), '--overwrite']) == 1  # never a folder's content
+    assert 'a folder exists there; --overwrite replaces a file, not a folder' in _error(capsys)
+    assert folder.is_dir()
     # process-bag twice to one output: the second is refused before it reads anything
     assert main(['process-bag', str(bag), str(tmp_path / 'pb'), '--model', str(model_file)]) == 0
     assert main(['process-bag', str(bag), str(tmp_path / 'pb'), '--model', str(model_file)]) == 1

@@ -30,7 +30,10 @@ def atomic_output(path: str | Path, overwrite: bool = False) -> Iterator[Path]:
     named as they would be. On any failure nothing is left behind.
     """
     path = Path(path)
-    if path.exists() and not (overwrite and path.is_file()):
+    if path.exists() and overwrite and not path.is_file():  # never a folder's content
+        raise OutputError(f'{path}: a folder exists there; --overwrite replaces a file, not '
+                          'a folder: give another name, or remove it first')
+    if path.exists() and not overwrite:
         raise OutputError(f'{path}: exists already')
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

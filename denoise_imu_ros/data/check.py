@@ -181,11 +181,14 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     report['usable'], report['reasons'] = ('no', units) if units else _usable(report,
                                                                               max_offset_s)
     quarters = report['time_offset_quarters_s']
-    if not units and max(quarters) - min(quarters) > OFFSET_SPREAD_S:
+    spread_limit = max(OFFSET_SPREAD_S, 0.1 / report['pose_rate_hz'])  # 10 Hz poses: 10 ms
+    if not units and max(quarters) - min(quarters) > spread_limit:
         report['reasons'].append(
             'the clock offset is not constant: '
             f'{", ".join(f"{1e3 * q:+.1f}" for q in quarters)} ms on the four quarters of the '
-            'recording (pose latency varies, or a clock drifts); one offset cannot fix that')
+            'recording (pose latency varies, or a clock drifts): alignment applies one '
+            'offset, their mean, and increments not much longer than the spread are '
+            'blurred by it')
     if not units and not report['supervision']['helps']:
         report['reasons'].append(report['supervision']['summary'])
     report['verdict'] = {'yes': 'usable for training', 'after alignment':

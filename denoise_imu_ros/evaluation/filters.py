@@ -245,9 +245,13 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
     if meta.recipe('whole_sequences'):
         raise DatasetError(f'{net.path}: trained on whole recordings (whole_sequences): it '
                            'has no validation tail to choose filter settings on')
-    if not names or folder is None or start is None:
+    if not names or start is None:
         raise DatasetError(f'{net.path}: the model file does not name its training '
-                           'recordings, their folder and its window (pass --data)')
+                           'recordings and its window: it has no validation tails to choose '
+                           'filter settings on')
+    if folder is None:
+        raise DatasetError(f'{net.path}: the model file does not name the folder of its '
+                           'training recordings: pass --data')
     tails, seqs, gyros = [], [], {source: [] for source in KINDS}
     for name in names:
         seq = load_sequence(f'{folder}/{name}', meta.recipe('imu_topic'),

@@ -80,7 +80,8 @@ PARAMETERS = [
         floats=(0.0, math.pi))),
     ('angular_velocity_stddev', -1.0, _param(
         'rad/s; < 0 uses the per-axis residual std the model measured on its '
-        'validation data.', floats=(-1.0, 10.0))),
+        'validation data (zeros, "unknown" to ROS, for a file without it); 0: zeros.',
+        floats=(-1.0, 10.0))),
     ('max_gap_factor', MAX_GAP_FACTOR, _param(
         'A stamp gap above this many nominal periods restarts the network history '
         '(warm-up) and holds the attitude across the gap.', floats=(1.5, 1000.0))),
@@ -99,7 +100,7 @@ PARAMETERS = [
         'the accelerometer.', read_only=True)),
     ('fusion_tau_acc', -1.0, _param(
         "s; the filter's accelerometer time constant (longer trusts the gyro more); < 0: "
-        'the value the model file stores, chosen on its training recordings.',
+        'the value the model file stores, chosen on its training recordings; 0 is refused.',
         read_only=True, floats=(-1.0, 1000.0))),
     ('fusion_bias_estimation', 'model', _param(
         "The filter's own gyro-bias estimation: 'model' (the model file's choice), on or "
@@ -116,7 +117,8 @@ PARAMETERS = [
         dynamic=True)),
     ('fused_orientation_stddev', -1.0, _param(
         'rad; imu/data orientation covariance diagonal; < 0: the fused errors the model '
-        'file stores (0.05 rad without them).', floats=(-1.0, math.pi))),
+        'file stores (0.05 rad without them); 0: zeros, which ROS reads as "unknown".',
+        floats=(-1.0, math.pi))),
 ]
 
 
@@ -254,6 +256,9 @@ class GyroDenoiser(Node):
         """Return the model file's filter settings with the node's overrides applied."""
         p = self.get_parameter
         settings = loaded.meta.fusion.chosen
+        if p('fusion_tau_acc').value == 0:
+            raise DenoiseError('bad parameter: fusion_tau_acc must be a time constant above 0 s, '
+                               "or below 0 for the model file's")
         bias = self._model_or_switch('fusion_bias_estimation', (True, False))
         accel = self._model_or_switch('fusion_accel_bias', (False,))
         return FusionSettings(

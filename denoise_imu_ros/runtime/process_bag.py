@@ -103,11 +103,16 @@ def check_one_clock(stamps: np.ndarray, turn: np.ndarray, src: object) -> None:
 
 def _check_free(rd: Any, names: tuple[str, ...], src: Path) -> None:
     """Refuse a bag that has an output topic already: the two would mix on one topic."""
-    taken = sorted({c.topic for c in rd.connections} & set(names))
+    topics = {c.topic for c in rd.connections}
+    taken = sorted(topics & set(names))
     if taken:
+        k = 1
+        while topics & set(output_topics(f'/denoised{k if k > 1 else ""}')):
+            k += 1  # a namespace this bag has none of the outputs in
+        free = f'/denoised{k if k > 1 else ""}'
         raise DatasetError(f'{src}: it has {", ".join(taken)} already, which the output would '
                            'mix with the new one: write the outputs in another namespace, '
-                           'e.g. --namespace /denoised (/denoised/imu/corrected, ...)')
+                           f'e.g. --namespace {free} ({free}/imu/corrected, ...)')
 
 
 def _writer(path: Path, rd: Any, plugin: StoragePlugin, compress: bool | None) -> Writer:

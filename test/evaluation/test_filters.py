@@ -135,3 +135,24 @@ def test_stored_filter_settings_out_of_range_are_one_line(stored, message):
     from denoise_imu_ros.evaluation.filters import Filter
     with pytest.raises(ModelFileError, match=f'^fusion.filters.x: inconsistent .*{message}'):
         Filter.from_dict(stored, 'fusion.filters.x')
+
+
+def test_tune_fusion_says_what_the_model_file_lacks_and_asks_for_data_only_when_missing(
+        tmp_path, capsys):
+    from denoise_imu_ros.cli import main
+    from denoise_imu_ros.learn.checkpoint import save_model
+    from helpers import SAMPLE, untrained_model
+    calib = tmp_path / 'calib.safetensors'
+    save_model(calib, untrained_model(calibration_only=True), {'sample_rate_hz': 200.0})
+    bare, named = tmp_path / 'bare.safetensors', tmp_path / 'named.safetensors'
+    save_model(bare, untrained_model(), {'sample_rate_hz': 200.0})
+    save_model(named, untrained_model(), {'sample_rate_hz': 200.0,
+                                          'train_sequences': [SAMPLE.name],
+                                          'train_config': {'window': 1024}})
+    for model, data, said in ((bare, ['--data', str(SAMPLE.parent)], 'no validation tails'),
+                              (named, [], 'pass --data')):
+        assert main(['tune-fusion', '--model', str(model), '--baseline', str(calib),
+                     *data]) == 1
+        err = capsys.readouterr().err.strip()
+        assert said in err and len(err.splitlines()) == 1
+        assert 'pass --data' not in err or not data

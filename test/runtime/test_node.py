@@ -417,6 +417,7 @@ print('ok')
     (['-p', 'fusion_bias_estimation:=maybe'], "fusion_bias_estimation must be 'model', on"),
     (['-p', 'fusion_bias_estimation:=3'], "fusion_bias_estimation must be 'model', on"),
     (['-p', 'fusion_tau_acc:=-5.0'], 'fusion_tau_acc out of range'),
+    (['-p', 'fusion_tau_acc:=0.0'], 'fusion_tau_acc must be a time constant above 0 s'),
     (['-p', 'fusion_accel_bias:=on'], "fusion_accel_bias must be 'model' or off, not on"),
     (['-p', 'rest_bias:=sometimes'], "rest_bias must be 'model', on or off, not 'sometimes'"),
     (['-p', 'qos_overrides./imu/corrected.publisher.reliability:=sometimes'],

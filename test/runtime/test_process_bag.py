@@ -272,6 +272,10 @@ def test_a_bag_that_has_an_output_topic_already_is_refused_or_namespaced(
     assert topics == {'/imu/data': 1200, '/groundtruth/pose': 1200,
                       '/denoised/imu/corrected': 1200, '/denoised/imu/data': 1200,
                       '/denoised/imu/attitude': 1200}
+    assert main(['process-bag', str(tmp_path / 'out'), str(tmp_path / 'again'), '--model',
+                 str(model_file), '--namespace', '/denoised']) == 1  # its own outputs now
+    err = capsys.readouterr().err
+    assert 'it has /denoised/imu/attitude' in err and 'e.g. --namespace /denoised2 (' in err
     assert output_topics('robot/') == ('/robot/imu/corrected', '/robot/imu/data',
                                        '/robot/imu/attitude')
     assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'o2'), '--model',
