@@ -113,7 +113,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     if note:
         print(f'warning: {note}', file=sys.stderr)
     rows = eval_filters(loaded.meta, models['calibrated'].meta if 'calibrated' in models
-                        else None)
+                        else None, str(loaded.path))
     results: dict[str, Any] = {}
     fused: dict[str, Any] = {}
     roe_all: dict[str, list[np.ndarray]] = {}

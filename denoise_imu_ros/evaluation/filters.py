@@ -88,8 +88,7 @@ class Filter:
                 raise ValueError(f'gain {gain!r}')
             bias = FusionSettings(accel_bias_m_s2=stored.get('accel_bias_m_s2', NO_BIAS))
         except (AttributeError, KeyError, TypeError, ValueError) as err:
-            raise ModelFileError(f'{where}: inconsistent filter settings {stored!r} '
-                                 f'({err})') from err
+            raise ModelFileError(f'{where}: inconsistent filter settings ({err})') from err
         return cls(kind, gain=gain, accel_bias_m_s2=bias.accel_bias_m_s2)
 
 
@@ -317,7 +316,7 @@ DEFAULTS = {'imufusion': Filter('imufusion', gain=0.5), 'madgwick': Filter('madg
 LABELS = {'vqf': 'VQF', 'imufusion': 'imufusion', 'madgwick': 'Madgwick'}
 
 
-def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None
+def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None, where: str = 'model file'
                  ) -> dict[str, tuple[str, Filter]]:
     """
     Return the fused rows of ``eval``: name -> (gyro source, filter with its settings).
@@ -329,7 +328,8 @@ def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None
 
     def chosen(source: str, kind: str) -> Filter:
         if f'{source} {kind}' in stored:
-            return Filter.from_dict(stored[f'{source} {kind}'], f'fusion.filters.{source} {kind}')
+            return Filter.from_dict(stored[f'{source} {kind}'],
+                                    f'{where}: fusion.filters.{source} {kind}')
         return DEFAULTS.get(kind, Filter('vqf'))
 
     def own(meta: ModelMeta) -> Filter:  # a model file's settings for its own gyro

@@ -127,12 +127,14 @@ def merge(members: list[GyroNet]) -> GyroNet:
     """
     first = members[0]
     base = dataclasses.replace(first.config, members=1)
-    for other in members:
-        alike = dataclasses.replace(other.config, members=1, gyro_std=base.gyro_std)
-        if alike != base or other.config.members != 1:
-            raise ValueError('ensemble members differ in architecture')
-    if base.calibration_only:
-        raise ValueError('ensemble members must be networks, not calibration baselines')
+    for k, other in enumerate(members):
+        if other.config.calibration_only:
+            raise ValueError(f'member {k + 1} is a calibration: an ensemble averages networks')
+        if other.config.members != 1:
+            raise ValueError(f'member {k + 1} is an ensemble of {other.config.members} already: '
+                             'give its trainings instead')
+        if dataclasses.replace(other.config, gyro_std=base.gyro_std) != base:
+            raise ValueError(f'member {k + 1} differs in architecture from member 1')
     merged = GyroNet(dataclasses.replace(base, members=len(members)))
     last = f'net.{len(base.channels) * BLOCK}.'
     states = []

@@ -156,3 +156,15 @@ def test_tune_fusion_says_what_the_model_file_lacks_and_asks_for_data_only_when_
         err = capsys.readouterr().err.strip()
         assert said in err and len(err.splitlines()) == 1
         assert 'pass --data' not in err or not data
+
+
+def test_a_bad_stored_filter_is_one_short_line_naming_the_file():
+    from denoise_imu_ros.core.errors import ModelFileError
+    bad = {'filter': 'vqf', 'settings': {'tau_acc_s': 'long'},
+           'candidates': {f'vqf tau_acc {k} s': 1.0 for k in range(100)}}
+    meta = parse_meta({'fusion': {'filters': {'raw vqf': bad}}}, 'm')
+    with pytest.raises(ModelFileError) as err:
+        eval_filters(meta, None, 'my.safetensors')
+    said = str(err.value)
+    assert said.startswith('my.safetensors: fusion.filters.raw vqf: inconsistent filter')
+    assert len(said) < 200 and '\n' not in said

@@ -125,6 +125,13 @@ def test_ensemble_command_writes_one_file_averaging_its_members(model_file, tmp_
     assert main(['ensemble', str(model_file), str(tmp_path / 'd.safetensors'),
                  '--out', str(tmp_path / 'y.safetensors')]) == 1
     assert not (tmp_path / 'y.safetensors').exists()
+    # a calibration or an ensemble as a member: said as such, not as "another architecture"
+    save_model(tmp_path / 'cal.safetensors', untrained_model(calibration_only=True),
+               {'sample_rate_hz': 200.0})
+    for member, said in (('cal.safetensors', 'member 2 is a calibration'),
+                         ('ens.safetensors', 'member 2 is an ensemble of 2 already')):
+        with pytest.raises(ModelFileError, match=said):
+            save_ensemble(tmp_path / 'y.safetensors', [model_file, tmp_path / member])
     # nor a model of another rate (a NaN rate is refused on reading already)
     save_model(tmp_path / 'e.safetensors', untrained_model(), {'sample_rate_hz': 100.0})
     with pytest.raises(ModelFileError, match='trained at different rates: 200.00 Hz, 100.00 Hz$'):
