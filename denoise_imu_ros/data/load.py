@@ -20,7 +20,7 @@ from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
 from .timebase import onto_imu_stamps
 from .trajectory import read_tum, trajectory_file, with_trajectory
 from ..core.errors import DatasetError, DataWarning
-from ..core.limits import check_rate
+from ..core.limits import check_gyro_against_poses, check_rate
 from ..core.records import check_recording, Recording, Sequence
 
 
@@ -104,7 +104,14 @@ def _alignment(rec: Recording, align_poses: str | dict, path: str | Path) -> dic
     """Return the clock offset and frame rotation to apply to the poses (None: none)."""
     if align_poses == 'check':
         found = estimate_pose_alignment(rec)
-        if needs_alignment(found) and not not_following(found):
+        why = not_following(found)
+        if why:
+            seq = onto_imu_stamps(rec)  # a gyro in deg/s follows no poses: say that first
+            check_gyro_against_poses(seq.imu[:, :3], seq.gt_quat, seq.gt_valid, seq.dt, path)
+            raise DatasetError(f'{path}: {why} (a quaternion order other than its format '
+                               "says? another recording's poses?): figures against them would "
+                               'be wrong; --align none scores them as they are')
+        if needs_alignment(found):
             raise DatasetError(f'{path}: {describe(found)}: figures against them as they are '
                                'would be wrong; give --align auto to move them first (or '
                                '--align none to score them as they are)')

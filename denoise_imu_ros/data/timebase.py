@@ -22,6 +22,7 @@ from ..core.records import Recording, Sequence
 # TUM-VI's 120 Hz mocap (holes of up to 3 s), 125 ms for V1_01's corrected 20 Hz poses,
 # 250 ms for a 10 Hz VIO trajectory. Interpolating across a hole would invent ground truth.
 GT_GAP_FACTOR = 2.5
+MAX_POSE_PERIOD_S = 1.0  # sparser poses cannot score an attitude between them (two, 45 s apart)
 
 
 def _between(rec: Recording, t0: int, t1: int) -> Recording:
@@ -103,6 +104,11 @@ def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
     t_imu, t_gt = rec.imu_stamp_ns, rec.gt_stamp_ns
     if len(t_gt) < 2:
         raise DatasetError(f'{rec.source}: {len(t_gt)} ground-truth samples, need at least 2')
+    period = float(np.median(np.diff(t_gt))) * 1e-9
+    if period > MAX_POSE_PERIOD_S:
+        raise DatasetError(f'{rec.source}: its poses come every {period:.1f} s (median): too '
+                           f'sparse to take an attitude between them from (one a second at '
+                           'least)')
     start, end = max(t_imu[0], t_gt[0]), min(t_imu[-1], t_gt[-1])
     if start >= end:
         raise DatasetError(f'{rec.source}: IMU and ground truth do not overlap in time')

@@ -171,6 +171,16 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
                                   imu=late.imu[:8000]), tmp_path / 'late')
     with pytest.raises(DatasetError, match='late: align auto: the poses do not follow'):
         load_sequence(tmp_path / 'late', align_poses='auto')
+    with pytest.raises(DatasetError, match='late: the poses do not follow .* quaternion order'):
+        load_sequence(tmp_path / 'late', align_poses='check')  # eval's default: not scored
+    # ground truth written x, y, z, w and read as w, x, y, z (a fixed rotation of each pose
+    # on both sides): refused by eval's default, not scored as 17 deg
+    write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:8000],
+                                  imu=rec.imu[:8000], gt_quat=np.roll(rec.gt_quat, -1, axis=1)),
+              tmp_path / 'order')
+    with pytest.raises(DatasetError, match=r'order: poses .* in a frame 155\.\d\d deg from the '
+                                           "IMU's: figures against them as they are would be"):
+        load_sequence(tmp_path / 'order', align_poses='check')
     # no overlap at all
     away = write_asl(tmp_path / 'away', n_imu=2000, gt_offset_s=20.0)
     assert main(['check-data', str(away)]) == 1
