@@ -22,8 +22,9 @@ import math
 from typing import NamedTuple
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from ..core.metrics import increment_residuals, trusted_blocks
+from ..core.metrics import fit_constant_bias, increment_residuals, integrate, trusted_blocks
 from ..core.records import Sequence
 
 JUMP_WINDOW_S = 0.2
@@ -71,14 +72,41 @@ def find_jumps(seq: Sequence) -> list[Jump]:
 
 
 def mask_jumps(seq: Sequence, jumps: list[Jump]) -> Sequence:
-    """``seq`` with its poses untrusted over every jump's span."""
+    """
+    ``seq`` with its poses untrusted over every jump's span, and rejoined after it.
+
+    After a jump mid-run the poses are in another world (a VIO re-initialised): every pose
+    after the span is moved back into the world before it, bridged by the gyro less its
+    constant bias fitted on the poses (the span lasts a fraction of a second), so that an
+    attitude error from the first pose measures the gyro, not the jump. A jump at the
+    start (a placeholder pose) has no world before it: nothing is moved.
+    """
     if not jumps:
         return seq
     t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
     valid = seq.gt_valid.copy()
     for jump in jumps:
         valid[(t >= jump.start_s) & (t <= jump.end_s)] = False
-    return dataclasses.replace(seq, gt_valid=valid)
+    quat, pos = seq.gt_quat.copy(), seq.gt_pos.copy()
+    gyro = seq.imu[:, :3] - _bias(seq, valid)
+    for jump in jumps:
+        before = np.flatnonzero(valid & (t < jump.start_s))
+        after = np.flatnonzero(valid & (t > jump.end_s))
+        if not len(before) or not len(after):
+            continue
+        i, j = before[-1], after[0]
+        bridged = integrate(quat[i], gyro[i:j], seq.dt[i:j])[-1]
+        turn = bridged * Rotation.from_quat(quat[j]).inv()  # the world change at the jump
+        quat[j:] = (turn * Rotation.from_quat(quat[j:])).as_quat()
+        pos[j:] = turn.apply(pos[j:] - pos[j]) + pos[i]
+    return dataclasses.replace(seq, gt_valid=valid, gt_quat=quat, gt_pos=pos)
+
+
+def _bias(seq: Sequence, valid: np.ndarray) -> np.ndarray:
+    """Return the gyro's constant bias against the trusted poses (0 where none fits)."""
+    n = max(2, round(JUMP_WINDOW_S * seq.rate_hz))
+    bias = fit_constant_bias(seq.gt_quat, valid, seq.imu[:, :3], seq.dt, n)
+    return np.zeros(3) if bias is None else bias
 
 
 def describe(jumps: list[Jump], most: int = 3) -> str:
