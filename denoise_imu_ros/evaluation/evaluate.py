@@ -30,7 +30,9 @@ from ..core.modelfile import sample_rate, shipped_models
 from ..core.records import Sequence
 from ..core.schema import ModelMeta, REST_ONLY
 from ..data import rest_bias
+from ..data.check import label_noise
 from ..data.load import load_sequence
+from ..data.pose_jumps import JUMP_WINDOW_S
 from ..learn.checkpoint import check_baseline, load_model, LoadedModel
 
 
@@ -76,6 +78,36 @@ def rest_note(rest_input: dict[str, bool], rest_only: bool) -> str:
                if rest_only else '') + '\n')
 
 
+def reference_noise_deg(seq: Sequence) -> float:
+    """
+    Return the poses' own rotation noise (deg, 3-D, per pose), as the gyro sees it.
+
+    From the label-noise profile (:func:`~denoise_imu_ros.data.check.label_noise`): the
+    residual of increments over about JUMP_WINDOW_S (two poses of a 10 Hz trajectory
+    apart at least: shorter ones are interpolated, smooth whatever the poses' noise)
+    against the gyro less its fitted bias holds the noise of their two poses and the
+    gyro's own error over that span (small beside a VIO's); over sqrt 2 it is one pose's.
+    On EuRoC's VIO and SLAM trajectories it is within 0.05 deg of the same figure taken
+    against the motion capture (docs/results.md). Not the poses' drift, which no gyro
+    can tell from its own.
+    """
+    profile = label_noise(seq)['increments']
+    length = min(profile, key=lambda j: abs(j / seq.rate_hz - JUMP_WINDOW_S))
+    return float(np.degrees(profile[length]['residual_mrad'] * 1e-3 * np.sqrt(3.0 / 2.0)))
+
+
+def estimate_note(noise_deg: dict[str, float]) -> str:
+    """Say what figures against a VIO's or SLAM's poses can and cannot say."""
+    each = ', '.join(f'{name} {v:.2f}' for name, v in noise_deg.items())
+    return ('\nReference: trajectory files (--poses), an estimate, not ground truth. Its own '
+            f'rotation noise per pose, about (against the gyro over {JUMP_WINDOW_S:g} s): '
+            f'{each} deg; differences between methods below that are not resolved. Its '
+            'drift over a recording is in '
+            'every figure above and is not measurable here: on EuRoC, ranking methods '
+            "against a VIO's or a SLAM's poses did not rank them as the motion capture did "
+            '(docs/results.md, "EuRoC without motion capture").\n')
+
+
 def check_inputs(seq: Sequence, loaded: LoadedModel, name: str) -> None:
     """Refuse a recording this model cannot score: another rate, unit, or IMU holes."""
     check_stream(seq.stamp_ns, seq.imu, name, sample_rate(loaded),
@@ -116,6 +148,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
                         else None, str(loaded.path))
     results: dict[str, Any] = {}
     fused: dict[str, Any] = {}
+    noise: dict[str, float] = {}  # the reference's own, where it is an estimate
     roe_all: dict[str, list[np.ndarray]] = {}
     for given, name in zip(sequences, names):
         seq = load_sequence(Path(data) / given, imu_topic, pose_topic,
@@ -124,6 +157,8 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         check_inputs(seq, loaded, name)
         if start_sample >= len(seq) - 1:
             raise OptionError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')
+        if poses is not None:
+            noise[name] = reference_noise_deg(seq)
         gyros = {m: g[start_sample:] for m, g in gyros_of(seq, models).items()}
         seq = seq.tail(start_sample)
         results[name], fused[name], estimates, roe = _score(seq, gyros, rows)
@@ -132,6 +167,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         if plots:
             plot_sequence(out_dir / f'{name}.png', seq, estimates)
     report = _report(models, baseline, data, start_sample, note, results, fused, rows)
+    report['reference_noise_deg'] = noise or None
     _write(out_dir, report, loaded.meta.kind == REST_ONLY)
     if plots:
         plot_roe(out_dir / 'roe.png', roe_all)
@@ -223,6 +259,8 @@ def _write(out_dir: Path, report: dict[str, Any], rest_only: bool) -> None:
         table += f'\nScored from sample {report["start_sample"]} on of every recording.\n'
     if report['training_fit_note']:
         table += f'\nNote: {report["training_fit_note"]}\n'
+    if report['reference_noise_deg']:
+        table += estimate_note(report['reference_noise_deg'])
     if 'crossval' in report:
         table += '\nThe recipe on recordings it never saw (stored in the model file):\n\n'
         table += crossval_table(report['crossval'])

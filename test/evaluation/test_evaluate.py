@@ -137,3 +137,30 @@ def test_a_baseline_that_is_a_network_or_of_another_rate_is_refused_by_every_com
             err = capsys.readouterr().err.strip()
             assert err.endswith(f'--baseline {baseline}: {why}'), err
             assert len(err.splitlines()) == 1
+
+
+def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_path, capsys):
+    """Motion capture written as a VIO writes it, once as it is, once 0.2 deg noisier."""
+    from denoise_imu_ros.data.asl import read_asl
+    from scipy.spatial.transform import Rotation
+    rec = read_asl(euroc / 'MH_01_easy')
+    keep = slice(None, None, 10)  # 20 Hz, a VIO's rate
+    rng = np.random.default_rng(0)
+    noisy = Rotation.from_rotvec(np.radians(rng.normal(0, 0.2, (len(rec.gt_quat[keep]), 3))))
+    for name, quat in (('clean', rec.gt_quat[keep]),
+                       ('noisy', (Rotation.from_quat(rec.gt_quat[keep]) * noisy).as_quat())):
+        (tmp_path / name).mkdir()
+        np.savetxt(tmp_path / name / 'MH_01_easy.txt', np.column_stack(
+            [rec.gt_stamp_ns[keep] * 1e-9, rec.gt_pos[keep], quat]), fmt='%.9f')
+        assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences',
+                     'MH_01_easy', '--poses', str(tmp_path / name), '--align', 'auto',
+                     '--out', str(tmp_path / f'e_{name}'), '--no-plots']) == 0
+    capsys.readouterr()
+    said = {name: json.loads((tmp_path / f'e_{name}' / 'results.json').read_text())[
+        'reference_noise_deg']['MH_01_easy'] for name in ('clean', 'noisy')}
+    assert said['clean'] < 0.1 and 0.25 < said['noisy'] < 0.5  # 0.2 deg per axis: 0.35
+    assert 'an estimate, not ground truth' in (tmp_path / 'e_noisy' / 'results.md').read_text()
+    assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences', 'MH_01_easy',
+                 '--out', str(tmp_path / 'e_mocap'), '--no-plots']) == 0  # its own poses
+    assert json.loads((tmp_path / 'e_mocap' / 'results.json').read_text())[
+        'reference_noise_deg'] is None
