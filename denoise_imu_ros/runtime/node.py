@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections import deque
 import math
+from pathlib import Path
 import re
 import sys
 import time
@@ -35,13 +36,14 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.utilities import remove_ros_args
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
+import yaml
 
 from .advice import deployment_warning
 from .fusion import FusionSettings, orientation_covariance
 from .online import Drop, DROP_CAUSES, Event, OnlineDenoiser
 from .outputs import Outputs
-from .rclpy_internals import (integer_given_for_double, RCLError, RCLInvalidROSArgsError,
-                              take_waiting)
+from .rclpy_internals import (given_parameters, integer_given_for_double, RCLError,
+                              RCLInvalidROSArgsError, take_waiting)
 from ..core import msgs
 from ..core.errors import DenoiseError
 from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE
@@ -63,6 +65,7 @@ def _param(description: str, read_only: bool = False, floats: tuple | None = Non
 # mirrors it.
 DRAIN_MAX = 50  # queued messages one callback takes after its own
 STALL_S = 2.0   # s without any input message after which diagnostics say the input stopped
+NAMESAKE_CHECK_S = 2.0  # s after start-up, discovery done, to look for a node of this name
 
 PARAMETERS = [
     ('model', 'euroc', _param(
@@ -170,6 +173,9 @@ class GyroDenoiser(Node):
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(1.0, self._publish_diagnostics, clock=steady)
         self._waiting_timer = self.create_timer(10.0, self._still_waiting, clock=steady)
+        self.namesakes = 0  # other nodes of this name, once discovery has seen them
+        self._namesake_timer = self.create_timer(NAMESAKE_CHECK_S, self._check_namesakes,
+                                                 clock=steady)
 
         self._last_input: float | None = None  # time.monotonic() of the last message
         self._infer_s: deque[float] = deque(maxlen=1000)
@@ -212,8 +218,8 @@ class GyroDenoiser(Node):
                 f'{", ".join(self.unknown_parameters)} (gyro_denoiser --help lists its own)')
 
     def _given_parameters(self) -> dict:
-        """Return the parameter values given at start-up (rclpy keeps them, privately)."""
-        return getattr(self, '_parameter_overrides', {})
+        """Return the parameter values given at start-up, declared or not."""
+        return given_parameters(self)
 
     def _create_topics(self, fused: bool) -> None:
         """Create the publishers and the subscription, with their QoS overrides."""
@@ -411,6 +417,18 @@ class GyroDenoiser(Node):
                 'rest_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
                 'rest_bias_sigma_rad_s': f'{sigma:.6f}'}
 
+    def _check_namesakes(self) -> None:
+        """Warn once when another node has this one's name: they share every topic."""
+        self._namesake_timer.cancel()
+        mine = (self.get_name(), self.get_namespace())
+        self.namesakes = sum(n == mine for n in self.get_node_names_and_namespaces()) - 1
+        if self.namesakes > 0:
+            self.get_logger().warning(
+                f'{self.namesakes} other node(s) named {self.get_fully_qualified_name()}: '
+                'they share its parameters, /diagnostics status, reset service and outputs '
+                '(imu/corrected, ...); give each its own name and namespace '
+                '(-r __node:=NAME -r __ns:=/NS)')
+
     def _still_waiting(self) -> None:
         sub = self.resolve_topic_name('imu/data_raw')
         self.get_logger().warning(f'still waiting for data on {sub}')
@@ -424,6 +442,33 @@ Parameters (see config/gyro_denoiser.yaml): """ + ', '.join(
 Later --params-file and -p arguments override earlier ones: put -p after --params-file.
 Example: gyro_denoiser --ros-args --params-file config/gyro_denoiser.yaml -p model:=tumvi
 """
+
+
+def foreign_params_files(args: list[str], node_name: str) -> dict[str, list[str]]:
+    """
+    Return the ``--params-file`` files none of whose sections applies to ``node_name``.
+
+    rcl applies a section keyed ``/**``, the node's name or a pattern matching it
+    (``*`` one name, ``**`` any number) and drops the others without a word: a file keyed
+    to another node (another name, a namespace it does not run in) does nothing.
+    File -> its sections' keys.
+    """
+    files = [args[k + 1] for k, a in enumerate(args[:-1]) if a == '--params-file']
+    foreign = {}
+    for path in files:
+        try:
+            keys = list(yaml.safe_load(Path(path).read_text(encoding='utf-8')) or {})
+        except (OSError, UnicodeDecodeError, yaml.YAMLError, TypeError):
+            continue  # rcl has said what is wrong with it already
+        if not any(_section_applies(str(key), node_name) for key in keys):
+            foreign[path] = [str(key) for key in keys]
+    return foreign
+
+
+def _section_applies(key: str, node_name: str) -> bool:
+    """Whether a params file's section key selects the node ``node_name`` (/ns/name)."""
+    pattern = re.escape('/' + key.lstrip('/')).replace(r'/\*\*', r'(/[^/]+)*')
+    return re.fullmatch(pattern.replace(r'\*', '[^/]+'), node_name) is not None
 
 
 def main(args: list[str] | None = None) -> int:
@@ -447,6 +492,12 @@ def main(args: list[str] | None = None) -> int:
     node = None
     try:
         node = GyroDenoiser()
+        name = node.get_fully_qualified_name()
+        for path, keys in foreign_params_files(sys.argv if args is None else args,
+                                               name).items():
+            node.get_logger().warning(
+                f'{path}: its parameters are for {", ".join(keys)}, none for this node '
+                f'({name}): nothing of it applies (key it /**: or {name}:)')
         # its own executor: rclpy.spin's global one is None when a signal has already
         # shut rclpy down (Ctrl-C during start-up); this one then returns at once
         executor = SingleThreadedExecutor()

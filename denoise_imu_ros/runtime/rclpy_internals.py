@@ -6,8 +6,9 @@ The parts of rclpy the node uses that are not its documented API, in one place.
 Each is needed for something the public API does not give: rcl's own errors (a signal
 shutting rclpy down mid-call, a malformed ``--params-file``), taking the messages already
 queued behind one in the same callback (one executor wake per message cannot keep up at
-1 kHz), and the parameter a ``ParameterException`` names (ROS does not turn ``5`` into
-``5.0``: the node says how to write it). test/runtime/test_rclpy_internals.py exercises
+1 kHz), the parameter a ``ParameterException`` names (ROS does not turn ``5`` into
+``5.0``: the node says how to write it), and the values given at start-up (a misspelt
+name is said, not silently ignored). test/runtime/test_rclpy_internals.py exercises
 each against the installed rclpy, so a release that changes one fails there, not on a
 robot.
 """
@@ -19,9 +20,11 @@ from typing import Any
 
 from rclpy.exceptions import ParameterException
 from rclpy.impl.implementation_singleton import rclpy_implementation as _impl
+from rclpy.node import Node
 from rclpy.subscription import Subscription
 
-__all__ = ['integer_given_for_double', 'RCLError', 'RCLInvalidROSArgsError', 'take_waiting']
+__all__ = ['given_parameters', 'integer_given_for_double', 'RCLError',
+           'RCLInvalidROSArgsError', 'take_waiting']
 
 RCLError = _impl.RCLError  # any rcl failure surfaced by rclpy's C extension
 RCLInvalidROSArgsError = _impl.RCLInvalidROSArgsError  # remove_ros_args on bad --ros-args
@@ -35,6 +38,11 @@ def take_waiting(subscription: Subscription, msg_type: type) -> Any | None:
     with subscription.handle:
         taken = subscription.handle.take_message(msg_type, False)
     return None if taken is None else taken[0]
+
+
+def given_parameters(node: Node) -> dict[str, Any]:
+    """Return the parameter values given at start-up, declared or not (rclpy's, private)."""
+    return getattr(node, '_parameter_overrides', {})
 
 
 def integer_given_for_double(err: ParameterException) -> tuple[str, str] | None:

@@ -485,3 +485,27 @@ def test_a_rate_change_withholds_the_attitude_within_ten_samples(harness):
     h.send([imu_msg(t, [0, 0, 0.1], [0, 0, 9.81]) for t in stamps])
     assert len(h.attitude) == 600 + 9 and h.node.attitude_withheld == 91
     assert len(h.fused) == 600 + 9
+
+
+def test_a_params_file_for_another_node_and_a_namesake_are_said(tmp_path, harness):
+    """A params file keyed to another node is dropped by rcl, and two nodes may share a name."""
+    from denoise_imu_ros.runtime.node import foreign_params_files
+    files = {'other.yaml': '/other_node:\n  ros__parameters: {model: tumvi}\n',
+             'any.yaml': '/**:\n  ros__parameters: {model: tumvi}\n',
+             'ns.yaml': '/robot/*:\n  ros__parameters: {model: tumvi}\n',
+             'mine.yaml': 'gyro_denoiser:\n  ros__parameters: {model: tumvi}\n'}
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    args = ['--ros-args'] + [a for name in files for a in ('--params-file', str(tmp_path / name))]
+    assert foreign_params_files(args, '/gyro_denoiser') == {
+        str(tmp_path / 'other.yaml'): ['/other_node'], str(tmp_path / 'ns.yaml'): ['/robot/*']}
+    assert foreign_params_files(args, '/robot/gyro_denoiser') == {
+        str(tmp_path / 'other.yaml'): ['/other_node'], str(tmp_path / 'mine.yaml'):
+        ['gyro_denoiser']}
+    h = harness()
+    assert h.node.namesakes == 0
+    import rclpy
+    twin = rclpy.create_node('gyro_denoiser', context=h.ctx)
+    h.node._namesake_timer.reset()
+    h.spin_until(lambda: h.node.namesakes == 1, timeout=5.0)
+    twin.destroy_node()

@@ -2,8 +2,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """rclpy's undocumented parts the node relies on still behave so in the installed rclpy."""
 
-from denoise_imu_ros.runtime.rclpy_internals import (integer_given_for_double, RCLError,
-                                                     RCLInvalidROSArgsError, take_waiting)
+from denoise_imu_ros.runtime.rclpy_internals import (given_parameters, integer_given_for_double,
+                                                     RCLError, RCLInvalidROSArgsError,
+                                                     take_waiting)
 from helpers import DOMAIN, imu_msg
 import pytest
 import rclpy
@@ -63,4 +64,13 @@ def test_an_integer_given_for_a_float_parameter_is_named(context):
     with pytest.raises(ParameterException) as other:  # another mismatch: nothing to advise
         node.declare_parameter('fixed_frame', 'world')
     assert integer_given_for_double(other.value) is None
+    node.destroy_node()
+
+
+def test_the_values_given_at_start_up_are_read_declared_or_not(context):
+    node = rclpy.create_node('given', context=context, parameter_overrides=[
+        Parameter('modle', value='euroc'), Parameter('rate_tolerance', value=0.1)])
+    node.declare_parameter('rate_tolerance', 0.05)
+    assert {k: v.value for k, v in given_parameters(node).items()} == {
+        'modle': 'euroc', 'rate_tolerance': 0.1}
     node.destroy_node()
