@@ -107,7 +107,7 @@ def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
     period = float(np.median(np.diff(t_gt))) * 1e-9
     if period > MAX_POSE_PERIOD_S:
         raise DatasetError(f'{rec.source}: its poses come every {period:.1f} s (median): too '
-                           f'sparse to take an attitude between them from (one a second at '
+                           'sparse to take an attitude between them from (one a second at '
                            'least)')
     start, end = max(t_imu[0], t_gt[0]), min(t_imu[-1], t_gt[-1])
     if start >= end:
