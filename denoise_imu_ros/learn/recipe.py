@@ -137,6 +137,11 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                'denoise-imu crossval before deploying it' if weak else
                "supervision: a constant bias fitted on each recording's poses lowers its "
                'attitude error')
+    if poses is not None:
+        why.append('poses from trajectory files, an estimate: train --calibration-only too '
+                   'and let crossval (recordings held out whole) choose between the two; '
+                   "a recording's own tail shares its trajectory's error and chose the "
+                   'network where unseen recordings did not (EuRoC, docs/results.md)')
     if len(sequences) < 2:
         why.append('one recording: train works, crossval (whether the network beats plain '
                    'integration on a recording it never saw) needs at least two')

@@ -112,8 +112,10 @@ def test_the_recordings_own_poses_as_tum_files_give_the_same_recipe(euroc, tmp_p
         rows = np.column_stack([rec.gt_stamp_ns * 1e-9, rec.gt_pos, rec.gt_quat])
         np.savetxt(tmp_path / f'{name}.txt', rows, fmt='%.9f')
     own, _ = init_recipe(euroc, names)
-    from_files, _ = init_recipe(euroc, names, poses=tmp_path)
+    from_files, said = init_recipe(euroc, names, poses=tmp_path)
     assert from_files.pop('poses') == str(tmp_path) and own.pop('poses') is None
+    assert any(line.startswith('poses from trajectory files, an estimate: train '
+                               '--calibration-only too') for line in said)
     assert from_files == own
     (tmp_path / 'r.yaml').write_text(f'sequences: {names}\ndata: {euroc}\n'
                                      f'poses: {tmp_path}\n')
