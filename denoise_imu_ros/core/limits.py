@@ -173,21 +173,6 @@ def check_gyro_against_poses(gyro: np.ndarray, gt_quat: np.ndarray, gt_valid: np
                            f'as the poses: {DEG_S_HINT}')
 
 
-def check_stream(stamps_ns: np.ndarray, imu: np.ndarray, source: object,
-                 model_rate_hz: float | None = None, model_input_std: np.ndarray | None = None,
-                 model_input_mean: np.ndarray | None = None) -> None:
-    """
-    Run the checks every offline tool runs on a recording before computing with it.
-
-    Its rate against the model's (when there is a model), the units of its samples (and
-    against the model's training data), and its holes.
-    """
-    if model_rate_hz is not None:
-        check_rate(stamps_ns, model_rate_hz, source)
-    check_units(imu, source, model_input_std, model_input_mean)
-    check_gaps(stamps_ns, model_rate_hz, source)
-
-
 def check_rate(stamps_ns: np.ndarray, model_rate_hz: float, source: object) -> None:
     """Refuse a recording whose IMU rate is more than RATE_TOLERANCE off the model's."""
     rate = stream_rate_hz(stamps_ns)

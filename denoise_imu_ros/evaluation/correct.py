@@ -14,8 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.atomic import atomic_output
+from ..core.compat import check_stream
 from ..core.errors import DatasetError
-from ..core.limits import check_stream
 from ..core.modelfile import ModelFile, read_model_file, sample_rate
 from ..data import rest_bias
 from ..data.load import load_imu

@@ -22,8 +22,8 @@ from .reports import (crossval_table, eval_table, fitting_note, fused_table, gro
                       scored_on_training_samples)
 from ..core import jsonio
 from ..core.atomic import write_text
+from ..core.compat import check_baseline, check_stream
 from ..core.errors import OptionError, OutputError
-from ..core.limits import check_stream
 from ..core.metrics import (align_yaw, error_components, sequence_errors,
                             tilt_growth_deg_min)
 from ..core.modelfile import sample_rate, shipped_models
@@ -33,7 +33,7 @@ from ..data import rest_bias
 from ..data.check import label_noise
 from ..data.load import load_sequence
 from ..data.pose_jumps import JUMP_WINDOW_S
-from ..learn.checkpoint import check_baseline, load_model, LoadedModel
+from ..learn.checkpoint import load_model, LoadedModel
 
 
 def default_baseline(meta: ModelMeta, baseline: str | None) -> str | None:

@@ -24,6 +24,7 @@ import imufusion
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from ..core.compat import check_baseline
 from ..core.errors import DatasetError, ModelFileError
 from ..core.limits import check_rate, GRAVITY_M_S2
 from ..core.metrics import fused_errors, FusedErrors
@@ -32,7 +33,7 @@ from ..core.records import Sequence
 from ..core.rotation import from_gravity
 from ..core.schema import MAX_ACCEL_BIAS_M_S2, ModelMeta
 from ..data.load import load_sequence
-from ..learn.checkpoint import check_baseline, load_model
+from ..learn.checkpoint import load_model
 from ..runtime.fusion import fuse, FusionSettings, step_periods
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant

@@ -280,7 +280,8 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     """Run the noise figures of raw, calibrated and corrected gyro; write and return them."""
     from ..core.modelfile import gyro_covariance, sample_rate
     from ..data.load import load_sequence
-    from ..learn.checkpoint import check_baseline, load_model
+    from ..core.compat import check_baseline
+    from ..learn.checkpoint import load_model
     from .evaluate import check_inputs, default_baseline, recording_names
     from .reports import fitting_note, scored_on_training_samples
     names = recording_names(sequences)  # before the slow part: a name twice is refused

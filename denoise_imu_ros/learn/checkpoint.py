@@ -17,9 +17,10 @@ import numpy as np
 import torch
 
 from .model import correct_gyro, GyroNet, merge
+from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
 from ..core.modelfile import code_version, read_model_file, sample_rate, write_model_file
-from ..core.schema import ModelMeta, REST_ONLY
+from ..core.schema import ModelMeta
 from ..data import rest_bias
 
 
@@ -34,6 +35,11 @@ class LoadedModel(NamedTuple):
     model: GyroNet
     meta: ModelMeta
     path: Path
+
+    @property
+    def config(self) -> ModelConfig:
+        """Return the network's architecture."""
+        return self.model.config
 
     def correct(self, imu: np.ndarray) -> np.ndarray:
         """Corrected gyro (N, 3) of a recording's raw samples (N, 6), fed as online."""
@@ -111,25 +117,6 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
             meta[key] = values[0]
     save_model(path, model, meta)
     return load_model(path)
-
-
-def check_baseline(model: LoadedModel, baseline: LoadedModel) -> None:
-    """
-    Refuse a calibration baseline that does not belong with ``model``: one line each.
-
-    It must be a calibration (``train --calibration-only``), not a network nor a rest-only
-    file, and of the model's IMU rate: the "calibrated" rows and the filter settings
-    stored crosswise would otherwise be wrong without a word.
-    """
-    role = ('a rest-only model' if baseline.meta.kind == REST_ONLY else
-            None if baseline.model.config.calibration_only else 'a network')
-    if role:
-        raise ModelFileError(f'--baseline {baseline.path}: {role}, not a calibration (train '
-                             '--calibration-only makes one)')
-    rates = sample_rate(model), sample_rate(baseline)
-    if abs(rates[1] / rates[0] - 1) > 1e-3:
-        raise ModelFileError(f'--baseline {baseline.path}: a calibration of {rates[1]:.2f} Hz, '
-                             f'the model {model.path.name} is of {rates[0]:.2f} Hz')
 
 
 def load_model(spec: str | Path) -> LoadedModel:

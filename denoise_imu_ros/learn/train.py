@@ -36,8 +36,9 @@ from .checkpoint import save_model
 from .config import LossConfig, TrainConfig
 from .loss import increment_loss
 from .model import GyroNet
+from ..core.compat import check_stream
 from ..core.errors import DataWarning, TrainingError
-from ..core.limits import check_gyro_against_poses, check_stream, common_rate
+from ..core.limits import check_gyro_against_poses, common_rate
 from ..core.metrics import (increment_residuals, RESIDUAL_BLOCK, sequence_errors,
                             trusted_blocks)
 from ..core.modelfile import code_version
