@@ -84,6 +84,9 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     rec = load_recording(path, imu_topic, pose_topic, poses)
     if rate_hz is not None:
         check_rate(rec.imu_stamp_ns, rate_hz, path)
+    # a gyro in deg/s follows no poses at any clock or frame: said before any alignment
+    raw = onto_imu_stamps(rec, max_gt_gap_s=max_gt_gap_s)
+    check_gyro_against_poses(raw.imu[:, :3], raw.gt_quat, raw.gt_valid, raw.dt, path)
     used = _alignment(rec, align_poses, path)
     if used is not None:
         rec = apply_pose_alignment(rec, used['time_offset_s'], used['imu_from_pose_rotation_xyzw'])
@@ -106,8 +109,6 @@ def _alignment(rec: Recording, align_poses: str | dict, path: str | Path) -> dic
         found = estimate_pose_alignment(rec)
         why = not_following(found)
         if why:
-            seq = onto_imu_stamps(rec)  # a gyro in deg/s follows no poses: say that first
-            check_gyro_against_poses(seq.imu[:, :3], seq.gt_quat, seq.gt_valid, seq.dt, path)
             raise DatasetError(f'{path}: {why} (a quaternion order other than its format '
                                "says? another recording's poses?): figures against them would "
                                'be wrong; --align none scores them as they are')

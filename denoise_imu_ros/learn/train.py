@@ -38,7 +38,7 @@ from .loss import increment_loss
 from .model import GyroNet
 from ..core.compat import check_stream
 from ..core.errors import DataWarning, TrainingError
-from ..core.limits import check_gyro_against_poses, common_rate
+from ..core.limits import common_rate
 from ..core.metrics import (increment_residuals, RESIDUAL_BLOCK, sequence_errors,
                             trusted_blocks)
 from ..core.modelfile import code_version
@@ -103,8 +103,6 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
                     f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
                     'IMU stamps have trusted ground truth): nothing to supervise the loss')
         check_stream(seq.stamp_ns, seq.imu, Path(cfg.data) / name)
-        check_gyro_against_poses(seq.imu[:, :3], seq.gt_quat, seq.gt_valid, seq.dt,
-                                 Path(cfg.data) / name)
         seqs.append(seq)
     common_rate({s.name: s.rate_hz for s in seqs}, cfg.data)
     return seqs
