@@ -28,14 +28,14 @@ MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not
 DEPLOY_CHOICES = ('network', 'calibration', REST_ONLY, 'none')
 
 
-def number(v: Any) -> bool:
+def _number(v: Any) -> bool:
     """Say whether ``v`` is a finite JSON number; a bool is not one."""
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
 def _triple(v: Any, minimum: float = -math.inf) -> bool:
     return isinstance(v, (list, tuple)) and len(v) == 3 and all(
-        number(x) and x >= minimum for x in v)
+        _number(x) and x >= minimum for x in v)
 
 
 @dataclass(frozen=True)
@@ -71,7 +71,7 @@ class RestBiasSettings:
                                  f'{", ".join(sorted(names))}')
         prior = value.get('prior_rad_s', [0.0] * 3)
         scalars = [v for k, v in value.items() if k != 'prior_rad_s']
-        if not (_triple(prior) and all(number(v) for v in scalars)):
+        if not (_triple(prior) and all(_number(v) for v in scalars)):
             raise ModelFileError(f'{where}: rest_bias {value!r} holds a value that is not a '
                                  'finite number (prior_rad_s: three)')
         settings = cls(**dict(value, prior_rad_s=tuple(float(v) for v in prior)))
@@ -93,7 +93,7 @@ class FusionSettings:
 
     def __post_init__(self) -> None:
         """Refuse settings the filter cannot run with (model files are user input)."""
-        if not (number(self.tau_acc_s) and 0 < self.tau_acc_s < 1e6):
+        if not (_number(self.tau_acc_s) and 0 < self.tau_acc_s < 1e6):
             raise ValueError(f'tau_acc_s must be a positive number of seconds, '
                              f'not {self.tau_acc_s!r}')
         if not isinstance(self.bias_estimation, bool):
@@ -212,7 +212,7 @@ def _validation(raw: dict[str, Any], where: str) -> Validation:
     if std is not None and not _triple(std, 0.0):
         raise _fail(where, 'validation.gyro_residual_std', std, 'three non-negative numbers')
     for key in ('step', 'loss', 'aoe_mean_deg'):
-        if value.get(key) is not None and not number(value[key]):
+        if value.get(key) is not None and not _number(value[key]):
             raise _fail(where, f'validation.{key}', value[key], 'a number')
     return Validation(step=value.get('step'), loss=value.get('loss'),
                       aoe_mean_deg=value.get('aoe_mean_deg'),
@@ -251,12 +251,12 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
     if not isinstance(mean, dict):
         raise _fail(where, 'crossval.mean', mean, 'a mapping of rows')
     aoe = {row: float(v['aoe_deg']) for row, v in mean.items()
-           if isinstance(v, dict) and number(v.get('aoe_deg'))}
+           if isinstance(v, dict) and _number(v.get('aoe_deg'))}
     folds = report.get('folds') or []
     if not (isinstance(folds, list) and all(isinstance(f, list) for f in folds)):
         raise _fail(where, 'crossval.folds', folds, 'a list of recording lists')
     steps = report.get('steps')
-    if steps is not None and not number(steps):
+    if steps is not None and not _number(steps):
         raise _fail(where, 'crossval.steps', steps, 'a number')
     cfg = report.get('train_config') or {}
     if not isinstance(cfg, dict):
@@ -268,7 +268,7 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
 def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
     """Return the typed metadata of a model file's entries; ``where`` names it in errors."""
     rate = raw.get('sample_rate_hz')
-    if rate is not None and not (number(rate) and 0 < rate <= MAX_RATE_HZ):
+    if rate is not None and not (_number(rate) and 0 < rate <= MAX_RATE_HZ):
         raise _fail(where, 'sample_rate_hz', rate, f'a rate from 0 to {MAX_RATE_HZ:g} Hz')
     names = raw.get('train_sequences') or []
     if not (isinstance(names, list) and all(isinstance(n, str) for n in names)):

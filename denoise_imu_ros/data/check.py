@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 
 from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
                              MAX_OFFSET_S, needs_alignment, not_following)
-from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
+from .pose_jumps import describe as describe_jumps, find_jumps, Jump, mask_jumps
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
 from ..core.limits import accel_units, DEG_S_HINT, imu_holes, MAX_GAP_FACTOR
@@ -60,8 +60,8 @@ ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'tim
              'imu_from_pose_rotation_xyzw', 'imu_from_pose_rotation_deg',
              'imu_from_pose_rotation_std_deg', 'gyro_bias_vs_pose_deg_s',
              'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
-             'rate_window_s', 'judged_after_alignment', 'pose_jumps', 'pose_jumps_summary',
-             'paper_increments', 'shortest_clean_increment', 'label_noise', 'supervision')
+             'rate_window_s', 'judged_after_alignment', 'pose_jumps', 'paper_increments',
+             'shortest_clean_increment', 'label_noise', 'supervision')
 
 
 def paper_increments(rate_hz: float) -> tuple[int, int]:
@@ -172,7 +172,6 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     jumps = find_jumps(seq)
     seq = mask_jumps(seq, jumps)
     report['pose_jumps'] = [j._asdict() for j in jumps]
-    report['pose_jumps_summary'] = describe_jumps(jumps) if jumps else None
     report.update(label_noise(seq))
     report.update(_increments(report, seq.rate_hz))
     long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
@@ -327,8 +326,8 @@ def markdown(report: dict[str, Any]) -> str:
                      'after a constant bias (samples: mrad per axis, as deg/s):')
     lines += [f'    {j:4d}: {p["residual_mrad"]:7.3f}  {p["noise_rate_deg_s"]:7.3f}'
               for j, p in r['increments'].items()]
-    if r['pose_jumps_summary']:
-        lines.append(f'  {r["pose_jumps_summary"]}')
+    if r['pose_jumps']:
+        lines.append(f'  {describe_jumps([Jump(**j) for j in r["pose_jumps"]])}')
     lines.append(f'  label noise: {r["label_noise"]}')
     lines.append(f'  supervision: {r["supervision"]["summary"]}')
     lines.append(f'  verdict: {r["verdict"]}' + (': ' + '; '.join(r['reasons'])

@@ -43,9 +43,14 @@ class Jump(NamedTuple):
     angle_deg: float      # the largest block error in it
 
 
+def _block(seq: Sequence) -> int:
+    """Return JUMP_WINDOW_S in samples (two at least)."""
+    return max(2, round(JUMP_WINDOW_S * seq.rate_hz))
+
+
 def find_jumps(seq: Sequence) -> list[Jump]:
     """Spans whose pose increments the gyro cannot explain (merged where they touch)."""
-    n = max(2, round(JUMP_WINDOW_S * seq.rate_hz))
+    n = _block(seq)
     starts = trusted_blocks(seq.gt_valid, n)
     if len(starts) < 2:
         return []
@@ -104,8 +109,7 @@ def mask_jumps(seq: Sequence, jumps: list[Jump]) -> Sequence:
 
 def _bias(seq: Sequence, valid: np.ndarray) -> np.ndarray:
     """Return the gyro's constant bias against the trusted poses (0 where none fits)."""
-    n = max(2, round(JUMP_WINDOW_S * seq.rate_hz))
-    bias = fit_constant_bias(seq.gt_quat, valid, seq.imu[:, :3], seq.dt, n)
+    bias = fit_constant_bias(seq.gt_quat, valid, seq.imu[:, :3], seq.dt, _block(seq))
     return np.zeros(3) if bias is None else bias
 
 
