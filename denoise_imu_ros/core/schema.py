@@ -275,6 +275,11 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         raise _fail(where, 'train_sequences', names, 'a list of recording names')
     kind = _optional(raw, 'kind', where, str, 'a model kind')
     rest = raw.get('rest_bias')
+    recipe = _mapping(raw, 'train_config', where)
+    for key in ('window', 'max_offset'):  # the training span every report uses
+        if key in recipe and not (isinstance(recipe[key], int) and not isinstance(
+                recipe[key], bool) and recipe[key] >= 0):
+            raise _fail(where, f'train_config.{key}', recipe[key], 'a number of samples')
     members = raw.get('members') or []
     if not isinstance(members, list):
         raise _fail(where, 'members', members, 'a list')
@@ -284,7 +289,7 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         dataset=_optional(raw, 'dataset', where, str, 'a dataset name'),
         kind=kind,
         train_sequences=tuple(names),
-        train_config=_mapping(raw, 'train_config', where),
+        train_config=recipe,
         data=_optional(_mapping(raw, 'run', where), 'data', where, str, 'a folder'),
         validation=_validation(raw, where),
         fusion=_fusion(raw, where),

@@ -61,6 +61,7 @@ def test_typed_entries_and_what_this_version_does_not_know_survive_a_copy():
     ({'train_sequences': 'MH_01'}, 'train_sequences'),
     ({'kind': 3}, 'kind 3 is not a model kind'),
     ({'validation': {'step': 'last'}}, 'validation.step'),
+    ({'train_config': {'window': 'x'}}, 'train_config.window'),
 ])
 def test_malformed_entries_are_refused_in_one_line_naming_the_file(raw, message):
     with pytest.raises(ModelFileError, match=message) as err:
