@@ -20,8 +20,8 @@ from typing import Any
 from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
 
-__all__ = ['Fusion', 'FusionSettings', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'parse_meta',
-           'REST_ONLY', 'RestBiasSettings', 'Validation', 'Verdict']
+__all__ = ['BiasTracking', 'Fusion', 'FusionSettings', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta',
+           'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'Validation', 'Verdict']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
 MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
@@ -81,6 +81,33 @@ class RestBiasSettings:
             raise ModelFileError(f'{where}: rest_bias {value!r}: its thresholds, time '
                                  'constants and prior_sigma_rad_s must be positive')
         return settings
+
+
+@dataclass(frozen=True)
+class BiasTracking:
+    """
+    The bias left in the model's output, tracked at rest and in motion (VQF's estimators).
+
+    What a turn-on bias removed at the start does not catch (a session's bias in motion
+    off its bias at rest, a network's constant error on an unseen recording) VQF
+    estimates from the accelerometer's tilt corrections while moving and from the gyro
+    while still; ``tune-fusion`` chooses its two settings on the training recordings'
+    validation tails, or none.
+    """
+
+    sigma_motion_deg_s: float  # VQF's biasSigmaMotion: smaller trusts motion updates more
+    forgetting_s: float        # VQF's biasForgettingTime: how long an estimate is kept
+
+    def __post_init__(self) -> None:
+        """Refuse settings VQF cannot run with (model files are user input)."""
+        for name in ('sigma_motion_deg_s', 'forgetting_s'):
+            value = getattr(self, name)
+            if not (_number(value) and 0 < value < 1e6):
+                raise ValueError(f'{name} must be a positive number, not {value!r}')
+
+    def as_dict(self) -> dict[str, float]:
+        """Return the settings as stored in a model file."""
+        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -162,6 +189,7 @@ class ModelMeta:
     fusion: Fusion = Fusion()
     crossval: Verdict | None = None
     rest_bias: RestBiasSettings | None = None   # None: the model is fed the raw gyro
+    bias_tracking: BiasTracking | None = None   # None: the model's output as it is
     code_version: str | None = None
     members: int = 0                            # an ensemble's trainings; 0 for one
 
@@ -265,6 +293,18 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
                    tuple(str(n) for fold in folds for n in fold), steps, cfg, report)
 
 
+def _tracking(raw: dict[str, Any], where: str) -> BiasTracking | None:
+    value = raw.get('bias_tracking')
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise _fail(where, 'bias_tracking', value, 'a mapping')
+    try:
+        return BiasTracking(value.get('sigma_motion_deg_s'), value.get('forgetting_s'))
+    except ValueError as err:
+        raise ModelFileError(f'{where}: inconsistent bias_tracking ({err})') from err
+
+
 def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
     """Return the typed metadata of a model file's entries; ``where`` names it in errors."""
     rate = raw.get('sample_rate_hz')
@@ -295,5 +335,6 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         fusion=_fusion(raw, where),
         crossval=_verdict(raw, where),
         rest_bias=None if rest is None else RestBiasSettings.from_dict(rest, where),
+        bias_tracking=_tracking(raw, where),
         code_version=_optional(raw, 'code_version', where, str, 'a version'),
         members=len(members))

@@ -18,6 +18,12 @@ estimate at that sample (:func:`remove_rest_bias` over arrays for training, ``ev
 ``correct``; :class:`RestBias` per sample for the node and ``process-bag``; both run
 VQF's one C++ update, equal bit for bit). A model trained that way records its settings
 under the ``rest_bias`` metadata key (:class:`~denoise_imu_ros.core.schema.RestBiasSettings`).
+
+What the turn-on bias at rest does not catch, the bias of the model's output in motion,
+is tracked after the model where its file says so (``bias_tracking``,
+:class:`~denoise_imu_ros.core.schema.BiasTracking`): a second VQF, its rest and motion
+bias estimators on, fed the model's output from a bias of 0; its estimate is removed
+from the output (:func:`model_output` over arrays, :class:`BiasTracker` per sample).
 """
 
 from __future__ import annotations
@@ -32,11 +38,12 @@ from vqf import VQF
 from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
 from ..core.modelfile import code_version, Described, ModelFile, sample_rate, write_model_file
-from ..core.schema import ModelMeta, REST_ONLY, RestBiasSettings
+from ..core.schema import BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings
 
-__all__ = ['baseline_gyro', 'baseline_settings', 'CHOICES', 'estimator', 'model_input',
-           'nominal_bias', 'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch',
-           'RestBiasSettings', 'write_rest_only_model']
+__all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES', 'estimator',
+           'model_input', 'model_output', 'nominal_bias', 'remove_rest_bias', 'resolve',
+           'RestBias', 'rest_bias_batch', 'RestBiasSettings', 'track_bias', 'tracker',
+           'tracking', 'write_rest_only_model']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
@@ -66,6 +73,20 @@ def resolve(meta: ModelMeta, choice: str) -> RestBiasSettings | None:
     if choice == 'off' or (choice == 'model' and stored is None):
         return None
     return stored or RestBiasSettings()
+
+
+def tracker(settings: BiasTracking, rate_hz: float) -> VQF:
+    """Return a VQF that tracks a model output's bias at rest and in motion, from 0."""
+    return VQF(1.0 / rate_hz, motionBiasEstEnabled=True, restBiasEstEnabled=True,
+               biasSigmaMotion=settings.sigma_motion_deg_s,
+               biasForgettingTime=settings.forgetting_s)
+
+
+def tracking(meta: ModelMeta, choice: str) -> BiasTracking | None:
+    """Return the model file's bias tracking, unless ``choice`` (as :func:`resolve`) is off."""
+    if choice not in CHOICES:
+        raise ValueError(f'rest_bias {choice!r}: must be one of {", ".join(CHOICES)}')
+    return None if choice == 'off' else meta.bias_tracking
 
 
 class RestBias:
@@ -101,6 +122,43 @@ class RestBias:
         """Return the current bias (3,) and its standard deviation, both rad/s."""
         bias, sigma = self._vqf.getBiasEstimate()
         return bias, float(sigma)
+
+
+class BiasTracker:
+    """The tracked bias of a model's output, one sample at a time (the node, process-bag)."""
+
+    def __init__(self, settings: BiasTracking, rate_hz: float) -> None:
+        self.settings = settings
+        self._rate_hz = rate_hz
+        self._vqf = tracker(settings, rate_hz)
+        self._gyro = np.zeros(3)
+        self._accel = np.zeros(3)
+
+    def reset(self) -> None:
+        """Start again from a bias of 0 (a new run)."""
+        self._vqf = tracker(self.settings, self._rate_hz)
+
+    def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
+        """Take the model's output and the accelerometer; return the bias after them (3,)."""
+        self._gyro[:] = gyro
+        self._accel[:] = accel
+        self._vqf.update(self._gyro, self._accel)
+        return self._vqf.getBiasEstimate()[0]
+
+    def estimate(self) -> tuple[np.ndarray, float]:
+        """Return the current bias (3,) and its standard deviation, both rad/s."""
+        bias, sigma = self._vqf.getBiasEstimate()
+        return bias, float(sigma)
+
+
+def track_bias(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
+               settings: BiasTracking | None) -> np.ndarray:
+    """Return a model's output (N, 3) less its tracked bias at each sample (None: as is)."""
+    if settings is None:
+        return gyro
+    out = tracker(settings, rate_hz).updateBatch(
+        np.ascontiguousarray(gyro, dtype=float), np.ascontiguousarray(accel, dtype=float))
+    return gyro - out['bias']
 
 
 def rest_bias_batch(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings
@@ -150,6 +208,12 @@ def model_input(loaded: Described, imu: np.ndarray, choice: str = 'model') -> np
     if settings is None:
         return imu
     return remove_rest_bias(imu, sample_rate(loaded), settings)
+
+
+def model_output(loaded: Described, gyro: np.ndarray, imu: np.ndarray,
+                 choice: str = 'model') -> np.ndarray:
+    """Return a model's output ``gyro`` (N, 3) for raw samples ``imu`` (N, 6), as online."""
+    return track_bias(gyro, imu[:, 3:], sample_rate(loaded), tracking(loaded.meta, choice))
 
 
 def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,

@@ -28,14 +28,16 @@ def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch',
     Corrected gyro (N, 3) rad/s of raw samples (N, 6) by either engine.
 
     ``rest`` (``model``, ``on``, ``off``): whether the turn-on bias is removed from the
-    gyro first, as the node's ``rest_bias`` parameter.
+    gyro first and the output's bias tracked, as the node's ``rest_bias`` parameter.
     """
-    imu = rest_bias.model_input(mf, imu, rest)
+    fed = rest_bias.model_input(mf, imu, rest)
     if engine == 'streaming':
-        return StreamingCorrector(mf.config, mf.arrays).process(imu)
-    from ..learn.checkpoint import load_model  # torch: the batch engine only
-    from ..learn.model import correct_gyro
-    return correct_gyro(load_model(mf.path).model, imu)
+        gyro = StreamingCorrector(mf.config, mf.arrays).process(fed)
+    else:
+        from ..learn.checkpoint import load_model  # torch: the batch engine only
+        from ..learn.model import correct_gyro
+        gyro = correct_gyro(load_model(mf.path).model, fed)
+    return rest_bias.model_output(mf, gyro, imu, rest)
 
 
 def correct_to_csv(model_spec: str, source: str, output: str,

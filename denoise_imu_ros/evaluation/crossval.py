@@ -9,7 +9,9 @@ recordings are split into folds by recording; each fold trains the network and t
 12-parameter calibrated-IMU baseline on the other recordings and scores the held-out
 ones whole (AOE from the ground truth at their first stamp), against plain integration
 of the input gyro and of the input gyro less its turn-on bias (estimated from stillness,
-``data/rest_bias.py``). The verdict says which of the four to deploy.
+``data/rest_bias.py``). Each fold's models track their output's bias as the fold's
+training tails choose (``tune-fusion``'s choice, :func:`~.filters.choose_tracking`), so
+that they run as the shipped model does. The verdict says which of the four to deploy.
 """
 
 from __future__ import annotations
@@ -21,14 +23,17 @@ from typing import Any
 
 import numpy as np
 
+from .filters import choose_tracking, training_tails
 from .reports import CROSSVAL_METHODS
 from ..core import jsonio
 from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
-from ..core.schema import ModelMeta, parse_meta
+from ..core.modelfile import sample_rate
+from ..core.schema import BiasTracking, ModelMeta, parse_meta
 from ..data import rest_bias
 from ..data.load import load_sequence
+from ..data.rest_bias import track_bias
 from ..learn import parallel
 from ..learn.checkpoint import load_model, LoadedModel
 from ..learn.config import load_config
@@ -125,6 +130,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                        + ('' if seed is None else f', seed {seed}'), progress))
         if only_fold is not None:
             return None
+        tracking = _tracking(models, recipe)
         for name in held_out:  # read as the recipe reads its recordings
             seq = load_sequence(Path(recipe.data) / name, recipe.imu_topic, recipe.pose_topic,
                                 recipe.max_gt_gap_s,
@@ -132,14 +138,17 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                 align_poses=recipe.align, poses=recipe.poses)
             raw = {'raw': score(seq, seq.imu[:, :3]),
                    'rest bias': score(seq, rest_bias.baseline_gyro(models[0][0], seq.imu))}
-            gyros = [{'calibrated': calib.correct(seq.imu), 'network': net.correct(seq.imu)}
+            gyros = [{'calibrated': calib.untracked(seq.imu), 'network': net.untracked(seq.imu)}
                      for net, calib in models]
+            rate, accel = sample_rate(models[0][0]), seq.imu[:, 3:]
             per_recording[name] = {**raw, **{
-                m: score(seq, np.mean([g[m] for g in gyros], axis=0))
+                m: score(seq, track_bias(np.mean([g[m] for g in gyros], axis=0), accel, rate,
+                                         tracking['ensemble'][m]))
                 for m in ('calibrated', 'network')}}
             if seeds is not None:
-                for seed, g in zip(runs, gyros):
-                    per_seed[seed][name] = {**raw, **{m: score(seq, g[m]) for m in g}}
+                for seed, g, own in zip(runs, gyros, tracking['members']):
+                    per_seed[seed][name] = {**raw, **{
+                        m: score(seq, track_bias(g[m], accel, rate, own[m])) for m in g}}
     report = summarize(per_recording)
     sizes = sorted({len(recipe.sequences) - len(f) for f in fold_list})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
@@ -202,6 +211,31 @@ def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
     return (LoadedModel(net.model, parse_meta(net.meta, label), Path(f'{label}, network')),
             LoadedModel(calib.model, parse_meta(calib.meta, label),
                         Path(f'{label}, calibration')))
+
+
+def _tracking(models: list[tuple[LoadedModel, LoadedModel]], recipe: Any) -> dict[str, Any]:
+    """
+    Return the output bias tracking ``tune-fusion`` would give a fold's models.
+
+    Chosen on the fold's own training tails, as the shipped model's is on its own: each
+    seed's network and calibration (``members``), and the mean of the seeds' outputs
+    (``ensemble``, what ``denoise-imu ensemble`` would ship), so that the held-out
+    recordings are scored as those models run. Folds of whole recordings (no tails) run
+    untracked.
+    """
+    none = {'calibrated': None, 'network': None}
+    if recipe.whole_sequences:
+        return {'members': [none] * len(models), 'ensemble': none}
+    seqs, start = training_tails(models[0][0], recipe.data)
+    rate = sample_rate(models[0][0])
+    outputs = [{'calibrated': [calib.untracked(seq.imu) for seq in seqs],
+                'network': [net.untracked(seq.imu) for seq in seqs]} for net, calib in models]
+
+    def chosen(gyros: list[np.ndarray]) -> BiasTracking | None:
+        return choose_tracking(seqs, gyros, start, rate)['settings']
+    return {'members': [{m: chosen(out[m]) for m in out} for out in outputs],
+            'ensemble': {m: chosen([np.mean(per, axis=0) for per in zip(
+                *(out[m] for out in outputs))]) for m in none}}
 
 
 def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any

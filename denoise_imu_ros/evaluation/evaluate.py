@@ -231,6 +231,8 @@ def _report(models: dict[str, LoadedModel], baseline: str | None, data: str,
     report = {'model': str(loaded.path), 'model_code_version': loaded.meta.code_version,
               'baseline': baseline,
               'rest_bias_input': {m: lm.meta.rest_bias is not None for m, lm in models.items()},
+              'bias_tracking': {m: lm.meta.bias_tracking.as_dict()
+                                for m, lm in models.items() if lm.meta.bias_tracking},
               'data': str(data), 'start_sample': start_sample,
               'training_fit_note': note,
               'sequences': results,
@@ -255,6 +257,10 @@ def _write(out_dir: Path, report: dict[str, Any], rest_only: bool) -> None:
     table = (eval_table(results, report['average'])
              + fused_table(fused, report['fused_average']) + growth_table(results, fused))
     table += rest_note(report['rest_bias_input'], rest_only)
+    for m, t in report['bias_tracking'].items():
+        table += (f"The {m} row tracks its output's bias at rest and in motion (VQF, sigma "
+                  f'{t["sigma_motion_deg_s"]:g} deg/s, forgetting {t["forgetting_s"]:g} s, '
+                  'chosen by tune-fusion on the training tails) and removes it, as online.\n')
     if report['start_sample']:
         table += f'\nScored from sample {report["start_sample"]} on of every recording.\n'
     if report['training_fit_note']:

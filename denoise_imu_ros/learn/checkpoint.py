@@ -42,7 +42,11 @@ class LoadedModel(NamedTuple):
         return self.model.config
 
     def correct(self, imu: np.ndarray) -> np.ndarray:
-        """Corrected gyro (N, 3) of a recording's raw samples (N, 6), fed as online."""
+        """Corrected gyro (N, 3) of a recording's raw samples (N, 6), as online."""
+        return rest_bias.model_output(self, self.untracked(imu), imu)
+
+    def untracked(self, imu: np.ndarray) -> np.ndarray:
+        """Return the model's output (N, 3) before its bias tracking, fed as online."""
         return correct_gyro(self.model, rest_bias.model_input(self, imu))
 
 

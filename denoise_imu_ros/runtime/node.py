@@ -116,7 +116,9 @@ PARAMETERS = [
         dynamic=True)),
     ('rest_bias', 'model', _param(
         "The gyro's turn-on bias, estimated from stillness (at start and later) and removed "
-        "before the model: 'model' (as the model was trained), on or off.", read_only=True,
+        "before the model, and the output's bias tracked after it where the model file "
+        "chose so: 'model' (as the model was trained and tuned), on or off (neither).",
+        read_only=True,
         dynamic=True)),
     ('fused_orientation_stddev', -1.0, _param(
         'rad; imu/data orientation covariance diagonal; < 0: the fused errors the model '
@@ -195,6 +197,10 @@ class GyroDenoiser(Node):
             + ('bias not removed' if rest is None else
                'bias removed: estimated from stillness, until then '
                f'{[round(b, 5) for b in rest.settings.prior_rad_s]} rad/s')
+            + ('' if self._denoiser.track is None else
+               '; output bias tracked (VQF: sigma in motion '
+               f'{self._denoiser.track.settings.sigma_motion_deg_s:g} deg/s, forgetting '
+               f'{self._denoiser.track.settings.forgetting_s:g} s)')
             + f'; {self._sub.topic_name} -> {self._pub_imu.topic_name}'
             + ('' if fusion is None else
                f', {self._pub_fused.topic_name} (VQF: tau_acc {fusion.tau_acc_s:g} s, bias '
@@ -406,16 +412,21 @@ class GyroDenoiser(Node):
         self._pub_diag.publish(array)
 
     def _rest_values(self) -> dict[str, str]:
-        """Return the turn-on bias estimate for /diagnostics: applied, seconds still, value."""
-        rest = self._denoiser.rest
-        if rest is None:
-            return {'rest_bias_applied': 'False'}
-        bias, sigma = rest.estimate()
-        return {'rest_bias_applied': 'True',
-                'rest_bias_seconds_still': f'{rest.seconds_still:.1f}',
-                'rest_bias_source': 'stillness' if rest.still_samples else 'prior',
-                'rest_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
-                'rest_bias_sigma_rad_s': f'{sigma:.6f}'}
+        """Return the bias estimates for /diagnostics: applied, seconds still, values."""
+        rest, track = self._denoiser.rest, self._denoiser.track
+        values = {'rest_bias_applied': str(rest is not None),
+                  'tracked_bias_applied': str(track is not None)}
+        if rest is not None:
+            bias, sigma = rest.estimate()
+            values.update({'rest_bias_seconds_still': f'{rest.seconds_still:.1f}',
+                           'rest_bias_source': 'stillness' if rest.still_samples else 'prior',
+                           'rest_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
+                           'rest_bias_sigma_rad_s': f'{sigma:.6f}'})
+        if track is not None:
+            bias, sigma = track.estimate()
+            values.update({'tracked_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
+                           'tracked_bias_sigma_rad_s': f'{sigma:.6f}'})
+        return values
 
     def _check_namesakes(self) -> None:
         """Warn once when another node has this one's name: they share every topic."""

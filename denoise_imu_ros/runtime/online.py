@@ -35,7 +35,10 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
 With a :class:`~denoise_imu_ros.data.rest_bias.RestBias`, the gyro the model sees is the
 raw gyro less the turn-on bias estimated from stillness up to that sample (the model's
 training input); a full reset starts the estimate again from its prior (another run,
-perhaps another power-on), a gap does not (the same run).
+perhaps another power-on), a gap does not (the same run). With a
+:class:`~denoise_imu_ros.data.rest_bias.BiasTracker` (the model file's ``bias_tracking``),
+the model's output less its tracked bias is what every output carries, the open-loop
+attitude and the gravity-aided orientation included; it restarts with the estimate.
 """
 
 from __future__ import annotations
@@ -105,6 +108,7 @@ class OnlineDenoiser:
     # the accelerometer's constant bias (m/s^2), removed before the initial tilt is read
     accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rest: rest_bias.RestBias | None = None  # the turn-on bias removed before the model
+    track: rest_bias.BiasTracker | None = None  # the output's bias tracked after it
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
          'skipped_input_periods', 'non_finite_covariance'), 0))
@@ -127,15 +131,18 @@ class OnlineDenoiser:
         accelerometer bias they remove is removed from the open-loop attitude's initial
         tilt as well (unless ``accel_bias`` is given). ``rest_choice`` (``model``, ``on``,
         ``off``) says whether the turn-on bias is estimated and removed
-        (:func:`denoise_imu_ros.data.rest_bias.resolve`).
+        (:func:`denoise_imu_ros.data.rest_bias.resolve`) and the output's bias tracked
+        (:func:`denoise_imu_ros.data.rest_bias.tracking`).
         """
         rate = sample_rate(model)
         if fusion is not None:
             options.setdefault('accel_bias', fusion.accel_bias_m_s2)
         settings = rest_bias.resolve(model.meta, rest_choice)
+        track = rest_bias.tracking(model.meta, rest_choice)
         return cls(StreamingCorrector(model.config, model.arrays), rate,
                    fusion=None if fusion is None else GravityFilter(rate, fusion),
                    rest=None if settings is None else rest_bias.RestBias(settings, rate),
+                   track=None if track is None else rest_bias.BiasTracker(track, rate),
                    **options)
 
     def _count_input_periods(self, interval_ns: int) -> None:
@@ -224,6 +231,10 @@ class OnlineDenoiser:
         corrected = self.engine.step(np.concatenate([gyro, accel]))
         if not np.isfinite(corrected).all():  # never published: dropped as if lost
             return self._drop(Drop.NON_FINITE_OUTPUT)
+        if self.track is not None:
+            if event in (Event.START, Event.TIME_JUMP):
+                self.track.reset()
+            corrected = corrected - self.track.update(corrected, accel)
         if event in (Event.START, Event.TIME_JUMP):  # another stream: its rate is new too
             self._off_rate_run, self._input_period_ns, self._window_off = 0, 0.0, False
             self._intervals.clear()

@@ -137,3 +137,50 @@ def test_a_rest_only_model_runs_anywhere_a_model_does_and_corrects_nothing_else(
     add_metadata(net, rest_bias=None)
     assert main(['rest-model', '--like', str(net), '--out', str(tmp_path / 'x')]) == 1
     assert not (tmp_path / 'x').exists()
+
+
+def _tilted_turns(seconds: float, bias: np.ndarray, seed: int = 0) -> np.ndarray:
+    """Return a gyro biased by ``bias`` turning about tilted axes, with true gravity."""
+    from scipy.spatial.transform import Rotation
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * RATE)) / RATE
+    rate = np.stack([0.6 * np.sin(0.7 * t), 0.5 * np.cos(0.5 * t), 0.3 * np.sin(0.3 * t)], 1)
+    att = Rotation.identity()
+    accel = np.empty_like(rate)
+    for k, w in enumerate(rate):
+        accel[k] = att.inv().apply([0.0, 0.0, 9.81])
+        att = att * Rotation.from_rotvec(w / RATE)
+    return np.hstack([rate + bias + rng.normal(0, 0.002, rate.shape),
+                      accel + rng.normal(0, 0.02, accel.shape)])
+
+
+def test_the_tracked_bias_online_equals_batch_and_finds_a_bias_in_motion():
+    from denoise_imu_ros.core.schema import BiasTracking
+    settings = BiasTracking(0.05, 30.0)
+    bias = np.array([0.004, -0.003, 0.002])  # rad/s, left in a model's output
+    imu = _tilted_turns(120.0, bias)
+    batch = rest_bias.track_bias(imu[:, :3], imu[:, 3:], RATE, settings)
+    online = rest_bias.BiasTracker(settings, RATE)
+    step = np.array([s[:3] - online.update(s[:3], s[3:]) for s in imu])
+    assert np.array_equal(step, batch)
+    # never still: found in motion alone, through gravity seen from every attitude
+    assert np.abs(online.estimate()[0] - bias).max() < 1e-3 < np.abs(bias).max()
+    gyro = imu[:, :3]
+    assert rest_bias.track_bias(gyro, imu[:, 3:], RATE, None) is gyro
+    online.reset()  # a new run: from a bias of 0 again
+    assert np.array_equal(imu[0, :3] - online.update(imu[0, :3], imu[0, 3:]), batch[0])
+
+
+def test_tracking_runs_where_the_model_file_says_unless_switched_off():
+    from denoise_imu_ros.core.errors import ModelFileError
+    from denoise_imu_ros.core.schema import BiasTracking
+    stored = {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0, 'chosen_on': 'tails'}
+    meta = parse_meta({'bias_tracking': stored}, 'm')
+    assert rest_bias.tracking(meta, 'model') == rest_bias.tracking(meta, 'on') == BiasTracking(
+        0.05, 30.0)
+    assert rest_bias.tracking(meta, 'off') is None
+    assert rest_bias.tracking(parse_meta({}, 'm'), 'on') is None
+    for bad in ({'sigma_motion_deg_s': 0.0, 'forgetting_s': 30.0},
+                {'sigma_motion_deg_s': 0.05}, 'fast'):
+        with pytest.raises(ModelFileError, match='m: inconsistent'):
+            parse_meta({'bias_tracking': bad}, 'm')

@@ -159,7 +159,6 @@ def test_held_out_recordings_are_aligned_like_the_training_ones(tmp_path):
 def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     from denoise_imu_ros.core.metrics import score
     from denoise_imu_ros.data.load import load_sequence
-    from denoise_imu_ros.learn.model import correct_gyro, merge
     data = tmp_path / 'data'
     for i, bias in enumerate((0.010, 0.012)):
         write_asl(data / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=bias)
@@ -183,13 +182,21 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     nets = [load_model(out / f'seed{s}' / 'fold0' / 'network.safetensors') for s in (3, 5)]
     assert [n.meta.recipe('seed') for n in nets] == [3, 5]
     assert nets[0].meta.train_sequences == ('rec1',)
-    # the ensemble row is what `denoise-imu ensemble` of the fold's two seeds would score
-    ensemble = score(seq, correct_gyro(merge([n.model for n in nets]), seq.imu))
+    # the ensemble row is what `denoise-imu ensemble` of the fold's two seeds would score,
+    # tuned as a user would (tune-fusion: its output bias tracking on its training tails)
+    members = [str(out / f'seed{s}' / 'fold0' / 'network.safetensors') for s in (3, 5)]
+    calib = str(out / 'seed3' / 'fold0' / 'calibrated.safetensors')
+    ens = str(tmp_path / 'ens.safetensors')
+    assert main(['ensemble', *members, '--out', ens]) == 0
+    for model in (ens, *members):
+        assert main(['tune-fusion', '--model', model, '--baseline', calib, '--attach',
+                     '--data', str(data), '--quiet']) == 0
+    assert load_model(ens).meta.bias_tracking is not None  # the synthetic bias: tracked
     assert report['recordings']['rec0']['network']['aoe_deg'] == pytest.approx(
-        ensemble['aoe_deg'], rel=1e-4)
-    for s, net in zip(('3', '5'), nets):
+        score(seq, load_model(ens).correct(seq.imu))['aoe_deg'], rel=1e-4)
+    for s, member in zip(('3', '5'), members):
         assert report['per_seed'][s]['recordings']['rec0']['network']['aoe_deg'] == (
-            pytest.approx(score(seq, correct_gyro(net.model, seq.imu))['aoe_deg'], rel=1e-6))
+            pytest.approx(score(seq, load_model(member).correct(seq.imu))['aoe_deg'], rel=1e-6))
     assert report['recordings']['rec0']['network'] != report['per_seed']['3']['recordings'][
         'rec0']['network']
     assert main(args + ['--seeds', '3', '3']) == 1

@@ -48,6 +48,27 @@ def test_online_attitude_equals_offline_integration_of_the_batch_output(seq, mod
     assert [o.stamp_ns for o in outs] == list(seq.stamp_ns[:n])  # each output has its stamp
 
 
+def test_with_bias_tracking_online_equals_both_offline_engines(seq, tmp_path):
+    """The model file's rest bias and output tracking, per sample as over a recording."""
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.data.rest_bias import RestBiasSettings
+    from denoise_imu_ros.evaluation.correct import corrected_gyro
+    from helpers import write_untrained_model
+    n = 3000
+    mf = read_model_file(write_untrained_model(tmp_path / 'm.safetensors', {
+        'sample_rate_hz': 200.0, 'rest_bias': RestBiasSettings().to_dict(),
+        'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0}}))
+    outs = _run(OnlineDenoiser.from_model_file(mf), seq.stamp_ns[:n], seq.imu[:n])
+    online = np.array([o.gyro for o in outs])
+    for engine in ('streaming', 'batch'):
+        np.testing.assert_allclose(online, corrected_gyro(mf, seq.imu[:n], engine), atol=1e-6)
+    untracked = corrected_gyro(mf, seq.imu[:n], 'streaming', rest='off')
+    assert np.abs(online - untracked).max() > 1e-4  # both estimates did something
+    off = _run(OnlineDenoiser.from_model_file(mf, rest_choice='off'), seq.stamp_ns[:n],
+               seq.imu[:n])
+    np.testing.assert_allclose(np.array([o.gyro for o in off]), untracked, atol=1e-6)
+
+
 def test_the_start_attitude_levels_the_accelerometer():
     tilt = Rotation.from_euler('ZYX', [0.0, 0.2, -0.4])
     accel = tilt.inv().apply([0.0, 0.0, 9.81])

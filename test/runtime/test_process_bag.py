@@ -16,10 +16,10 @@ def _fields(m) -> list[float]:
             *m.linear_acceleration_covariance, o.x, o.y, o.z, o.w, *m.orientation_covariance]
 
 
-@pytest.mark.parametrize('rest', [False, True])
+@pytest.mark.parametrize('rest,track', [(False, False), (True, False), (True, True)])
 def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path,
-                                                            rest):
-    """With the model's filter settings, and with a turn-on bias removed (a model so trained)."""
+                                                            rest, track):
+    """With the model's filter settings, a turn-on bias removed, the output's bias tracked."""
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core.modelfile import add_metadata
     from denoise_imu_ros.data.rest_bias import RestBiasSettings
@@ -28,7 +28,8 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     # settings stored as tune-fusion stores them: both paths must apply all of them
     add_metadata(model_file, fusion={'settings': FusionSettings(
         4.0, False, (0.02, -0.1, 0.05)).as_dict(), 'orientation_std_rad': [0.01, 0.02, 0.03]},
-        rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict() if rest else None)
+        rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict() if rest else None,
+        bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0} if track else None)
     assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
                 str(model_file)]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
@@ -56,6 +57,8 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     h.spin_until(lambda: h.diagnostics, timeout=5.0)
     diagnostics = {v.key: v.value for v in h.diagnostics[-1].status[0].values}
     assert diagnostics['rest_bias_applied'] == str(rest)
+    assert diagnostics['tracked_bias_applied'] == str(track)
+    assert ('tracked_bias_rad_s' in diagnostics) == track
     if rest:  # the bundled sample starts moving: the model's prior, said so
         assert diagnostics['rest_bias_source'] == 'prior'
         assert diagnostics['rest_bias_rad_s'] == '0.010000 -0.020000 0.030000'
