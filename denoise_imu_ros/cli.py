@@ -132,6 +132,7 @@ def _check_writable(folder: str | Path | None) -> None:
 
 def _crossval(args: argparse.Namespace) -> None:
     from .core.modelfile import add_metadata, check_attachable, read_model_file
+    from .core.schema import REST_ONLY
     from .evaluation.crossval import attach_mismatches, crossval
     from .evaluation.reports import crossval_table
     from .learn.config import load_config
@@ -158,8 +159,14 @@ def _crossval(args: argparse.Namespace) -> None:
         return
     sys.stdout.write(crossval_table(report))
     for path in args.attach or []:
-        add_metadata(path, crossval=report)
-        print(f'stored the cross-recording figures in {path}')
+        mf = read_model_file(path)
+        row = (None if mf.meta.kind == REST_ONLY else
+               'calibrated' if mf.config.calibration_only else 'network')
+        tracking = None if row is None else report['tracking']['chosen'][row]
+        add_metadata(path, crossval=report, bias_tracking=tracking and dict(
+            tracking, chosen_on=f'crossval: {report["tracking"]["chosen_on"]}'))
+        print(f'stored the cross-recording figures in {path}' + (
+            f', and its output bias tracking ({tracking["label"]})' if tracking else ''))
 
 
 def _init_recipe(args: argparse.Namespace) -> None:

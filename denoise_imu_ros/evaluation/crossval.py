@@ -9,9 +9,13 @@ recordings are split into folds by recording; each fold trains the network and t
 12-parameter calibrated-IMU baseline on the other recordings and scores the held-out
 ones whole (AOE from the ground truth at their first stamp), against plain integration
 of the input gyro and of the input gyro less its turn-on bias (estimated from stillness,
-``data/rest_bias.py``). Each fold's models track their output's bias as the fold's
-training tails choose (``tune-fusion``'s choice, :func:`~.filters.choose_tracking`), so
-that they run as the shipped model does. The verdict says which of the four to deploy.
+``data/rest_bias.py``). The verdict says which of the four to deploy.
+
+The models' output bias tracking (:class:`~denoise_imu_ros.core.schema.BiasTracking`)
+is chosen here too, on recordings no model saw: the shipped model's, for the network and
+for the calibration, is the candidate of lowest mean AOE over every held-out recording
+(none among them); the figures of a fold's recordings use the candidate the other folds'
+recordings choose, so that no figure was picked on itself.
 """
 
 from __future__ import annotations
@@ -23,7 +27,6 @@ from typing import Any
 
 import numpy as np
 
-from .filters import choose_tracking, training_tails
 from .reports import CROSSVAL_METHODS
 from ..core import jsonio
 from ..core.atomic import write_text
@@ -34,10 +37,24 @@ from ..core.schema import BiasTracking, ModelMeta, parse_meta
 from ..data import rest_bias
 from ..data.load import load_sequence
 from ..data.rest_bias import track_bias
-from ..learn import parallel
 from ..learn.checkpoint import load_model, LoadedModel
+from ..learn import parallel
 from ..learn.config import load_config
 from ..learn.train import train
+
+
+TRACKED = ('calibrated', 'network')  # the rows whose output bias may be tracked
+# the candidates: VQF's biasSigmaMotion (its default 0.1 deg/s) and biasForgettingTime
+# (its default 100 s), beside none
+TRACKING_GRID = tuple(BiasTracking(sigma, forget) for sigma in (0.03, 0.05, 0.07, 0.1, 0.2)
+                      for forget in (30.0, 100.0, 300.0))
+
+
+def tracking_label(settings: BiasTracking | None) -> str:
+    """Name a tracking candidate in reports."""
+    if settings is None:
+        return 'none'
+    return f'sigma {settings.sigma_motion_deg_s:g} deg/s, forgetting {settings.forgetting_s:g} s'
 
 
 def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:
@@ -106,8 +123,10 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
         raise TrainingError(f'--seeds must list distinct seeds (and no --seed), got {seeds}')
     recipe = load_config(config, **overrides)
     runs: list[int | None] = [None] if seeds is None else list(seeds)
-    per_recording: dict[str, dict[str, dict[str, float]]] = {}
-    per_seed: dict[int, dict[str, dict[str, dict[str, float]]]] = {s: {} for s in seeds or []}
+    raw_rows: dict[str, dict[str, dict[str, float]]] = {}
+    tracked: dict[str, Any] = {}      # recording -> candidate -> row -> figures
+    tracked_seed: dict[str, Any] = {}  # the same for each seed alone
+    fold_of: dict[str, int] = {}
     if sessions is not None and k is not None:
         raise TrainingError('--folds and --sessions: give one (sessions are the folds)')
     fold_list = (folds(recipe.sequences, k) if sessions is None
@@ -130,26 +149,29 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                        + ('' if seed is None else f', seed {seed}'), progress))
         if only_fold is not None:
             return None
-        tracking = _tracking(models, recipe)
         for name in held_out:  # read as the recipe reads its recordings
             seq = load_sequence(Path(recipe.data) / name, recipe.imu_topic, recipe.pose_topic,
                                 recipe.max_gt_gap_s,
                                 min_samples=models[0][0].model.receptive_field,
                                 align_poses=recipe.align, poses=recipe.poses)
-            raw = {'raw': score(seq, seq.imu[:, :3]),
-                   'rest bias': score(seq, rest_bias.baseline_gyro(models[0][0], seq.imu))}
+            raw_rows[name] = {'raw': score(seq, seq.imu[:, :3]), 'rest bias': score(
+                seq, rest_bias.baseline_gyro(models[0][0], seq.imu))}
             gyros = [{'calibrated': calib.untracked(seq.imu), 'network': net.untracked(seq.imu)}
                      for net, calib in models]
-            rate, accel = sample_rate(models[0][0]), seq.imu[:, 3:]
-            per_recording[name] = {**raw, **{
-                m: score(seq, track_bias(np.mean([g[m] for g in gyros], axis=0), accel, rate,
-                                         tracking['ensemble'][m]))
-                for m in ('calibrated', 'network')}}
-            if seeds is not None:
-                for seed, g, own in zip(runs, gyros, tracking['members']):
-                    per_seed[seed][name] = {**raw, **{
-                        m: score(seq, track_bias(g[m], accel, rate, own[m])) for m in g}}
+            tracked[name] = _candidates(seq, {m: np.mean([g[m] for g in gyros], axis=0)
+                                              for m in TRACKED}, sample_rate(models[0][0]))
+            tracked_seed[name] = [_candidates(seq, g, sample_rate(models[0][0]))
+                                  for g in gyros] if seeds is not None else []
+            fold_of[name] = i
+    choice = {f: _choose(tracked, [n for n in tracked if fold_of[n] != f])
+              for f in set(fold_of.values())}  # for each fold: the other folds' choice
+    per_recording = {name: {**raw_rows[name], **{
+        m: tracked[name][choice[fold_of[name]][m]][m] for m in TRACKED}} for name in tracked}
+    per_seed = {seed: {name: {**raw_rows[name], **{
+        m: tracked_seed[name][k][choice[fold_of[name]][m]][m] for m in TRACKED}}
+        for name in tracked} for k, seed in enumerate(seeds or [])}
     report = summarize(per_recording)
+    shipped = _choose(tracked, list(tracked))
     sizes = sorted({len(recipe.sequences) - len(f) for f in fold_list})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
                   train_config=recipe.recipe(),
@@ -159,6 +181,14 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                  f"recipe's {len(recipe.sequences)} recordings; a model of "
                                  'the whole recipe trains on all of them, so these figures '
                                  'judge networks trained on less data than it'),
+                  tracking={
+                      'chosen': {m: _labelled(shipped[m]) for m in TRACKED},
+                      'chosen_on': 'the mean AOE over every held-out recording; each fold\'s '
+                                   "figures use the other folds' choice",
+                      'per_fold': {str(f): c for f, c in choice.items()},
+                      'candidates': {m: {label: float(np.mean(
+                          [tracked[n][label][m]['aoe_deg'] for n in tracked]))
+                          for label in _CANDIDATES} for m in TRACKED}},
                   **({'seed': recipe.seed} if seeds is None else {
                       'seeds': runs, 'per_seed': {str(s): summarize(r)
                                                   for s, r in per_seed.items()}}))
@@ -213,29 +243,26 @@ def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
                         Path(f'{label}, calibration')))
 
 
-def _tracking(models: list[tuple[LoadedModel, LoadedModel]], recipe: Any) -> dict[str, Any]:
-    """
-    Return the output bias tracking ``tune-fusion`` would give a fold's models.
+_CANDIDATES = {tracking_label(t): t for t in (None, *TRACKING_GRID)}
 
-    Chosen on the fold's own training tails, as the shipped model's is on its own: each
-    seed's network and calibration (``members``), and the mean of the seeds' outputs
-    (``ensemble``, what ``denoise-imu ensemble`` would ship), so that the held-out
-    recordings are scored as those models run. Folds of whole recordings (no tails) run
-    untracked.
-    """
-    none = {'calibrated': None, 'network': None}
-    if recipe.whole_sequences:
-        return {'members': [none] * len(models), 'ensemble': none}
-    seqs, start = training_tails(models[0][0], recipe.data)
-    rate = sample_rate(models[0][0])
-    outputs = [{'calibrated': [calib.untracked(seq.imu) for seq in seqs],
-                'network': [net.untracked(seq.imu) for seq in seqs]} for net, calib in models]
 
-    def chosen(gyros: list[np.ndarray]) -> BiasTracking | None:
-        return choose_tracking(seqs, gyros, start, rate)['settings']
-    return {'members': [{m: chosen(out[m]) for m in out} for out in outputs],
-            'ensemble': {m: chosen([np.mean(per, axis=0) for per in zip(
-                *(out[m] for out in outputs))]) for m in none}}
+def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float
+                ) -> dict[str, dict[str, dict[str, float]]]:
+    """Return each tracking candidate's figures (label -> row -> score) of untracked gyros."""
+    return {label: {m: score(seq, track_bias(g, seq.imu[:, 3:], rate_hz, t))
+                    for m, g in gyros.items()} for label, t in _CANDIDATES.items()}
+
+
+def _choose(tracked: dict[str, Any], names: list[str]) -> dict[str, str]:
+    """Return, per row, the candidate of lowest mean AOE over ``names``."""
+    return {m: min(_CANDIDATES, key=lambda label: np.mean(
+        [tracked[n][label][m]['aoe_deg'] for n in names])) for m in TRACKED}
+
+
+def _labelled(label: str) -> dict[str, Any] | None:
+    """Return a candidate as a model file stores it (None: no tracking)."""
+    settings = _CANDIDATES[label]
+    return None if settings is None else dict(settings.as_dict(), label=label)
 
 
 def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any

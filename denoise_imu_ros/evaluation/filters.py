@@ -10,9 +10,8 @@ chosen the same way (``denoise-imu tune-fusion``): on the validation tails of th
 model's training recordings (the samples after its training windows, which no training
 step saw), the setting with the lowest mean 3-D error wins. Test sequences are never
 used. Scores follow :func:`denoise_imu_ros.core.metrics.fused_errors`: yaw aligned once
-1.5 s in, tilt never. Before the filters, the same tails choose each model's output
-bias tracking (:class:`~denoise_imu_ros.core.schema.BiasTracking`, or none) by the
-open-loop error, and the filters are tuned on the gyro it leaves.
+1.5 s in, tilt never. Each model's gyro is its output as it runs, its bias tracked where
+its file says so (``crossval --attach`` chooses that).
 """
 
 from __future__ import annotations
@@ -29,24 +28,19 @@ from scipy.spatial.transform import Rotation
 from ..core.compat import check_baseline
 from ..core.errors import DatasetError, ModelFileError
 from ..core.limits import check_rate, GRAVITY_M_S2
-from ..core.metrics import fused_errors, FusedErrors, score as open_loop_score
+from ..core.metrics import fused_errors, FusedErrors
 from ..core.modelfile import read_model_file, sample_rate
 from ..core.records import Sequence
 from ..core.rotation import from_gravity
-from ..core.schema import BiasTracking, MAX_ACCEL_BIAS_M_S2, ModelMeta
+from ..core.schema import MAX_ACCEL_BIAS_M_S2, ModelMeta
 from ..data.load import load_sequence
-from ..data.rest_bias import track_bias
-from ..learn.checkpoint import load_model, LoadedModel
+from ..learn.checkpoint import load_model
 from ..runtime.fusion import fuse, FusionSettings, step_periods
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
 MADGWICK_GAINS = (0.001, 0.003, 0.01, 0.033, 0.1, 0.3)     # ahrs's default: 0.033
 NO_BIAS = (0.0, 0.0, 0.0)
-# the output's bias tracking tried: VQF's biasSigmaMotion (its default 0.1 deg/s) and
-# biasForgettingTime (its default 100 s), beside none
-TRACKING_GRID = tuple(BiasTracking(sigma, forget) for sigma in (0.03, 0.05, 0.07, 0.1, 0.2)
-                      for forget in (30.0, 100.0, 300.0))
 
 
 @dataclass(frozen=True)
@@ -231,72 +225,9 @@ def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: flo
     return report
 
 
-def tracking_label(settings: BiasTracking | None) -> str:
-    """Name a tracking candidate in reports."""
-    if settings is None:
-        return 'none'
-    return f'sigma {settings.sigma_motion_deg_s:g} deg/s, forgetting {settings.forgetting_s:g} s'
-
-
-def choose_tracking(seqs: list[Sequence], gyros: list[np.ndarray], start: int,
-                    rate_hz: float) -> dict[str, Any]:
-    """
-    Choose a model output's bias tracking on the tails: the lowest mean open-loop AOE.
-
-    ``gyros`` are the untracked outputs over whole recordings (the tracker's causal
-    context); each tail is integrated from its first pose. Returns the chosen settings
-    (None: no tracking), its mean AOE and every candidate's.
-    """
-    mean = {}
-    for settings in (None, *TRACKING_GRID):
-        mean[settings] = float(np.mean([
-            open_loop_score(seq.tail(start),
-                            track_bias(g, seq.imu[:, 3:], rate_hz, settings)[start:])['aoe_deg']
-            for seq, g in zip(seqs, gyros)]))
-    best = min(mean, key=mean.get)
-    return {'settings': best, 'aoe_deg': mean[best],
-            'candidates': {tracking_label(s): m for s, m in mean.items()}}
-
-
 # what is tuned for each gyro: the product's filter for all three, the others for the
 # gyro a user without the network would feed them
 KINDS = {'raw': ('vqf',), 'calibrated': ('vqf', 'imufusion', 'madgwick'), 'network': ('vqf',)}
-
-
-def training_tails(net: LoadedModel, data: str | None = None, progress: bool = False
-                   ) -> tuple[list[Sequence], int]:
-    """
-    Return a model's training recordings that have a validation tail, and its start.
-
-    The recordings, their folder and the tail start come from the model file (its recipe
-    and run); ``data`` overrides the folder. What the file lacks is a DatasetError.
-    """
-    meta = net.meta
-    names, folder, start = meta.train_sequences, data or meta.data, meta.training_span
-    if meta.recipe('whole_sequences'):
-        raise DatasetError(f'{net.path}: trained on whole recordings (whole_sequences): it '
-                           'has no validation tail to choose settings on')
-    if not names or start is None:
-        raise DatasetError(f'{net.path}: the model file does not name its training '
-                           'recordings and its window: it has no validation tails to choose '
-                           'settings on')
-    if folder is None:
-        raise DatasetError(f'{net.path}: the model file does not name the folder of its '
-                           'training recordings: pass --data')
-    seqs = []
-    for name in names:
-        seq = load_sequence(f'{folder}/{name}', meta.recipe('imu_topic'),
-                            meta.recipe('pose_topic'), meta.recipe('max_gt_gap_s'),
-                            align_poses=meta.recipe('align', 'none'), poses=meta.recipe('poses'))
-        check_rate(seq.stamp_ns, sample_rate(net), f'{folder}/{name}')  # --data: its own?
-        if len(seq) - start < 2:
-            continue
-        seqs.append(seq)
-        if progress:
-            print(f'tail of {name}: {len(seq) - start} samples', flush=True)
-    if not seqs:
-        raise DatasetError(f'{net.path}: no training recording has a validation tail')
-    return seqs, start
 
 
 def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
@@ -310,32 +241,44 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
     net = load_model(model_spec)
     calib = load_model(baseline_spec)
     check_baseline(net, calib)
-    names = net.meta.train_sequences
-    seqs, start = training_tails(net, data, progress)
-    tails = [seq.tail(start) for seq in seqs]
-    gyros = {'raw': [seq.imu[:, :3] for seq in seqs],  # whole: the tail's causal context
-             'calibrated': [calib.untracked(seq.imu) for seq in seqs],
-             'network': [net.untracked(seq.imu) for seq in seqs]}
-    rate = sample_rate(net)
-    tracking = {source: choose_tracking(seqs, gyros[source], start, rate)
-                for source in ('calibrated', 'network')}
-    for source, chosen in tracking.items():
-        gyros[source] = [track_bias(g, seq.imu[:, 3:], rate, chosen['settings'])
-                         for seq, g in zip(seqs, gyros[source])]
+    meta = net.meta
+    names, folder, start = meta.train_sequences, data or meta.data, meta.training_span
+    if meta.recipe('whole_sequences'):
+        raise DatasetError(f'{net.path}: trained on whole recordings (whole_sequences): it '
+                           'has no validation tail to choose filter settings on')
+    if not names or start is None:
+        raise DatasetError(f'{net.path}: the model file does not name its training '
+                           'recordings and its window: it has no validation tails to choose '
+                           'filter settings on')
+    if folder is None:
+        raise DatasetError(f'{net.path}: the model file does not name the folder of its '
+                           'training recordings: pass --data')
+    tails, seqs, gyros = [], [], {source: [] for source in KINDS}
+    for name in names:
+        seq = load_sequence(f'{folder}/{name}', meta.recipe('imu_topic'),
+                            meta.recipe('pose_topic'), meta.recipe('max_gt_gap_s'),
+                            align_poses=meta.recipe('align', 'none'), poses=meta.recipe('poses'))
+        check_rate(seq.stamp_ns, sample_rate(net), f'{folder}/{name}')  # --data: its own?
+        if len(seq) - start < 2:
+            continue
+        whole = {'raw': seq.imu[:, :3], 'calibrated': calib.correct(seq.imu),
+                 'network': net.correct(seq.imu)}  # the tail's causal context
+        tails.append(seq.tail(start))
+        seqs.append(seq)
+        for source, gyro in whole.items():
+            gyros[source].append(gyro[start:])
         if progress:
-            print(f'{source} output bias tracking: {tracking_label(chosen["settings"])} '
-                  f'({chosen["aoe_deg"]:.2f} deg open loop on the tails, none '
-                  f'{chosen["candidates"]["none"]:.2f})', flush=True)
-    gyros = {source: [g[start:] for g in per] for source, per in gyros.items()}
+            print(f'tail of {name}: {len(seq) - start} samples', flush=True)
+    if not tails:
+        raise DatasetError(f'{net.path}: no training recording has a validation tail')
     fitted = fit_accel_bias(seqs, start)
     bias = None if fitted is None else tuple(float(b) for b in fitted[0])
     if progress:
         print('accelerometer bias from the poses before the tails: ' + (
             'none usable' if fitted is None else
             f'{np.round(fitted[0], 4).tolist()} m/s^2 ({fitted[1]} samples)'), flush=True)
-    report = tune(tails, gyros, rate, KINDS, bias)
+    report = tune(tails, gyros, sample_rate(net), KINDS, bias)
     return {'chosen_on': f'validation tails of {", ".join(names)} (from sample {start} on)',
-            'tracking': tracking,
             'accel_bias': None if fitted is None else {
                 'm_s2': list(bias), 'samples': fitted[1],
                 'fitted_on': f'poses of {", ".join(names)} before sample {start}'},
@@ -348,15 +291,11 @@ def attach(model_spec: str, baseline_spec: str, report: dict[str, Any]) -> None:
     from ..core.modelfile import add_metadata
     for spec, source in ((model_spec, 'network'), (baseline_spec, 'calibrated')):
         chosen = report['filters'][f'{source} vqf']
-        tracking = report['tracking'][source]
         add_metadata(read_model_file(spec).path, fusion=dict(
             settings=chosen['settings'], orientation_std_rad=chosen['orientation_std_rad'],
             chosen_on=report['chosen_on'], scored=report['scored'],
             accel_bias=report.get('accel_bias'),
-            **({'filters': report['filters']} if source == 'network' else {})),
-            bias_tracking=None if tracking['settings'] is None else dict(
-                tracking['settings'].as_dict(), aoe_deg=tracking['aoe_deg'],
-                candidates=tracking['candidates'], chosen_on=report['chosen_on']))
+            **({'filters': report['filters']} if source == 'network' else {})))
 
 
 def table(report: dict[str, Any]) -> str:
@@ -367,11 +306,6 @@ def table(report: dict[str, Any]) -> str:
         lines.append(f'| {source} | {kind} | {Filter.from_dict(r).label} | {r["aoe_deg"]:.2f} '
                      f'| {r["tilt_deg"]:.2f} | {r["aoe_yaw_deg"]:.2f} |\n')
     lines.append(f'\nChosen on the {report["chosen_on"]}; {report["scored"]}; degrees.\n')
-    for source, chosen in report['tracking'].items():
-        lines.append(f'Output bias tracking of the {source} gyro (chosen first, by the '
-                     f'open-loop error on the same tails): {tracking_label(chosen["settings"])}'
-                     f', {chosen["aoe_deg"]:.2f} deg (none: {chosen["candidates"]["none"]:.2f})'
-                     '.\n')
     fitted = report.get('accel_bias')
     lines.append('Accelerometer bias tried: ' + (
         'none (no usable poses)' if fitted is None else

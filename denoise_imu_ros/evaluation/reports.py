@@ -76,6 +76,15 @@ def crossval_table(report: dict[str, Any]) -> str:
                  f'Verdict: {report["verdict"]}.\n')
     if 'fold_training' in report:
         lines.append(f'\nNote: {report["fold_training"]}.\n')
+    if 'tracking' in report:
+        tracking = report['tracking']
+        said = [f'{m} {(c or {}).get("label", "none")}' for m, c in tracking['chosen'].items()]
+        folds = [f'fold {f}: ' + ', '.join(f'{m} {c}' for m, c in chosen.items())
+                 for f, chosen in tracking['per_fold'].items()]
+        lines.append('\nOutput bias tracking (VQF at rest and in motion, after the model), '
+                     f'chosen on {tracking["chosen_on"]}: {"; ".join(said)} (for the '
+                     f'models this verdict is attached to); the figures above: '
+                     f'{"; ".join(folds)}.\n')
     if 'per_seed' in report:
         alone = [f'seed {s} {r["mean"]["network"]["aoe_deg"]:.2f}'
                  for s, r in report['per_seed'].items()]

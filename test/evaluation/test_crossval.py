@@ -105,6 +105,13 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     printed = capsys.readouterr().out
     assert report['verdict'] in printed and 'rec2' in printed
     assert load_model(model_file).meta.crossval.report == report
+    # the network's output bias tracking chosen over every held-out recording, stored
+    chosen = report['tracking']['chosen']['network']
+    stored = load_model(model_file).meta.bias_tracking
+    assert (stored is None) == (chosen is None)
+    if chosen is not None:
+        assert stored.as_dict() == {k: chosen[k] for k in ('sigma_motion_deg_s', 'forgetting_s')}
+    assert set(report['tracking']['per_fold']) == {'0', '1', '2'}
     assert main(['eval', '--model', str(model_file), '--data', str(data), '--sequences',
                  'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0
     assert json.loads((tmp_path / 'ev' / 'results.json').read_text())['crossval'] == report
@@ -159,6 +166,9 @@ def test_held_out_recordings_are_aligned_like_the_training_ones(tmp_path):
 def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     from denoise_imu_ros.core.metrics import score
     from denoise_imu_ros.data.load import load_sequence
+    from denoise_imu_ros.data.rest_bias import track_bias
+    from denoise_imu_ros.evaluation.crossval import tracking_label, TRACKING_GRID
+    from denoise_imu_ros.learn.model import correct_gyro, merge
     data = tmp_path / 'data'
     for i, bias in enumerate((0.010, 0.012)):
         write_asl(data / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=bias)
@@ -183,20 +193,17 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     assert [n.meta.recipe('seed') for n in nets] == [3, 5]
     assert nets[0].meta.train_sequences == ('rec1',)
     # the ensemble row is what `denoise-imu ensemble` of the fold's two seeds would score,
-    # tuned as a user would (tune-fusion: its output bias tracking on its training tails)
-    members = [str(out / f'seed{s}' / 'fold0' / 'network.safetensors') for s in (3, 5)]
-    calib = str(out / 'seed3' / 'fold0' / 'calibrated.safetensors')
-    ens = str(tmp_path / 'ens.safetensors')
-    assert main(['ensemble', *members, '--out', ens]) == 0
-    for model in (ens, *members):
-        assert main(['tune-fusion', '--model', model, '--baseline', calib, '--attach',
-                     '--data', str(data), '--quiet']) == 0
-    assert load_model(ens).meta.bias_tracking is not None  # the synthetic bias: tracked
+    # its output's bias tracked as the other fold's held-out recording chose
+    labels = {tracking_label(t): t for t in (None, *TRACKING_GRID)}
+    chosen = labels[report['tracking']['per_fold']['0']['network']]
+
+    def tracked(gyro):
+        return score(seq, track_bias(gyro, seq.imu[:, 3:], 200.0, chosen))['aoe_deg']
     assert report['recordings']['rec0']['network']['aoe_deg'] == pytest.approx(
-        score(seq, load_model(ens).correct(seq.imu))['aoe_deg'], rel=1e-4)
-    for s, member in zip(('3', '5'), members):
+        tracked(correct_gyro(merge([n.model for n in nets]), seq.imu)), rel=1e-4)
+    for s, net in zip(('3', '5'), nets):
         assert report['per_seed'][s]['recordings']['rec0']['network']['aoe_deg'] == (
-            pytest.approx(score(seq, load_model(member).correct(seq.imu))['aoe_deg'], rel=1e-6))
+            pytest.approx(tracked(correct_gyro(net.model, seq.imu)), rel=1e-6))
     assert report['recordings']['rec0']['network'] != report['per_seed']['3']['recordings'][
         'rec0']['network']
     assert main(args + ['--seeds', '3', '3']) == 1
