@@ -37,8 +37,8 @@ from ..core.schema import BiasTracking, ModelMeta, parse_meta
 from ..data import rest_bias
 from ..data.load import load_sequence
 from ..data.rest_bias import track_bias
-from ..learn.checkpoint import load_model, LoadedModel
 from ..learn import parallel
+from ..learn.checkpoint import load_model, LoadedModel
 from ..learn.config import load_config
 from ..learn.train import train
 
@@ -183,7 +183,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                  'judge networks trained on less data than it'),
                   tracking={
                       'chosen': {m: _labelled(shipped[m]) for m in TRACKED},
-                      'chosen_on': 'the mean AOE over every held-out recording; each fold\'s '
+                      'chosen_on': "the mean AOE over every held-out recording; each fold's "
                                    "figures use the other folds' choice",
                       'per_fold': {str(f): c for f, c in choice.items()},
                       'candidates': {m: {label: float(np.mean(

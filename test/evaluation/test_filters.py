@@ -81,26 +81,6 @@ def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):
     assert offered['raw vqf']['settings'] == chosen['settings']
 
 
-def test_the_output_bias_tracking_is_chosen_on_the_tails_and_none_when_none_helps(
-        monkeypatch):
-    t = np.arange(24000) * 0.005
-    gt = Rotation.from_rotvec(np.stack([0.4 * np.sin(0.2 * t), 0.4 * np.cos(0.15 * t),
-                                        2.0 * np.sin(0.05 * t)], axis=1))
-    omega = (gt[:-1].inv() * gt[1:]).as_rotvec() / 0.005
-    accel = gt.inv().apply(np.tile([0, 0, 9.81], (len(t), 1)))
-    seq = Sequence('s', (1e9 + t * 1e9).astype(np.int64), np.hstack([np.vstack(
-        [omega, omega[-1:]]), accel]), gt.as_quat(), np.zeros((len(t), 3)),
-        np.ones(len(t), bool))
-    exact = seq.imu[:, :3]
-    grid = (filters.BiasTracking(0.05, 30.0), filters.BiasTracking(0.1, 300.0))
-    monkeypatch.setattr(filters, 'TRACKING_GRID', grid)
-    biased = filters.choose_tracking([seq], [exact + [0.01, -0.01, 0.0]], 12000, 200.0)
-    assert biased['settings'] in grid and len(biased['candidates']) == 3
-    assert biased['aoe_deg'] == min(biased['candidates'].values())
-    assert biased['aoe_deg'] < 0.5 * biased['candidates']['none']
-    assert filters.choose_tracking([seq], [exact], 12000, 200.0)['settings'] is None
-
-
 def _moving_sequence(bias: np.ndarray, n: int = 6000) -> Sequence:
     """Return a body moving and turning, its accelerometer the specific force plus ``bias``."""
     t = np.arange(n) * 0.005
