@@ -279,7 +279,10 @@ def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any
     models = []
     for path, want in zip(paths, (cfg, calib_cfg)):
         loaded = load_model(path)
-        if loaded.meta.train_config != json.loads(jsonio.dumps(want.recipe())):
+        wanted = json.loads(jsonio.dumps(want.recipe()))
+        # a recipe entry newer than the file, left unset, is the recipe the file was made by
+        stored = {k: None for k, v in wanted.items() if v is None} | loaded.meta.train_config
+        if stored != wanted:
             raise TrainingError(f'{path}: trained by another recipe than this fold uses '
                                 '(remove it, or use another --out)')
         models.append(loaded)

@@ -128,6 +128,14 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
                  '--quiet']) == 0
     assert (out / 'fold0' / 'network.safetensors').stat().st_mtime_ns == kept
     assert json.loads((out / 'crossval.json').read_text())['recordings'] == report['recordings']
+    # a fold written before a recipe entry existed (unset in this recipe) is this recipe
+    from denoise_imu_ros.core.modelfile import add_metadata
+    net0 = out / 'fold0' / 'network.safetensors'
+    older = load_model(net0).meta.train_config
+    assert older.pop('poses', 'absent') is None
+    add_metadata(net0, train_config=older)
+    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+                 '--quiet']) == 0
     # models of another recipe are refused, not scored as if this one had made them
     assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
                  '--quiet', '--seed', '7']) == 1
