@@ -92,17 +92,19 @@ def tracking(meta: ModelMeta, choice: str) -> BiasTracking | None:
 class RestBias:
     """The estimate one sample at a time (the node, process-bag), with what it has seen."""
 
-    def __init__(self, settings: RestBiasSettings, rate_hz: float) -> None:
+    _start = staticmethod(estimator)  # the VQF, as the run starts
+
+    def __init__(self, settings: RestBiasSettings | BiasTracking, rate_hz: float) -> None:
         self.settings = settings
         self._rate_hz = rate_hz
-        self._vqf = estimator(settings, rate_hz)
+        self._vqf = self._start(settings, rate_hz)
         self._gyro = np.zeros(3)
         self._accel = np.zeros(3)
         self.still_samples = 0  # samples detected still since the last reset
 
     def reset(self) -> None:
         """Start again from the prior (a new run: another power-on, a bag loop)."""
-        self._vqf = estimator(self.settings, self._rate_hz)
+        self._vqf = self._start(self.settings, self._rate_hz)
         self.still_samples = 0
 
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
@@ -124,31 +126,10 @@ class RestBias:
         return bias, float(sigma)
 
 
-class BiasTracker:
-    """The tracked bias of a model's output, one sample at a time (the node, process-bag)."""
+class BiasTracker(RestBias):
+    """The tracked bias of a model's output (fed that output), one sample at a time."""
 
-    def __init__(self, settings: BiasTracking, rate_hz: float) -> None:
-        self.settings = settings
-        self._rate_hz = rate_hz
-        self._vqf = tracker(settings, rate_hz)
-        self._gyro = np.zeros(3)
-        self._accel = np.zeros(3)
-
-    def reset(self) -> None:
-        """Start again from a bias of 0 (a new run)."""
-        self._vqf = tracker(self.settings, self._rate_hz)
-
-    def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
-        """Take the model's output and the accelerometer; return the bias after them (3,)."""
-        self._gyro[:] = gyro
-        self._accel[:] = accel
-        self._vqf.update(self._gyro, self._accel)
-        return self._vqf.getBiasEstimate()[0]
-
-    def estimate(self) -> tuple[np.ndarray, float]:
-        """Return the current bias (3,) and its standard deviation, both rad/s."""
-        bias, sigma = self._vqf.getBiasEstimate()
-        return bias, float(sigma)
+    _start = staticmethod(tracker)  # from a bias of 0, at rest and in motion
 
 
 def track_bias(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,

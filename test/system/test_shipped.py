@@ -3,6 +3,7 @@
 """Pins of the shipped models: provenance, accuracy on the bundled sample, streaming."""
 
 from denoise_imu_ros.core.modelfile import read_model_file, shipped_models
+from denoise_imu_ros.core.schema import BiasTracking
 from denoise_imu_ros.evaluation import evaluate as evaluate_module
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
@@ -98,18 +99,24 @@ def test_shipped_tumvi_is_the_ensemble_of_eleven_family_trainings_and_its_folds_
     assert report['seeds'] == [0, 1, 2] and set(report['per_seed']) == {'0', '1', '2'}
 
 
-def test_shipped_broad_removes_the_turn_on_bias_alone_as_its_session_folds_say():
+def test_shipped_broad_is_what_its_session_folds_say_its_output_bias_tracked():
     broad, network = read_model_file('broad'), load_model('broad_network')
-    assert broad.meta.kind == 'rest bias' and broad.config.calibration_only
+    assert broad.meta.kind != 'rest bias' and broad.config.calibration_only
     report = broad.meta.raw['crossval']
     assert report == network.meta.raw['crossval'] == load_model(
         'broad_calibrated').meta.raw['crossval']
     assert report['fold_kind'] == 'leave one power-on session out'
     assert len(report['folds']) == 2 and report['seeds'] == [0, 1, 2]
     assert set(report['mean']) == {'raw', 'rest bias', 'calibrated', 'network'}
-    assert report['deploy'] == 'rest bias' and deployment_warning(broad) is None
+    assert report['deploy'] == 'calibration' and deployment_warning(broad) is None
     assert deployment_warning(read_model_file('broad_network')).endswith(
-        'deploy no learnt correction, only the turn-on bias removed (rest_bias)')
+        'deploy the calibration')
+    # each file tracks its output's bias as the held-out sessions chose for its row
+    for name, row in (('broad', 'calibrated'), ('broad_calibrated', 'calibrated'),
+                      ('broad_network', 'network')):
+        chosen = report['tracking']['chosen'][row]
+        assert read_model_file(name).meta.bias_tracking == BiasTracking(
+            chosen['sigma_motion_deg_s'], chosen['forgetting_s'])
     assert network.model.config.members == 3
     assert sorted(m['seed'] for m in network.meta.raw['members']) == [0, 1, 2]
     # one estimator, its prior between the two sessions' turn-on biases (rad/s)
