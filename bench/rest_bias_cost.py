@@ -1,13 +1,14 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
 """
-What the turn-on bias estimate adds to the online pipeline's per-sample cost, side by side.
+What the bias estimates add to the online pipeline's per-sample cost, side by side.
 
 Runs the same model over the same real samples through ``OnlineDenoiser.process`` (the
-node's and process-bag's per-sample work, without ROS) with ``rest_bias`` off and on,
-alternating rounds so that a change in the machine's speed hits both alike, and the
-estimator alone (``RestBias.update``). Prints the median per-sample time of each, and
-the ratio on/off.
+node's and process-bag's per-sample work, without ROS) with ``rest_bias`` off and on
+(the turn-on bias before the model, and its output's tracking where the file has one),
+alternating rounds so that a change in the machine's speed hits both alike, and each
+estimator alone (``RestBias.update``, ``BiasTracker.update``). Prints the median
+per-sample time of each, and the ratio on/off.
 Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
      [--recording 03_undisturbed_slow_rotation_C] [--samples 20000] [--rounds 5]
 """
@@ -18,7 +19,7 @@ import time
 
 from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
 from denoise_imu_ros.data.load import load_imu
-from denoise_imu_ros.data.rest_bias import resolve, RestBias
+from denoise_imu_ros.data.rest_bias import BiasTracker, resolve, RestBias
 from denoise_imu_ros.runtime.online import OnlineDenoiser
 import numpy as np
 
@@ -35,7 +36,7 @@ def per_sample_s(step, stamps: np.ndarray, imu: np.ndarray) -> float:
 
 
 def main() -> None:
-    """Print the per-sample cost with rest_bias off and on, and of the estimator alone."""
+    """Print the per-sample cost with rest_bias off and on, and of each estimator alone."""
     parser = argparse.ArgumentParser()
     parser.add_argument('--model', default='broad_network')
     parser.add_argument('--recording', default='03_undisturbed_slow_rotation_C')
@@ -45,7 +46,7 @@ def main() -> None:
     model = read_model_file(args.model)
     rec = load_imu(DATA / args.recording)
     stamps, imu = rec.imu_stamp_ns[:args.samples], rec.imu[:args.samples]
-    times = {'off': [], 'on': [], 'estimator alone': []}
+    times = {'off': [], 'on': [], 'estimator alone': [], 'tracker alone': []}
     for _ in range(args.rounds):
         for choice in ('off', 'on'):
             den = OnlineDenoiser.from_model_file(model, rest_choice=choice)
@@ -53,12 +54,16 @@ def main() -> None:
         rest = RestBias(resolve(model.meta, 'on'), sample_rate(model))
         times['estimator alone'].append(
             per_sample_s(lambda t, g, a: rest.update(g, a), stamps, imu))
-    median = {k: float(np.median(v)) for k, v in times.items()}
+        if model.meta.bias_tracking is not None:
+            track = BiasTracker(model.meta.bias_tracking, sample_rate(model))
+            times['tracker alone'].append(
+                per_sample_s(lambda t, g, a: track.update(g, a), stamps, imu))
+    median = {k: float(np.median(v)) for k, v in times.items() if v}
     print(f'{model.path.name}, {len(stamps)} samples of {args.recording}, '
           f'{args.rounds} rounds alternating, median per sample:')
     for name, value in median.items():
-        print(f'  rest_bias {name}: {value * 1e6:.1f} us' if name != 'estimator alone'
-              else f'  the estimator alone: {value * 1e6:.1f} us')
+        print(f'  rest_bias {name}: {value * 1e6:.1f} us' if name in ('off', 'on')
+              else f'  the {name.replace(" alone", "")} alone: {value * 1e6:.1f} us')
     print(f'  on / off: {median["on"] / median["off"]:.3f}')
 
 

@@ -193,13 +193,13 @@ def _tune_fusion(args: argparse.Namespace) -> None:
 
 def _ensemble(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file
-    from .learn.checkpoint import save_ensemble, SHARED_BY_MEMBERS
+    from .learn.checkpoint import save_ensemble
     _guard_output(args.out, [read_model_file(m).path for m in args.models], args.overwrite)
     loaded = save_ensemble(args.out, args.models)
     print(f'wrote {args.out}: the mean of {loaded.model.config.members} networks')
     missing = {'fusion': ("imu/data's filter settings", 'tune-fusion --attach'),
                'crossval': ('cross-recording verdict', 'crossval --attach')}
-    for key in SHARED_BY_MEMBERS:
+    for key in missing:  # no bias_tracking is a choice crossval makes, not a gap
         if key not in loaded.meta.raw:
             what, how = missing[key]
             print(f'warning: the ensemble has no {what} (its members carry none, or not the '

@@ -91,8 +91,8 @@ class BiasTracking:
     What a turn-on bias removed at the start does not catch (a session's bias in motion
     off its bias at rest, a network's constant error on an unseen recording) VQF
     estimates from the accelerometer's tilt corrections while moving and from the gyro
-    while still; ``tune-fusion`` chooses its two settings on the training recordings'
-    validation tails, or none.
+    while still; ``crossval`` chooses its two settings, or none, on recordings its folds
+    never trained on.
     """
 
     sigma_motion_deg_s: float  # VQF's biasSigmaMotion: smaller trusts motion updates more

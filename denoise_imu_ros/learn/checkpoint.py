@@ -26,7 +26,7 @@ from ..data import rest_bias
 
 # imu/data's filter settings (tune-fusion) and the cross-recording verdict (crossval
 # --seeds): kept by an ensemble when every member carries the same
-SHARED_BY_MEMBERS = ('fusion', 'crossval')
+SHARED_BY_MEMBERS = ('fusion', 'crossval', 'bias_tracking')
 
 
 class LoadedModel(NamedTuple):
