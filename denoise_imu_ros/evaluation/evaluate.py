@@ -260,7 +260,8 @@ def _write(out_dir: Path, report: dict[str, Any], rest_only: bool) -> None:
     for m, t in report['bias_tracking'].items():
         table += (f"The {m} row tracks its output's bias at rest and in motion (VQF, sigma "
                   f'{t["sigma_motion_deg_s"]:g} deg/s, forgetting {t["forgetting_s"]:g} s, '
-                  'chosen by tune-fusion on the training tails) and removes it, as online.\n')
+                  'chosen by crossval on recordings its folds never trained on) and removes '
+                  'it, as online.\n')
     if report['start_sample']:
         table += f'\nScored from sample {report["start_sample"]} on of every recording.\n'
     if report['training_fit_note']:
