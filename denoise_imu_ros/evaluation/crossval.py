@@ -188,7 +188,10 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                       'per_fold': {str(f): c for f, c in choice.items()},
                       'candidates': {m: {label: float(np.mean(
                           [tracked[n][label][m]['aoe_deg'] for n in tracked]))
-                          for label in _CANDIDATES} for m in TRACKED}},
+                          for label in _CANDIDATES} for m in TRACKED},
+                      'recordings': {n: {m: {label: tracked[n][label][m]['aoe_deg']
+                                             for label in _CANDIDATES} for m in TRACKED}
+                                     for n in tracked}},
                   **({'seed': recipe.seed} if seeds is None else {
                       'seeds': runs, 'per_seed': {str(s): summarize(r)
                                                   for s, r in per_seed.items()}}))

@@ -203,7 +203,12 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     # the ensemble row is what `denoise-imu ensemble` of the fold's two seeds would score,
     # its output's bias tracked as the other fold's held-out recording chose
     labels = {tracking_label(t): t for t in (None, *TRACKING_GRID)}
-    chosen = labels[report['tracking']['per_fold']['0']['network']]
+    tracking = report['tracking']
+    for fold, other in (('0', 'rec1'), ('1', 'rec0')):  # chosen on the other fold's recording
+        for m in ('network', 'calibrated'):
+            figures = tracking['recordings'][other][m]
+            assert tracking['per_fold'][fold][m] == min(figures, key=figures.get)
+    chosen = labels[tracking['per_fold']['0']['network']]
 
     def tracked(gyro):
         return score(seq, track_bias(gyro, seq.imu[:, 3:], 200.0, chosen))['aoe_deg']
