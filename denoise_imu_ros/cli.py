@@ -37,8 +37,9 @@ POSES_OPTION = {  # a VIO's or SLAM's trajectories in place of the recordings' p
                               "recordings' own poses"}
 REST_BIAS_OPTION = {  # the node's rest_bias parameter, for the offline tools
     'choices': ('model', 'on', 'off'), 'default': 'model',
-    'help': "remove the gyro's turn-on bias, estimated from stillness, before the model: "
-            'model (as the model was trained, the default), on, off'}
+    'help': "remove the gyro's turn-on bias, estimated from stillness, before the model, "
+            "and track the output's bias after it where the model file says: model (as the "
+            'model was trained and cross-validated, the default), on, off (neither)'}
 
 
 def _workers(value: str) -> int | str:
