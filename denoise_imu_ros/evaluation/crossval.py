@@ -309,10 +309,12 @@ def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
     The network only if it beats the baseline on most recordings and on average. The
     baseline is the best on average of the calibrated IMU, the raw gyro less its turn-on
     bias and plain integration, so a calibration that hurts new recordings (an already
-    calibrated IMU) is not the bar, nor is a raw gyro that a still start would fix.
+    calibrated IMU) is not the bar, nor is a raw gyro that a still start would fix. On a
+    tie the simpler wins (recordings never still: the rest bias is the raw gyro).
     """
-    base = min((m for m in ('calibrated', 'rest bias', 'raw') if m in mean),
-               key=lambda m: mean[m]['aoe_deg'])
+    simpler = ('raw', 'rest bias', 'calibrated')
+    base = min((m for m in simpler if m in mean),
+               key=lambda m: (mean[m]['aoe_deg'], simpler.index(m)))
     label = {'calibrated': 'the calibrated IMU', 'raw': 'plain integration',
              'rest bias': 'the raw gyro less its turn-on bias'}[base]
     n = len(per_recording)

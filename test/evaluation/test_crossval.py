@@ -53,6 +53,11 @@ def test_verdict_follows_the_figures():
                                        'turn-on bias on unseen recordings (1 of 2, +8 %')
     assert after['deploy'] == 'rest bias'
     assert after['verdict'].endswith('only the turn-on bias removed (rest_bias)')
+    # recordings never still: the rest bias is the raw gyro, and the simpler is deployed
+    same = {'raw': {'aoe_deg': 1.4, 'aoe_yaw_deg': 1.2},
+            'rest bias': {'aoe_deg': 1.4, 'aoe_yaw_deg': 1.2}}
+    never_still = summarize({'a': dict(_figures(2.1, 2.0, 1.4), **same)})
+    assert never_still['deploy'] == 'none'
 
 
 def test_attaching_a_report_of_other_recordings_or_a_shorter_training_is_named():
