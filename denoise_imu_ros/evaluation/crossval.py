@@ -163,15 +163,9 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
             tracked_seed[name] = [_candidates(seq, g, sample_rate(models[0][0]))
                                   for g in gyros] if seeds is not None else []
             fold_of[name] = i
-    choice = {f: _choose(tracked, [n for n in tracked if fold_of[n] != f])
-              for f in set(fold_of.values())}  # for each fold: the other folds' choice
-    per_recording = {name: {**raw_rows[name], **{
-        m: tracked[name][choice[fold_of[name]][m]][m] for m in TRACKED}} for name in tracked}
-    per_seed = {seed: {name: {**raw_rows[name], **{
-        m: tracked_seed[name][k][choice[fold_of[name]][m]][m] for m in TRACKED}}
-        for name in tracked} for k, seed in enumerate(seeds or [])}
+    per_recording, per_seed, tracking = _nested(raw_rows, tracked, tracked_seed, fold_of,
+                                                seeds or [])
     report = summarize(per_recording)
-    shipped = _choose(tracked, list(tracked))
     sizes = sorted({len(recipe.sequences) - len(f) for f in fold_list})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
                   train_config=recipe.recipe(),
@@ -181,17 +175,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                  f"recipe's {len(recipe.sequences)} recordings; a model of "
                                  'the whole recipe trains on all of them, so these figures '
                                  'judge networks trained on less data than it'),
-                  tracking={
-                      'chosen': {m: _labelled(shipped[m]) for m in TRACKED},
-                      'chosen_on': "the mean AOE over every held-out recording; each fold's "
-                                   "figures use the other folds' choice",
-                      'per_fold': {str(f): c for f, c in choice.items()},
-                      'candidates': {m: {label: float(np.mean(
-                          [tracked[n][label][m]['aoe_deg'] for n in tracked]))
-                          for label in _CANDIDATES} for m in TRACKED},
-                      'recordings': {n: {m: {label: tracked[n][label][m]['aoe_deg']
-                                             for label in _CANDIDATES} for m in TRACKED}
-                                     for n in tracked}},
+                  tracking=tracking,
                   **({'seed': recipe.seed} if seeds is None else {
                       'seeds': runs, 'per_seed': {str(s): summarize(r)
                                                   for s, r in per_seed.items()}}))
@@ -260,6 +244,36 @@ def _choose(tracked: dict[str, Any], names: list[str]) -> dict[str, str]:
     """Return, per row, the candidate of lowest mean AOE over ``names``."""
     return {m: min(_CANDIDATES, key=lambda label: np.mean(
         [tracked[n][label][m]['aoe_deg'] for n in names])) for m in TRACKED}
+
+
+def _nested(raw_rows: dict[str, Any], tracked: dict[str, Any], tracked_seed: dict[str, Any],
+            fold_of: dict[str, int], seeds: list[int]
+            ) -> tuple[dict[str, Any], dict[int, Any], dict[str, Any]]:
+    """
+    Return the held-out figures, each seed's, and the report's ``tracking`` entry.
+
+    Each fold's recordings are scored with the tracking candidate the other folds'
+    recordings chose; the shipped models get the one all of them choose.
+    """
+    choice = {f: _choose(tracked, [n for n in tracked if fold_of[n] != f])
+              for f in set(fold_of.values())}
+
+    def rows(name: str, figures: dict[str, Any]) -> dict[str, Any]:
+        return {**raw_rows[name], **{m: figures[choice[fold_of[name]][m]][m] for m in TRACKED}}
+    per_recording = {name: rows(name, tracked[name]) for name in tracked}
+    per_seed = {seed: {name: rows(name, tracked_seed[name][k]) for name in tracked}
+                for k, seed in enumerate(seeds)}
+    shipped = _choose(tracked, list(tracked))
+    return per_recording, per_seed, {
+        'chosen': {m: _labelled(shipped[m]) for m in TRACKED},
+        'chosen_on': "the mean AOE over every held-out recording; each fold's figures use "
+                     "the other folds' choice",
+        'per_fold': {str(f): c for f, c in choice.items()},
+        'candidates': {m: {label: float(np.mean([tracked[n][label][m]['aoe_deg']
+                                                 for n in tracked]))
+                           for label in _CANDIDATES} for m in TRACKED},
+        'recordings': {n: {m: {label: tracked[n][label][m]['aoe_deg'] for label in _CANDIDATES}
+                           for m in TRACKED} for n in tracked}}
 
 
 def _labelled(label: str) -> dict[str, Any] | None:
