@@ -13,7 +13,6 @@ from denoise_imu_ros.learn.checkpoint import load_model
 import numpy as np
 
 
-
 def main(data: Path, held_out: list[str], models: list[str]) -> None:
     """Print one line per model: its mean AOE on the held-out recordings it never saw."""
     seqs = {p.name: load_sequence(p, align_poses='auto') for p in sorted(data.iterdir())
