@@ -24,8 +24,9 @@ from ..core.schema import ModelMeta
 from ..data import rest_bias
 
 
-# imu/data's filter settings (tune-fusion) and the cross-recording verdict (crossval
-# --seeds): kept by an ensemble when every member carries the same
+# imu/data's filter settings (tune-fusion), the cross-recording verdict and the output
+# bias tracking it chose (crossval --seeds): kept by an ensemble when every member
+# carries the same
 SHARED_BY_MEMBERS = ('fusion', 'crossval', 'bias_tracking')
 
 

@@ -117,7 +117,7 @@ PARAMETERS = [
     ('rest_bias', 'model', _param(
         "The gyro's turn-on bias, estimated from stillness (at start and later) and removed "
         "before the model, and the output's bias tracked after it where the model file "
-        "chose so: 'model' (as the model was trained and tuned), on or off (neither).",
+        "chose so: 'model' (as the model was trained and cross-validated), on or off (neither).",
         read_only=True,
         dynamic=True)),
     ('fused_orientation_stddev', -1.0, _param(
