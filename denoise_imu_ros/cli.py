@@ -133,10 +133,10 @@ def _check_writable(folder: str | Path | None) -> None:
 
 def _crossval(args: argparse.Namespace) -> None:
     from .core.modelfile import add_metadata, check_attachable, read_model_file
-    from .core.schema import REST_ONLY
     from .evaluation.crossval import attach_mismatches, crossval
     from .evaluation.reports import crossval_table
     from .learn.config import load_config
+    from .runtime.advice import model_kind
     recipe = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps)
     if args.attach and args.fold is not None:
         raise OptionError('--attach with --fold: one fold is no verdict; attach when '
@@ -160,9 +160,8 @@ def _crossval(args: argparse.Namespace) -> None:
         return
     sys.stdout.write(crossval_table(report))
     for path in args.attach or []:
-        mf = read_model_file(path)
-        row = (None if mf.meta.kind == REST_ONLY else
-               'calibrated' if mf.config.calibration_only else 'network')
+        row = {'network': 'network', 'calibration': 'calibrated'}.get(
+            model_kind(read_model_file(path)))  # a rest-only model tracks nothing
         tracking = None if row is None else report['tracking']['chosen'][row]
         add_metadata(path, crossval=report, bias_tracking=tracking and dict(
             tracking, chosen_on=f'crossval: {report["tracking"]["chosen_on"]}'))

@@ -59,6 +59,13 @@ def estimator(settings: RestBiasSettings, rate_hz: float) -> VQF:
     return vqf
 
 
+def _checked(choice: str) -> str:
+    """Return the node's rest_bias choice, or raise ValueError naming the three."""
+    if choice not in CHOICES:
+        raise ValueError(f'rest_bias {choice!r}: must be one of {", ".join(CHOICES)}')
+    return choice
+
+
 def resolve(meta: ModelMeta, choice: str) -> RestBiasSettings | None:
     """
     Return the settings to run with, given ``model``, ``on`` or ``off``.
@@ -67,10 +74,8 @@ def resolve(meta: ModelMeta, choice: str) -> RestBiasSettings | None:
     model file's, or the defaults with a prior of 0 for a model that has none; ``off``:
     None, the raw gyro into the model whatever it was trained on.
     """
-    if choice not in CHOICES:
-        raise ValueError(f'rest_bias {choice!r}: must be one of {", ".join(CHOICES)}')
     stored = meta.rest_bias
-    if choice == 'off' or (choice == 'model' and stored is None):
+    if _checked(choice) == 'off' or (choice == 'model' and stored is None):
         return None
     return stored or RestBiasSettings()
 
@@ -84,41 +89,31 @@ def tracker(settings: BiasTracking, rate_hz: float) -> VQF:
 
 def tracking(meta: ModelMeta, choice: str) -> BiasTracking | None:
     """Return the model file's bias tracking, unless ``choice`` (as :func:`resolve`) is off."""
-    if choice not in CHOICES:
-        raise ValueError(f'rest_bias {choice!r}: must be one of {", ".join(CHOICES)}')
-    return None if choice == 'off' else meta.bias_tracking
+    return None if _checked(choice) == 'off' else meta.bias_tracking
 
 
-class RestBias:
-    """The estimate one sample at a time (the node, process-bag), with what it has seen."""
+class BiasTracker:
+    """The tracked bias of a model's output (fed that output), one sample at a time."""
 
-    _start = staticmethod(estimator)  # the VQF, as the run starts
+    _start = staticmethod(tracker)  # the VQF as a run starts: from a bias of 0
 
-    def __init__(self, settings: RestBiasSettings | BiasTracking, rate_hz: float) -> None:
+    def __init__(self, settings: BiasTracking | RestBiasSettings, rate_hz: float) -> None:
         self.settings = settings
         self._rate_hz = rate_hz
         self._vqf = self._start(settings, rate_hz)
         self._gyro = np.zeros(3)
         self._accel = np.zeros(3)
-        self.still_samples = 0  # samples detected still since the last reset
 
     def reset(self) -> None:
-        """Start again from the prior (a new run: another power-on, a bag loop)."""
+        """Start again (a new run: another power-on, a bag loop)."""
         self._vqf = self._start(self.settings, self._rate_hz)
-        self.still_samples = 0
 
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
         """Take one sample (rad/s, m/s^2); return the bias estimate after it (3,)."""
         self._gyro[:] = gyro
         self._accel[:] = accel
         self._vqf.update(self._gyro, self._accel)
-        self.still_samples += bool(self._vqf.getRestDetected())
         return self._vqf.getBiasEstimate()[0]
-
-    @property
-    def seconds_still(self) -> float:
-        """Seconds of detected stillness since the last reset."""
-        return self.still_samples / self._rate_hz
 
     def estimate(self) -> tuple[np.ndarray, float]:
         """Return the current bias (3,) and its standard deviation, both rad/s."""
@@ -126,10 +121,30 @@ class RestBias:
         return bias, float(sigma)
 
 
-class BiasTracker(RestBias):
-    """The tracked bias of a model's output (fed that output), one sample at a time."""
+class RestBias(BiasTracker):
+    """The turn-on bias one sample at a time (the node, process-bag), and the rest seen."""
 
-    _start = staticmethod(tracker)  # from a bias of 0, at rest and in motion
+    _start = staticmethod(estimator)  # from the prior, at rest only
+
+    def __init__(self, settings: RestBiasSettings, rate_hz: float) -> None:
+        super().__init__(settings, rate_hz)
+        self.still_samples = 0  # samples detected still since the last reset
+
+    def reset(self) -> None:
+        """Start again from the prior (a new run: another power-on, a bag loop)."""
+        super().reset()
+        self.still_samples = 0
+
+    def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
+        """Take one sample (rad/s, m/s^2); return the bias estimate after it (3,)."""
+        bias = super().update(gyro, accel)
+        self.still_samples += bool(self._vqf.getRestDetected())
+        return bias
+
+    @property
+    def seconds_still(self) -> float:
+        """Seconds of detected stillness since the last reset."""
+        return self.still_samples / self._rate_hz
 
 
 def track_bias(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,

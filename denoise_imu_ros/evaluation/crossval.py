@@ -57,6 +57,9 @@ def tracking_label(settings: BiasTracking | None) -> str:
     return f'sigma {settings.sigma_motion_deg_s:g} deg/s, forgetting {settings.forgetting_s:g} s'
 
 
+CANDIDATES = {tracking_label(t): t for t in (None, *TRACKING_GRID)}  # label -> settings
+
+
 def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:
     """Held-out groups, round-robin over the recipe's list; None = leave one out."""
     k = len(recordings) if k is None else k
@@ -230,19 +233,16 @@ def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
                         Path(f'{label}, calibration')))
 
 
-_CANDIDATES = {tracking_label(t): t for t in (None, *TRACKING_GRID)}
-
-
 def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float
                 ) -> dict[str, dict[str, dict[str, float]]]:
     """Return each tracking candidate's figures (label -> row -> score) of untracked gyros."""
     return {label: {m: score(seq, track_bias(g, seq.imu[:, 3:], rate_hz, t))
-                    for m, g in gyros.items()} for label, t in _CANDIDATES.items()}
+                    for m, g in gyros.items()} for label, t in CANDIDATES.items()}
 
 
 def _choose(tracked: dict[str, Any], names: list[str]) -> dict[str, str]:
     """Return, per row, the candidate of lowest mean AOE over ``names``."""
-    return {m: min(_CANDIDATES, key=lambda label: np.mean(
+    return {m: min(CANDIDATES, key=lambda label: np.mean(
         [tracked[n][label][m]['aoe_deg'] for n in names])) for m in TRACKED}
 
 
@@ -271,14 +271,14 @@ def _nested(raw_rows: dict[str, Any], tracked: dict[str, Any], tracked_seed: dic
         'per_fold': {str(f): c for f, c in choice.items()},
         'candidates': {m: {label: float(np.mean([tracked[n][label][m]['aoe_deg']
                                                  for n in tracked]))
-                           for label in _CANDIDATES} for m in TRACKED},
-        'recordings': {n: {m: {label: tracked[n][label][m]['aoe_deg'] for label in _CANDIDATES}
+                           for label in CANDIDATES} for m in TRACKED},
+        'recordings': {n: {m: {label: tracked[n][label][m]['aoe_deg'] for label in CANDIDATES}
                            for m in TRACKED} for n in tracked}}
 
 
 def _labelled(label: str) -> dict[str, Any] | None:
     """Return a candidate as a model file stores it (None: no tracking)."""
-    settings = _CANDIDATES[label]
+    settings = CANDIDATES[label]
     return None if settings is None else dict(settings.as_dict(), label=label)
 
 

@@ -8,7 +8,7 @@ import shutil
 import sys
 
 from denoise_imu_ros.core.modelfile import add_metadata
-from denoise_imu_ros.evaluation.crossval import TRACKING_GRID, tracking_label
+from denoise_imu_ros.evaluation.crossval import CANDIDATES
 
 USAGE = ('Usage: .venv/bin/python scripts/experiments/fold_tracking.py CROSSVAL_OUT DEST\n'
          'Writes DEST/fold<i>/<seed<s>|fold ensemble>/{network,calibrated}.safetensors '
@@ -20,7 +20,6 @@ USAGE = ('Usage: .venv/bin/python scripts/experiments/fold_tracking.py CROSSVAL_
 def main(out: Path, dest: Path) -> None:
     """Write the copies; the calibration beside each is seed 0's."""
     report = json.loads((out / 'crossval.json').read_text())
-    labels = {tracking_label(t): t for t in (None, *TRACKING_GRID)}
     for fold, choice in report['tracking']['per_fold'].items():
         sources = {f'seed{s}': out / f'seed{s}' / f'fold{fold}' / 'network.safetensors'
                    for s in report.get('seeds', [])}
@@ -34,7 +33,7 @@ def main(out: Path, dest: Path) -> None:
             shutil.copy(out / 'seed0' / f'fold{fold}' / 'calibrated.safetensors',
                         folder / 'calibrated.safetensors')
             for row, file in (('network', 'network'), ('calibrated', 'calibrated')):
-                settings = labels[choice[row]]
+                settings = CANDIDATES[choice[row]]
                 add_metadata(folder / f'{file}.safetensors',
                              bias_tracking=None if settings is None else settings.as_dict())
             print(f'{folder}: network {choice["network"]}, calibration {choice["calibrated"]}')

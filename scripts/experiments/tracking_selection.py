@@ -8,7 +8,7 @@ from pathlib import Path
 from denoise_imu_ros.core.metrics import score
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.data.rest_bias import track_bias
-from denoise_imu_ros.evaluation.crossval import TRACKING_GRID, tracking_label
+from denoise_imu_ros.evaluation.crossval import CANDIDATES
 from denoise_imu_ros.learn.checkpoint import load_model
 import numpy as np
 
@@ -23,9 +23,9 @@ def main(data: Path, held_out: list[str], models: list[str]) -> None:
         figures = {}  # candidate -> recording -> (whole, tail)
         for name, seq in seqs.items():
             gyro = model.untracked(seq.imu)
-            for t in (None, *TRACKING_GRID):
+            for label, t in CANDIDATES.items():
                 tracked = track_bias(gyro, seq.imu[:, 3:], seq.rate_hz, t)
-                figures.setdefault(tracking_label(t), {})[name] = (
+                figures.setdefault(label, {})[name] = (
                     score(seq, tracked)['aoe_deg'],
                     score(seq.tail(start), tracked[start:])['aoe_deg'] if name in trained
                     else None)

@@ -180,7 +180,7 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     from denoise_imu_ros.core.metrics import score
     from denoise_imu_ros.data.load import load_sequence
     from denoise_imu_ros.data.rest_bias import track_bias
-    from denoise_imu_ros.evaluation.crossval import tracking_label, TRACKING_GRID
+    from denoise_imu_ros.evaluation.crossval import CANDIDATES
     from denoise_imu_ros.learn.model import correct_gyro, merge
     data = tmp_path / 'data'
     for i, bias in enumerate((0.010, 0.012)):
@@ -207,13 +207,12 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     assert nets[0].meta.train_sequences == ('rec1',)
     # the ensemble row is what `denoise-imu ensemble` of the fold's two seeds would score,
     # its output's bias tracked as the other fold's held-out recording chose
-    labels = {tracking_label(t): t for t in (None, *TRACKING_GRID)}
     tracking = report['tracking']
     for fold, other in (('0', 'rec1'), ('1', 'rec0')):  # chosen on the other fold's recording
         for m in ('network', 'calibrated'):
             figures = tracking['recordings'][other][m]
             assert tracking['per_fold'][fold][m] == min(figures, key=figures.get)
-    chosen = labels[tracking['per_fold']['0']['network']]
+    chosen = CANDIDATES[tracking['per_fold']['0']['network']]
 
     def tracked(gyro):
         return score(seq, track_bias(gyro, seq.imu[:, 3:], 200.0, chosen))['aoe_deg']
