@@ -17,6 +17,14 @@ setup(
     ext_modules=[Extension(package_name + '.runtime._step',
                            sources=['denoise_imu_ros/runtime/_step.c'],
                            extra_compile_args=['-O3', '-fopenmp-simd'], libraries=['m'],
+                           optional=True),
+                 # training's fused BatchNorm, GELU and dropout (learn/fused.py), optional
+                 # too: without it training runs PyTorch's layers
+                 Extension(package_name + '.learn._block',
+                           sources=['denoise_imu_ros/learn/_block.c'],
+                           # no trapping: its comparisons vectorise as blends without AVX-512
+                           extra_compile_args=['-O3', '-fopenmp-simd', '-fno-trapping-math'],
+                           libraries=['m'],
                            optional=True)],
     package_data={package_name: ['models/*.safetensors', 'sample/*/*']},
     data_files=[

@@ -5,9 +5,10 @@ Training speed of the EuRoC recipe (6 sequences x 16,000 samples per step).
 
 Runs the real trainer twice per variant, for a few and for more steps, and reports the
 difference per step, which leaves out loading and validation. Variants, side by side in
-the same run so that ratios are meaningful on a shared machine:
+the same run so that ratios are meaningful on a shared machine, each with PyTorch's
+BatchNorm, GELU and dropout layers one by one (``fused: false``) and with the fused block
+(learn/fused.py, the default):
   - one process with 2 threads;
-  - 2 data-parallel worker processes with 1 thread each;
   - the recipe as shipped (``workers: auto``, ``threads: auto``: what this machine has).
 Prints seconds per step and the projected time of the full recipe, and a floor: the
 recipe's convolution arithmetic (forward and backward) at the speed this machine
@@ -78,17 +79,18 @@ def main() -> None:
     args = parser.parse_args()
     recipe = load_config(RECIPE)
     full = recipe.steps
-    rows = [('1 process, 2 threads', seconds_per_step(args.steps, workers=1, threads=2)),
-            ('2 workers, 1 thread each', seconds_per_step(args.steps, workers=2, threads=2)),
-            (f'recipe: {recipe.workers} workers, {recipe.threads} threads',
-             seconds_per_step(args.steps))]
+    shipped = f'recipe: {recipe.workers} workers, {recipe.threads} threads'
+    rows = [(f'{name}, {layers}', seconds_per_step(args.steps, fused=fused, **variant))
+            for name, variant in (('1 process, 2 threads', {'workers': 1, 'threads': 2}),
+                                  (shipped, {}))
+            for layers, fused in (('PyTorch layers', False), ('fused', True))]
     macs = conv_macs_per_step(len(recipe.sequences), recipe.window)
     floor = macs / (usable_cores() * gemm_macs_per_second())
     base = rows[0][1]
-    print(f'{"variant":36s} {"s/step":>8s} {f"{full} steps":>11s} {"ratio":>6s} '
+    print(f'{"variant":52s} {"s/step":>8s} {f"{full} steps":>11s} {"ratio":>6s} '
           f'{"x floor":>8s}')
     for name, t in rows:
-        print(f'{name:36s} {t:8.3f} {t * full / 60:7.1f} min {t / base:6.2f} '
+        print(f'{name:52s} {t:8.3f} {t * full / 60:7.1f} min {t / base:6.2f} '
               f'{t / floor:8.2f}')
     print(f'floor: {macs / 1e9:.1f} GMAC of convolutions per step at the float32 GEMM speed '
           f'of {usable_cores()} cores: {floor:.3f} s/step, {floor * full / 60:.1f} min')

@@ -22,7 +22,7 @@ import yaml
 from ..core.architecture import ModelConfig
 from ..core.errors import TrainingError
 
-RUN_KEYS = ('data', 'threads', 'workers', 'device')  # where it runs, not what it learns
+RUN_KEYS = ('data', 'threads', 'workers', 'device', 'fused')  # how it runs, not what it learns
 OPTIONS = ('seed', 'data', 'steps', 'workers', 'device')  # keys train's options override
 DEVICE = re.compile(r'cpu|cuda(:\d+)?')             # the devices training supports
 AUTO = 'auto'                                         # workers and threads: from the machine
@@ -69,7 +69,8 @@ class TrainConfig:
     Everything a training run depends on.
 
     The recipe (all but RUN_KEYS) is stored in the model file; the run environment (the
-    local data folder, threads, workers, device) is stored apart, as how it was made.
+    local data folder, threads, workers, device, fused layers) is stored apart, as how it
+    was made.
     """
 
     dataset: str = 'euroc'             # name of the data family (picks eval baselines)
@@ -118,6 +119,9 @@ class TrainConfig:
     threads: int = 2                   # torch intra-op threads, shared by the workers
     workers: int = 1                   # data-parallel processes (parallel.py), CPU only
     device: str | None = None          # cpu or cuda[:N]; None: cuda when available
+    # True: each hidden block's BatchNorm, GELU and dropout in one compiled call on the CPU
+    # (learn/fused.py; the same function); False: PyTorch's layers one by one
+    fused: bool = True
 
     def model_config(self) -> ModelConfig:
         """Return the network this recipe trains."""
@@ -134,7 +138,7 @@ class TrainConfig:
         return {k: v for k, v in asdict(self).items() if k not in RUN_KEYS}
 
     def run_environment(self) -> dict[str, Any]:
-        """Return where and how this run was made (data folder, threads, workers, device)."""
+        """Return where and how this run was made (data folder, threads, workers, ...)."""
         return {k: getattr(self, k) for k in RUN_KEYS}
 
 

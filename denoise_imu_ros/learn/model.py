@@ -23,6 +23,7 @@ import torch
 from torch import nn
 import torch.nn.functional as F  # noqa: N812
 
+from . import fused
 from ..core.architecture import BLOCK, BN_EPS, ModelConfig
 
 CHUNK = 65536  # samples per network call in correct_gyro; long recordings go in pieces
@@ -60,6 +61,7 @@ class GyroNet(nn.Module):
     def __init__(self, config: ModelConfig) -> None:
         super().__init__()
         self.config = config
+        self.fuse_layers = True  # see _layers; False: PyTorch's layers one by one
         # Input normalisation, set from the training data before training starts.
         self.register_buffer('input_mean', torch.zeros(config.in_channels))
         self.register_buffer('input_std', torch.ones(config.in_channels))
@@ -100,10 +102,19 @@ class GyroNet(nn.Module):
             return self.bias.expand(u.shape[0], u.shape[1], 3)
         x = ((u - self.input_mean) / self.input_std).transpose(1, 2)  # (B, 6, T)
         x = F.pad(x, (self.receptive_field - 1, 0), mode='replicate')  # (B, 6, T + 510)
-        out = self.net(x)                                               # (B, 3 K, T)
+        out = self._layers(x)                                           # (B, 3 K, T)
         if self.config.members > 1:
             out = out.unflatten(1, (self.config.members, 3)).mean(1)
         return out.transpose(1, 2)  # (B, T, 3)
+
+    def _layers(self, x: torch.Tensor) -> torch.Tensor:
+        """The convolutions, each hidden one's BatchNorm, GELU and dropout in one call."""
+        if not self.fuse_layers:
+            return self.net(x)
+        for i in range(0, len(self.net) - 1, BLOCK):
+            conv, norm, gelu, dropout = self.net[i:i + BLOCK]
+            x = fused.block(conv(x), norm, gelu, dropout)
+        return self.net[-1](x)
 
     def forward(self, u: torch.Tensor) -> torch.Tensor:
         """Corrected angular velocity (B, T, 3) in rad/s from raw IMU samples (B, T, 6)."""

@@ -213,6 +213,7 @@ def build_model(cfg: TrainConfig, seqs: list[Sequence],
                 rank: int) -> tuple[GyroNet, Split, torch.Generator]:
     """Return the network, the training split with this process's rows, its generator."""
     model = GyroNet(cfg.model_config())
+    model.fuse_layers = cfg.fused
     split = training_split(seqs, cfg, rank)
     # every sequence's samples windows are drawn from (not the padding of shorter ones)
     flat = torch.tensor(np.concatenate([s.imu[:m] for s, m in
