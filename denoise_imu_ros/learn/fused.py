@@ -60,7 +60,7 @@ def available() -> bool:
 
 
 def _ptr(t: torch.Tensor) -> Any:
-    """A contiguous CPU tensor's data as the C pointer of its type."""
+    """Return a contiguous CPU tensor's data as the C pointer of its type."""
     return ctypes.cast(t.data_ptr(), _D if t.dtype == torch.float64 else _F)
 
 

@@ -108,7 +108,7 @@ class GyroNet(nn.Module):
         return out.transpose(1, 2)  # (B, T, 3)
 
     def _layers(self, x: torch.Tensor) -> torch.Tensor:
-        """The convolutions, each hidden one's BatchNorm, GELU and dropout in one call."""
+        """Run the convolutions, each hidden one's BatchNorm, GELU and dropout in one call."""
         if not self.fuse_layers:
             return self.net(x)
         for i in range(0, len(self.net) - 1, BLOCK):

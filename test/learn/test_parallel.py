@@ -24,13 +24,14 @@ SEQUENCES = ['MH_01_easy', 'V1_02_medium', 'V2_01_easy']
 N = 2048
 
 
-def _gradients(rank: int, world: int, store, data: Path, out: Path) -> None:
+def _gradients(rank: int, world: int, store, data: Path, out: Path, fused: bool) -> None:
     """Loss, gradients and BatchNorm statistics of one step, as process rank of world."""
     if world > 1:
         parallel.join(rank, world, store)
     torch.set_num_threads(1)
     torch.manual_seed(0)
     model = GyroNet(ModelConfig(dropout=0.0))
+    model.fuse_layers = fused
     seqs = [load_sequence(data / name) for name in SEQUENCES]
     u = torch.tensor(np.stack([s.imu[:N] for s in seqs]), dtype=torch.float32)
     dt = torch.tensor(np.stack([s.dt[:N] for s in seqs]))
@@ -52,11 +53,12 @@ def _gradients(rank: int, world: int, store, data: Path, out: Path) -> None:
     np.savez(out / f'{world}_{rank}.npz', loss=loss.item(), **arrays)
 
 
-def test_two_processes_give_the_whole_batch_gradient_and_statistics(euroc, tmp_path):
-    _gradients(0, 1, None, euroc, tmp_path)
+@pytest.mark.parametrize('fused', [True, False])  # learn/fused.py or PyTorch's layers
+def test_two_processes_give_the_whole_batch_gradient_and_statistics(euroc, tmp_path, fused):
+    _gradients(0, 1, None, euroc, tmp_path, fused)
     store = parallel.serve(2)
-    other = parallel.spawn(_gradients, (1, 2, store.port, euroc, tmp_path))
-    _gradients(0, 2, store, euroc, tmp_path)
+    other = parallel.spawn(_gradients, (1, 2, store.port, euroc, tmp_path, fused))
+    _gradients(0, 2, store, euroc, tmp_path, fused)
     other.join(timeout=60)
     assert other.exitcode == 0
     one = np.load(tmp_path / '1_0.npz')
