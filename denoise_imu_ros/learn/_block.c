@@ -14,8 +14,10 @@
 #include <stdint.h>
 #include <string.h>
 
+/* x86-64 ISA levels, chosen when the library is loaded: AVX-512, AVX2 with FMA, the base
+ * (a CPU model such as arch=haswell would be chosen on that model alone) */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#define CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #define INLINE static inline __attribute__((always_inline))
 #else
 #define CLONES
