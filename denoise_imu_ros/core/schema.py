@@ -20,8 +20,8 @@ from typing import Any
 from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
 
-__all__ = ['BiasTracking', 'Fusion', 'FusionSettings', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta',
-           'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'Validation', 'Verdict']
+__all__ = ['BiasTracking', 'Fusion', 'FusionSettings', 'InputEnvelope', 'MAX_ACCEL_BIAS_M_S2',
+           'ModelMeta', 'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'Validation', 'Verdict']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
 MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
@@ -111,6 +111,33 @@ class BiasTracking:
 
 
 @dataclass(frozen=True)
+class InputEnvelope:
+    """
+    How far the model's training input went, so that it is not trusted beyond.
+
+    The largest gyro norm and the largest distance of the accelerometer norm from gravity
+    over its training recordings. A network fed motion faster than any it was trained on
+    extrapolates (BROAD: networks of a slow session fail on another session's fast
+    trials); where a sample of its receptive field leaves the envelope, the correction is
+    held at its last trusted value (``data/envelope.py``).
+    """
+
+    gyro_rad_s: float           # the largest |gyro| trained on
+    accel_offset_m_s2: float    # the largest | |accel| - g | trained on
+
+    def __post_init__(self) -> None:
+        """Refuse bounds that are not positive numbers (model files are user input)."""
+        for name in ('gyro_rad_s', 'accel_offset_m_s2'):
+            value = getattr(self, name)
+            if not (_number(value) and 0 < value < 1e6):
+                raise ValueError(f'{name} must be a positive number, not {value!r}')
+
+    def as_dict(self) -> dict[str, float]:
+        """Return the bounds as stored in a model file."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
 class FusionSettings:
     """The filter's choices; defaults are VQF's own time constant, no bias removed or estimated."""
 
@@ -190,6 +217,7 @@ class ModelMeta:
     crossval: Verdict | None = None
     rest_bias: RestBiasSettings | None = None   # None: the model is fed the raw gyro
     bias_tracking: BiasTracking | None = None   # None: the model's output as it is
+    input_envelope: InputEnvelope | None = None  # None: the correction applies everywhere
     code_version: str | None = None
     members: int = 0                            # an ensemble's trainings; 0 for one
 
@@ -305,6 +333,18 @@ def _tracking(raw: dict[str, Any], where: str) -> BiasTracking | None:
         raise ModelFileError(f'{where}: inconsistent bias_tracking ({err})') from err
 
 
+def _envelope(raw: dict[str, Any], where: str) -> InputEnvelope | None:
+    value = raw.get('input_envelope')
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise _fail(where, 'input_envelope', value, 'a mapping')
+    try:
+        return InputEnvelope(value.get('gyro_rad_s'), value.get('accel_offset_m_s2'))
+    except ValueError as err:
+        raise ModelFileError(f'{where}: inconsistent input_envelope ({err})') from err
+
+
 def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
     """Return the typed metadata of a model file's entries; ``where`` names it in errors."""
     rate = raw.get('sample_rate_hz')
@@ -336,5 +376,6 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         crossval=_verdict(raw, where),
         rest_bias=None if rest is None else RestBiasSettings.from_dict(rest, where),
         bias_tracking=_tracking(raw, where),
+        input_envelope=_envelope(raw, where),
         code_version=_optional(raw, 'code_version', where, str, 'a version'),
         members=len(members))

@@ -17,7 +17,7 @@ from ..core.atomic import atomic_output
 from ..core.compat import check_stream
 from ..core.errors import DatasetError
 from ..core.modelfile import ModelFile, read_model_file, sample_rate
-from ..data import rest_bias
+from ..data import envelope, rest_bias
 from ..data.load import load_imu
 from ..runtime.streaming import StreamingCorrector
 
@@ -37,6 +37,7 @@ def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch',
         from ..learn.checkpoint import load_model  # torch: the batch engine only
         from ..learn.model import correct_gyro
         gyro = correct_gyro(load_model(mf.path).model, fed)
+    gyro = envelope.guard_batch(gyro, fed, mf.meta.input_envelope, mf.config.receptive_field)
     return rest_bias.model_output(mf, gyro, imu, rest)
 
 

@@ -21,13 +21,13 @@ from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
 from ..core.modelfile import code_version, read_model_file, sample_rate, write_model_file
 from ..core.schema import ModelMeta
-from ..data import rest_bias
+from ..data import envelope, rest_bias
 
 
 # imu/data's filter settings (tune-fusion), the cross-recording verdict and the output
-# bias tracking it chose (crossval --seeds): kept by an ensemble when every member
-# carries the same
-SHARED_BY_MEMBERS = ('fusion', 'crossval', 'bias_tracking')
+# bias tracking it chose (crossval --seeds), the input envelope (the same training
+# data): kept by an ensemble when every member carries the same
+SHARED_BY_MEMBERS = ('fusion', 'crossval', 'bias_tracking', 'input_envelope')
 
 
 class LoadedModel(NamedTuple):
@@ -48,7 +48,9 @@ class LoadedModel(NamedTuple):
 
     def untracked(self, imu: np.ndarray) -> np.ndarray:
         """Return the model's output (N, 3) before its bias tracking, fed as online."""
-        return correct_gyro(self.model, rest_bias.model_input(self, imu))
+        fed = rest_bias.model_input(self, imu)
+        return envelope.guard_batch(correct_gyro(self.model, fed), fed,
+                                    self.meta.input_envelope, self.config.receptive_field)
 
 
 def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:

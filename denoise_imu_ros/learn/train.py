@@ -43,7 +43,7 @@ from ..core.metrics import (increment_residuals, RESIDUAL_BLOCK, sequence_errors
                             trusted_blocks)
 from ..core.modelfile import code_version
 from ..core.records import Sequence
-from ..data import rest_bias
+from ..data import envelope, rest_bias
 from ..data.load import load_sequence
 
 RANK_SEED_STRIDE = 7919  # data-parallel process r draws its dropout masks from seed + r * this
@@ -324,6 +324,9 @@ def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[s
         'train_sequences': cfg.sequences,
         'train_config': cfg.recipe(),
         'rest_bias': None if rest is None else rest.to_dict(),
+        # the motion trained on: the correction is held beyond it (data/envelope.py)
+        'input_envelope': envelope.measure(
+            s.imu[:m] for s, m in zip(seqs, window_lengths(seqs, cfg))).as_dict(),
         'pose_alignment': {s.name: s.pose_alignment for s in seqs
                            if s.pose_alignment is not None},
         'run': cfg.run_environment(),

@@ -406,6 +406,11 @@ class GyroDenoiser(Node):
         values['attitude_withheld'] = str(self.attitude_withheld)
         values['fused_withheld'] = str(self.fused_withheld)
         values.update(self._rest_values())
+        guard = self._denoiser.guard
+        values['envelope_guard_applied'] = str(guard is not None)
+        if guard is not None:  # samples whose correction was held (motion not trained on)
+            values['envelope_guarded_samples'] = str(guard.guarded)
+            values['envelope_trusted'] = str(guard.trusted)
         status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()

@@ -39,6 +39,10 @@ perhaps another power-on), a gap does not (the same run). With a
 :class:`~denoise_imu_ros.data.rest_bias.BiasTracker` (the model file's ``bias_tracking``),
 the model's output less its tracked bias is what every output carries, the open-loop
 attitude and the gravity-aided orientation included; it restarts with the estimate.
+With a :class:`~denoise_imu_ros.data.envelope.Guard` (the model file's
+``input_envelope``), between the model and the tracking, the correction is held at its
+last trusted value while the receptive field holds motion the model was not trained on;
+it restarts with the network's history.
 """
 
 from __future__ import annotations
@@ -55,7 +59,7 @@ from ..core import rotation
 from ..core.limits import in_range, MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import ModelFile, sample_rate
 from ..core.msgs import finite_covariance, imu_fields, UNKNOWN_COVARIANCE
-from ..data import rest_bias
+from ..data import envelope, rest_bias
 
 
 class Drop(str, Enum):
@@ -109,6 +113,7 @@ class OnlineDenoiser:
     accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rest: rest_bias.RestBias | None = None  # the turn-on bias removed before the model
     track: rest_bias.BiasTracker | None = None  # the output's bias tracked after it
+    guard: envelope.Guard | None = None  # the correction held outside the input envelope
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
          'skipped_input_periods', 'non_finite_covariance'), 0))
@@ -139,7 +144,10 @@ class OnlineDenoiser:
             options.setdefault('accel_bias', fusion.accel_bias_m_s2)
         settings = rest_bias.resolve(model.meta, rest_choice)
         track = rest_bias.tracking(model.meta, rest_choice)
+        bounds = model.meta.input_envelope
         return cls(StreamingCorrector(model.config, model.arrays), rate,
+                   guard=None if bounds is None else envelope.Guard(
+                       bounds, model.config.receptive_field),
                    fusion=None if fusion is None else GravityFilter(rate, fusion),
                    rest=None if settings is None else rest_bias.RestBias(settings, rate),
                    track=None if track is None else rest_bias.BiasTracker(track, rate),
@@ -228,9 +236,14 @@ class OnlineDenoiser:
             if event in (Event.START, Event.TIME_JUMP):
                 self.rest.reset()
             gyro = gyro - self.rest.update(gyro, accel)
-        corrected = self.engine.step(np.concatenate([gyro, accel]))
+        fed = np.concatenate([gyro, accel])
+        corrected = self.engine.step(fed)
         if not np.isfinite(corrected).all():  # never published: dropped as if lost
             return self._drop(Drop.NON_FINITE_OUTPUT)
+        if self.guard is not None:
+            if event is not None:  # the engine's history restarted
+                self.guard.reset()
+            corrected = self.guard.update(corrected, fed)
         if self.track is not None:
             if event in (Event.START, Event.TIME_JUMP):
                 self.track.reset()

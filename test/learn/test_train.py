@@ -45,6 +45,9 @@ def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
     assert meta['train_sequences'] == ['MH_01_easy', 'V1_02_medium']
     assert 199 < meta['sample_rate_hz'] < 201
     assert len(meta['validation']['gyro_residual_std']) == 3
+    # the motion trained on, that the runtime holds the correction beyond
+    envelope = load_model(tmp_path / 'chosen.safetensors').meta.input_envelope
+    assert 0.5 < envelope.gyro_rad_s < 10 and 0.5 < envelope.accel_offset_m_s2 < 50
 
 
 def test_twenty_hz_ground_truth_trains_with_a_finite_falling_loss(euroc, tmp_path):

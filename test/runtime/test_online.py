@@ -49,19 +49,28 @@ def test_online_attitude_equals_offline_integration_of_the_batch_output(seq, mod
 
 
 def test_with_bias_tracking_online_equals_both_offline_engines(seq, tmp_path):
-    """The model file's rest bias and output tracking, per sample as over a recording."""
+    """The model file's rest bias, input envelope and output tracking, per sample as offline."""
     from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.data.envelope import excursion
     from denoise_imu_ros.data.rest_bias import RestBiasSettings
     from denoise_imu_ros.evaluation.correct import corrected_gyro
+    from denoise_imu_ros.learn.checkpoint import load_model
     from helpers import write_untrained_model
     n = 3000
+    gyro_norm, accel_offset = excursion(seq.imu[:n])
+    bounds = {'gyro_rad_s': float(np.percentile(gyro_norm, 95)),  # a few excursions
+              'accel_offset_m_s2': float(accel_offset.max()) + 1.0}
     mf = read_model_file(write_untrained_model(tmp_path / 'm.safetensors', {
         'sample_rate_hz': 200.0, 'rest_bias': RestBiasSettings().to_dict(),
-        'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0}}))
-    outs = _run(OnlineDenoiser.from_model_file(mf), seq.stamp_ns[:n], seq.imu[:n])
+        'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0},
+        'input_envelope': bounds}))
+    denoiser = OnlineDenoiser.from_model_file(mf)
+    outs = _run(denoiser, seq.stamp_ns[:n], seq.imu[:n])
     online = np.array([o.gyro for o in outs])
     for engine in ('streaming', 'batch'):
         np.testing.assert_allclose(online, corrected_gyro(mf, seq.imu[:n], engine), atol=1e-6)
+    np.testing.assert_allclose(online, load_model(mf.path).correct(seq.imu[:n]), atol=1e-6)
+    assert 0 < denoiser.guard.guarded < n  # the envelope held some corrections
     untracked = corrected_gyro(mf, seq.imu[:n], 'streaming', rest='off')
     assert np.abs(online - untracked).max() > 1e-4  # both estimates did something
     off = _run(OnlineDenoiser.from_model_file(mf, rest_choice='off'), seq.stamp_ns[:n],

@@ -19,7 +19,11 @@ def _fields(m) -> list[float]:
 @pytest.mark.parametrize('rest,track', [(False, False), (True, False), (True, True)])
 def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path,
                                                             rest, track):
-    """With the model's filter settings, a turn-on bias removed, the output's bias tracked."""
+    """
+    With the model's filter settings, a turn-on bias removed, the output's bias tracked.
+
+    And the last with an input envelope the bag's motion leaves (the correction held).
+    """
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core.modelfile import add_metadata
     from denoise_imu_ros.data.rest_bias import RestBiasSettings
@@ -29,7 +33,8 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     add_metadata(model_file, fusion={'settings': FusionSettings(
         4.0, False, (0.02, -0.1, 0.05)).as_dict(), 'orientation_std_rad': [0.01, 0.02, 0.03]},
         rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict() if rest else None,
-        bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0} if track else None)
+        bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0} if track else None,
+        input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0} if track else None)
     assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
                 str(model_file)]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
@@ -58,6 +63,9 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     diagnostics = {v.key: v.value for v in h.diagnostics[-1].status[0].values}
     assert diagnostics['rest_bias_applied'] == str(rest)
     assert diagnostics['tracked_bias_applied'] == str(track)
+    assert diagnostics['envelope_guard_applied'] == str(track)
+    if track:  # the turn-on bias removed, the still start's noise exceeds 0.002 rad/s
+        assert int(diagnostics['envelope_guarded_samples']) > 0
     assert ('tracked_bias_rad_s' in diagnostics) == track
     if rest:  # the bundled sample starts moving: the model's prior, said so
         assert diagnostics['rest_bias_source'] == 'prior'

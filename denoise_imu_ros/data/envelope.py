@@ -1,0 +1,103 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+Where a model's correction is trusted: within the motion its training recordings had.
+
+A network extrapolates beyond the motion it was trained on (BROAD: networks of a slow
+power-on session, at most 325 deg/s, add 1-20° on another session's trials at 600-1450
+deg/s). Training stores the envelope of its input (:func:`measure`; the model file's
+``input_envelope``: the largest gyro norm and the largest distance of the accelerometer
+norm from gravity). Wherever a sample of the receptive field since the last reset lies
+outside it, the output is the model's input gyro plus the correction of the last trusted
+sample (zero before any): the correction is held, not extrapolated. Every path uses it
+identically, after the network and before the output's bias tracking
+(:func:`guard_batch` over arrays for ``eval``, ``correct`` and ``crossval``;
+:class:`Guard` per sample for the node and ``process-bag``; equal bit for bit).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Iterable
+
+import numpy as np
+
+from ..core.limits import GRAVITY_M_S2
+from ..core.schema import InputEnvelope
+
+__all__ = ['excursion', 'Guard', 'guard_batch', 'measure', 'outside']
+
+
+def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Per sample of (N, 6): the gyro norm (rad/s) and |accelerometer norm - g| (m/s^2).
+
+    Summed in the order :meth:`Guard.update` sums one sample's, so both agree bit for bit.
+    """
+    x, y, z, ax, ay, az = imu.T
+    return (np.sqrt(x * x + y * y + z * z),
+            np.abs(np.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2))
+
+
+def measure(imus: Iterable[np.ndarray]) -> InputEnvelope:
+    """Return the envelope of every sample of ``imus`` (each (N, 6), as the model is fed)."""
+    gyro, accel = zip(*(excursion(imu) for imu in imus))
+    return InputEnvelope(float(np.max(np.concatenate(gyro))),
+                         float(np.max(np.concatenate(accel))))
+
+
+def outside(imu: np.ndarray, envelope: InputEnvelope) -> np.ndarray:
+    """Whether each sample of (N, 6) lies outside ``envelope`` (N,)."""
+    gyro, accel = excursion(imu)
+    return (gyro > envelope.gyro_rad_s) | (accel > envelope.accel_offset_m_s2)
+
+
+def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | None,
+                field: int) -> np.ndarray:
+    """
+    Return a model's ``output`` (N, 3) guarded for its input ``fed`` (N, 6), one run.
+
+    Sample n is untrusted when any of samples n - field + 1 ... n is outside; it then
+    gets its input gyro plus the correction (output - input) of the last trusted sample.
+    """
+    if envelope is None:
+        return output
+    bad = np.concatenate([[0], np.cumsum(outside(fed, envelope))])
+    n = np.arange(len(output))
+    untrusted = bad[n + 1] > bad[np.maximum(n + 1 - field, 0)]
+    if not untrusted.any():
+        return output
+    last = np.maximum.accumulate(np.where(untrusted, -1, n))
+    held = np.where((last >= 0)[:, None], output[last] - fed[last, :3], 0.0)
+    return np.where(untrusted[:, None], fed[:, :3] + held, output)
+
+
+class Guard:
+    """:func:`guard_batch` one sample at a time (node, process-bag)."""
+
+    def __init__(self, envelope: InputEnvelope, field: int) -> None:
+        self.envelope, self.field = envelope, field
+        self.reset()
+        self.guarded = 0  # samples guarded since start, for diagnostics
+
+    def reset(self) -> None:
+        """Forget the past: a new stream, or the network's history restarted."""
+        self._since_outside = self.field  # no sample outside within the receptive field
+        self._held = np.zeros(3)
+        self.trusted = True
+
+    def update(self, output: np.ndarray, fed: np.ndarray) -> np.ndarray:
+        """Return the model's ``output`` (3,) guarded for its input ``fed`` (6,)."""
+        x, y, z, ax, ay, az = (float(v) for v in fed)
+        if (math.sqrt(x * x + y * y + z * z) > self.envelope.gyro_rad_s
+                or abs(math.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2)
+                > self.envelope.accel_offset_m_s2):
+            self._since_outside = 0
+        else:
+            self._since_outside += 1
+        self.trusted = self._since_outside >= self.field
+        if self.trusted:
+            self._held = output - fed[:3]
+            return output
+        self.guarded += 1
+        return fed[:3] + self._held

@@ -1,0 +1,91 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+Does a model fail where its input leaves what it was trained on? An experiment.
+
+BROAD networks trained on session C (slow motion: at most 325 deg/s, accelerations near
+gravity) fail on session B's fast trials (600-1450 deg/s, 87 m/s^2 beyond gravity). This
+takes a model's training envelope (the largest gyro norm and the largest distance of the
+accelerometer norm from gravity, or a high percentile of each, over its training
+recordings) and, wherever a sample of the receptive field leaves it, replaces the model's
+output by the raw gyro less its turn-on bias (the "rest bias" row). Prints, per held-out
+recording, the open-loop AOE and the AOE of VQF (defaults) fed each gyro: rest bias, the
+model, the model so guarded (per envelope), and the share of samples guarded.
+Usage: .venv/bin/python scripts/experiments/envelope_guard.py MODEL DATA_DIR
+       TRAIN_A,TRAIN_B,... HELD_A,HELD_B,...
+"""
+
+from pathlib import Path
+import sys
+
+from denoise_imu_ros.core.metrics import score
+from denoise_imu_ros.data import rest_bias
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.evaluation import filters
+from denoise_imu_ros.learn.checkpoint import load_model
+import numpy as np
+from scipy.ndimage import maximum_filter1d
+
+GRAVITY = 9.81
+PERCENTILES = (100.0, 99.9, 99.0)
+
+
+def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per sample: gyro norm (rad/s) and |accelerometer norm - g| (m/s^2)."""
+    return (np.linalg.norm(imu[:, :3], axis=1),
+            np.abs(np.linalg.norm(imu[:, 3:], axis=1) - GRAVITY))
+
+
+def outside(imu: np.ndarray, bounds: tuple[float, float], field: int) -> np.ndarray:
+    """Whether any sample of each one's receptive field (causal) leaves the bounds."""
+    gyro, accel = excursion(imu)
+    bad = ((gyro > bounds[0]) | (accel > bounds[1])).astype(np.uint8)
+    # the window [n - field + 1, n]: a centred filter shifted to end at n
+    return maximum_filter1d(bad, field, origin=(field - 1) // 2).astype(bool)
+
+
+def fused_aoe(seq, gyro: np.ndarray) -> float:
+    """AOE of VQF's defaults fed this gyro and the recording's accelerometer (deg)."""
+    quat = filters.run(filters.Filter('vqf'), gyro, seq.imu[:, 3:], seq.rate_hz, seq.stamp_ns)
+    return filters.score(seq, quat).aoe
+
+
+def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
+    """Print the envelopes, then one line per held-out recording and the means."""
+    net = load_model(model)
+    align = net.meta.recipe('align', 'none')
+    field = net.model.receptive_field
+    train = [excursion(load_sequence(Path(data) / n, align_poses=align).imu) for n in trained]
+    gyro_all = np.concatenate([g for g, _ in train])
+    accel_all = np.concatenate([a for _, a in train])
+    envelopes = {p: (np.percentile(gyro_all, p), np.percentile(accel_all, p))
+                 for p in PERCENTILES}
+    for p, (g, a) in envelopes.items():
+        print(f'envelope p{p:g}: gyro {np.degrees(g):.0f} deg/s, accel {a:.1f} m/s^2 off g')
+    settings = rest_bias.baseline_settings(net.meta)
+    rows = []
+    for name in held:
+        seq = load_sequence(Path(data) / name, align_poses=align)
+        rest = rest_bias.remove_rest_bias(seq.imu, seq.rate_hz, settings)[:, :3]
+        gyro = net.correct(seq.imu)
+        figures = [score(seq, rest)['aoe_deg'], score(seq, gyro)['aoe_deg']]
+        fused = [fused_aoe(seq, rest), fused_aoe(seq, gyro)]
+        shares = []
+        for p in PERCENTILES:
+            out = outside(seq.imu, envelopes[p], field)
+            guarded = np.where(out[:, None], rest, gyro)
+            figures.append(score(seq, guarded)['aoe_deg'])
+            fused.append(fused_aoe(seq, guarded))
+            shares.append(out.mean())
+        rows.append((figures, fused))
+        print(f'{name[:34]:34s} open loop ' + ' '.join(f'{v:6.2f}' for v in figures)
+              + '  fused ' + ' '.join(f'{v:6.2f}' for v in fused)
+              + '  guarded ' + ' '.join(f'{100 * s:3.0f}%' for s in shares), flush=True)
+    mean = np.mean([r[0] for r in rows], 0), np.mean([r[1] for r in rows], 0)
+    print('columns: rest bias, model, guarded by p' + ', p'.join(f'{p:g}' for p in PERCENTILES))
+    print(f'{"mean":34s} open loop ' + ' '.join(f'{v:6.2f}' for v in mean[0])
+          + '  fused ' + ' '.join(f'{v:6.2f}' for v in mean[1]))
+
+
+if __name__ == '__main__':
+    main(sys.argv[1], sys.argv[2], sys.argv[3].split(','), sys.argv[4].split(','))

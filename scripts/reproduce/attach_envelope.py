@@ -1,0 +1,40 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""Store the input envelope in model files trained before training stored it."""
+
+import argparse
+from pathlib import Path
+
+from denoise_imu_ros.core.modelfile import add_metadata
+from denoise_imu_ros.data import envelope, rest_bias
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.learn.checkpoint import load_model
+
+
+def main() -> None:
+    """Measure each file's envelope on its training spans, as training measures it."""
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument('models', nargs='+', help='model files, rewritten in place')
+    parser.add_argument('--data', help="the training recordings' folder (default: the "
+                        "file's own, as it was trained)")
+    args = parser.parse_args()
+    for path in args.models:
+        loaded = load_model(path)
+        meta = loaded.meta
+        folder = Path(args.data or meta.data or '.')
+        imus = []
+        for name in meta.train_sequences:
+            seq = load_sequence(folder / name, meta.recipe('imu_topic'),
+                                meta.recipe('pose_topic'), meta.recipe('max_gt_gap_s'),
+                                align_poses=meta.recipe('align', 'none'),
+                                poses=meta.recipe('poses'))
+            imus.append(rest_bias.model_input(loaded, seq.imu)[:meta.training_span])
+        bounds = envelope.measure(imus)
+        add_metadata(path, input_envelope=bounds.as_dict())
+        print(f'{path}: gyro {bounds.gyro_rad_s:.3f} rad/s, accelerometer '
+              f'{bounds.accel_offset_m_s2:.2f} m/s^2 off gravity, over '
+              f'{len(imus)} recordings')
+
+
+if __name__ == '__main__':
+    main()

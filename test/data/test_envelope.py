@@ -1,0 +1,67 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""The input envelope: measured, stored, and the correction held beyond it."""
+
+from denoise_imu_ros.core.errors import ModelFileError
+from denoise_imu_ros.core.limits import GRAVITY_M_S2
+from denoise_imu_ros.core.schema import InputEnvelope, parse_meta
+from denoise_imu_ros.data.envelope import Guard, guard_batch, measure
+import numpy as np
+import pytest
+
+FIELD = 5
+
+
+def _imu(n: int, seed: int = 0) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return np.column_stack([rng.normal(0, 0.5, (n, 3)),
+                            rng.normal(0, 0.3, (n, 3)) + [0.0, 0.0, GRAVITY_M_S2]])
+
+
+def test_the_envelope_is_the_largest_gyro_norm_and_accelerometer_offset_trained_on():
+    a, b = _imu(100), _imu(50, 1)
+    b[7, :3] = [3.0, 4.0, 0.0]                      # |gyro| 5 rad/s
+    b[9, 3:] = [0.0, 0.0, GRAVITY_M_S2 - 6.5]      # 6.5 m/s^2 below gravity
+    assert measure([a, b]) == InputEnvelope(5.0, 6.5)
+
+
+def test_the_correction_is_held_for_a_receptive_field_after_each_sample_outside():
+    fed = _imu(40)
+    fed[:, :3] = 0.1
+    fed[10, :3] = [0.0, 9.0, 0.0]  # outside
+    output = fed[:, :3] + np.arange(40)[:, None] * 1e-3  # a correction that keeps changing
+    guarded = guard_batch(output, fed, InputEnvelope(1.0, 5.0), FIELD)
+    inside = [n for n in range(40) if not 10 <= n < 10 + FIELD]
+    assert np.array_equal(guarded[inside], output[inside])
+    # samples 10-14 see sample 10 in their receptive field: sample 9's correction, held
+    np.testing.assert_allclose(guarded[10:15], fed[10:15, :3] + 9e-3, rtol=0, atol=1e-15)
+    # outside from the first sample: nothing trusted yet, no correction
+    fed[0, :3] = 9.0
+    np.testing.assert_array_equal(guard_batch(output, fed, InputEnvelope(1.0, 5.0), FIELD)[:5],
+                                  fed[:5, :3])
+    assert guard_batch(output, fed, None, FIELD) is output
+
+
+def test_per_sample_equals_the_arrays_bit_for_bit_and_restarts_on_reset():
+    fed = _imu(2000, 2)
+    fed[300:320, 3:] *= 3.0     # a shock on the accelerometer
+    fed[1000:1400, :3] *= 6.0   # fast rotation
+    output = fed[:, :3] + np.random.default_rng(3).normal(0, 0.01, (2000, 3))
+    bounds = InputEnvelope(2.5, 8.0)
+    batch = guard_batch(output, fed, bounds, 51)
+    guard = Guard(bounds, 51)
+    online = np.array([guard.update(o, f) for o, f in zip(output, fed)])
+    assert np.array_equal(online, batch)
+    assert 0 < guard.guarded == int((batch != output).any(axis=1).sum()) < 2000
+    guard.reset()
+    again = np.array([guard.update(o, f) for o, f in zip(output[1000:], fed[1000:])])
+    assert np.array_equal(again, guard_batch(output[1000:], fed[1000:], bounds, 51))
+
+
+def test_the_model_file_entry_is_checked():
+    assert parse_meta({'input_envelope': {'gyro_rad_s': 5.0, 'accel_offset_m_s2': 2.0}},
+                      'm').input_envelope == InputEnvelope(5.0, 2.0)
+    assert parse_meta({}, 'm').input_envelope is None
+    for bad in ({'gyro_rad_s': -1.0, 'accel_offset_m_s2': 2.0}, {'gyro_rad_s': 5.0}, [5, 2]):
+        with pytest.raises(ModelFileError, match='m: inconsistent'):
+            parse_meta({'input_envelope': bad}, 'm')
