@@ -118,12 +118,15 @@ class InputEnvelope:
     The largest gyro norm and the largest distance of the accelerometer norm from gravity
     over its training recordings. A network fed motion faster than any it was trained on
     extrapolates (BROAD: networks of a slow session fail on another session's fast
-    trials); where a sample of its receptive field leaves the envelope, the correction is
-    held at its last trusted value (``data/envelope.py``).
+    trials); where a sample of its receptive field leaves the envelope, the output is
+    its input gyro plus a constant correction instead (``data/envelope.py``).
     """
 
     gyro_rad_s: float           # the largest |gyro| trained on
     accel_offset_m_s2: float    # the largest | |accel| - g | trained on
+    # rad/s added to the input gyro outside: the model's mean correction over its
+    # training recordings, 0 where the turn-on bias is removed before the model
+    fallback_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         """Refuse bounds that are not positive numbers (model files are user input)."""
@@ -131,10 +134,14 @@ class InputEnvelope:
             value = getattr(self, name)
             if not (_number(value) and 0 < value < 1e6):
                 raise ValueError(f'{name} must be a positive number, not {value!r}')
+        if not (_triple(self.fallback_rad_s) and max(map(abs, self.fallback_rad_s)) <= 1.0):
+            raise ValueError(f'fallback_rad_s must be three numbers of at most 1 rad/s, not '
+                             f'{self.fallback_rad_s!r}')
+        object.__setattr__(self, 'fallback_rad_s', tuple(map(float, self.fallback_rad_s)))
 
-    def as_dict(self) -> dict[str, float]:
+    def as_dict(self) -> dict[str, Any]:
         """Return the bounds as stored in a model file."""
-        return asdict(self)
+        return {**asdict(self), 'fallback_rad_s': list(self.fallback_rad_s)}
 
 
 @dataclass(frozen=True)
@@ -340,7 +347,8 @@ def _envelope(raw: dict[str, Any], where: str) -> InputEnvelope | None:
     if not isinstance(value, dict):
         raise _fail(where, 'input_envelope', value, 'a mapping')
     try:
-        return InputEnvelope(value.get('gyro_rad_s'), value.get('accel_offset_m_s2'))
+        return InputEnvelope(value.get('gyro_rad_s'), value.get('accel_offset_m_s2'),
+                             value.get('fallback_rad_s', (0.0, 0.0, 0.0)))
     except ValueError as err:
         raise ModelFileError(f'{where}: inconsistent input_envelope ({err})') from err
 

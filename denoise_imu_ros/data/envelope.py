@@ -8,8 +8,11 @@ power-on session, at most 325 deg/s, add 1-20° on another session's trials at 6
 deg/s). Training stores the envelope of its input (:func:`measure`; the model file's
 ``input_envelope``: the largest gyro norm and the largest distance of the accelerometer
 norm from gravity). Wherever a sample of the receptive field since the last reset lies
-outside it, the output is the model's input gyro plus the correction of the last trusted
-sample (zero before any): the correction is held, not extrapolated. Every path uses it
+outside it, the output is the model's input gyro plus a constant: the model's mean
+correction over its training recordings, or nothing where the turn-on bias is removed
+before the model (its input is then the gyro less that bias, the practitioner's
+baseline). Holding the last correction instead was measured worse: a correction taken in
+motion carries that motion's scale terms into faster motion. Every path uses it
 identically, after the network and before the output's bias tracking
 (:func:`guard_batch` over arrays for ``eval``, ``correct`` and ``crossval``;
 :class:`Guard` per sample for the node and ``process-bag``; equal bit for bit).
@@ -30,7 +33,7 @@ __all__ = ['excursion', 'Guard', 'guard_batch', 'measure', 'outside']
 
 def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
-    Per sample of (N, 6): the gyro norm (rad/s) and |accelerometer norm - g| (m/s^2).
+    Return per sample of (N, 6) the gyro norm (rad/s) and |accelerometer norm - g| (m/s^2).
 
     Summed in the order :meth:`Guard.update` sums one sample's, so both agree bit for bit.
     """
@@ -39,11 +42,19 @@ def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             np.abs(np.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2))
 
 
-def measure(imus: Iterable[np.ndarray]) -> InputEnvelope:
-    """Return the envelope of every sample of ``imus`` (each (N, 6), as the model is fed)."""
+def measure(imus: Iterable[np.ndarray], corrections: Iterable[np.ndarray] | None = None
+            ) -> InputEnvelope:
+    """
+    Return the envelope of every sample of ``imus`` (each (N, 6), as the model is fed).
+
+    ``corrections``: the model's output less its input gyro on the same samples, whose
+    mean is the fallback; None: no fallback correction (a turn-on bias removed first).
+    """
     gyro, accel = zip(*(excursion(imu) for imu in imus))
+    fallback = (0.0, 0.0, 0.0) if corrections is None else tuple(
+        float(v) for v in np.concatenate(list(corrections)).mean(0))
     return InputEnvelope(float(np.max(np.concatenate(gyro))),
-                         float(np.max(np.concatenate(accel))))
+                         float(np.max(np.concatenate(accel))), fallback)
 
 
 def outside(imu: np.ndarray, envelope: InputEnvelope) -> np.ndarray:
@@ -58,7 +69,7 @@ def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | N
     Return a model's ``output`` (N, 3) guarded for its input ``fed`` (N, 6), one run.
 
     Sample n is untrusted when any of samples n - field + 1 ... n is outside; it then
-    gets its input gyro plus the correction (output - input) of the last trusted sample.
+    gets its input gyro plus the envelope's fallback correction.
     """
     if envelope is None:
         return output
@@ -67,9 +78,8 @@ def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | N
     untrusted = bad[n + 1] > bad[np.maximum(n + 1 - field, 0)]
     if not untrusted.any():
         return output
-    last = np.maximum.accumulate(np.where(untrusted, -1, n))
-    held = np.where((last >= 0)[:, None], output[last] - fed[last, :3], 0.0)
-    return np.where(untrusted[:, None], fed[:, :3] + held, output)
+    return np.where(untrusted[:, None], fed[:, :3] + np.array(envelope.fallback_rad_s),
+                    output)
 
 
 class Guard:
@@ -77,13 +87,13 @@ class Guard:
 
     def __init__(self, envelope: InputEnvelope, field: int) -> None:
         self.envelope, self.field = envelope, field
+        self._fallback = np.array(envelope.fallback_rad_s)
         self.reset()
         self.guarded = 0  # samples guarded since start, for diagnostics
 
     def reset(self) -> None:
         """Forget the past: a new stream, or the network's history restarted."""
         self._since_outside = self.field  # no sample outside within the receptive field
-        self._held = np.zeros(3)
         self.trusted = True
 
     def update(self, output: np.ndarray, fed: np.ndarray) -> np.ndarray:
@@ -97,7 +107,6 @@ class Guard:
             self._since_outside += 1
         self.trusted = self._since_outside >= self.field
         if self.trusted:
-            self._held = output - fed[:3]
             return output
         self.guarded += 1
-        return fed[:3] + self._held
+        return fed[:3] + self._fallback

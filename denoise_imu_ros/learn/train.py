@@ -35,7 +35,7 @@ from . import parallel
 from .checkpoint import save_model
 from .config import LossConfig, TrainConfig
 from .loss import increment_loss
-from .model import GyroNet
+from .model import correct_gyro, GyroNet
 from ..core.compat import check_stream
 from ..core.errors import DataWarning, TrainingError
 from ..core.limits import common_rate
@@ -308,6 +308,15 @@ class TrainResult:
                        dict(self.meta, selected=name, validation=figures))
 
 
+def _envelope(model: GyroNet, seqs: list[Sequence], cfg: TrainConfig,
+              rest: rest_bias.RestBiasSettings | None) -> dict[str, Any]:
+    """Return the motion trained on, beyond which the runtime does not trust the model."""
+    fed = [s.imu[:m] for s, m in zip(seqs, window_lengths(seqs, cfg))]
+    corrections = None if rest is not None else [  # the turn-on bias is left to the model
+        correct_gyro(model, imu) - imu[:, :3] for imu in fed]
+    return envelope.measure(fed, corrections).as_dict()
+
+
 def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[str, Any]],
             history: list[dict[str, Any]], t_start: float,
             rest: rest_bias.RestBiasSettings | None) -> TrainResult:
@@ -324,9 +333,7 @@ def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[s
         'train_sequences': cfg.sequences,
         'train_config': cfg.recipe(),
         'rest_bias': None if rest is None else rest.to_dict(),
-        # the motion trained on: the correction is held beyond it (data/envelope.py)
-        'input_envelope': envelope.measure(
-            s.imu[:m] for s, m in zip(seqs, window_lengths(seqs, cfg))).as_dict(),
+        'input_envelope': _envelope(models[chosen], seqs, cfg, rest),
         'pose_alignment': {s.name: s.pose_alignment for s in seqs
                            if s.pose_alignment is not None},
         'run': cfg.run_environment(),

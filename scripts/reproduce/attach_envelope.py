@@ -9,6 +9,7 @@ from denoise_imu_ros.core.modelfile import add_metadata
 from denoise_imu_ros.data import envelope, rest_bias
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.model import correct_gyro
 
 
 def main() -> None:
@@ -22,17 +23,22 @@ def main() -> None:
         loaded = load_model(path)
         meta = loaded.meta
         folder = Path(args.data or meta.data or '.')
-        imus = []
+        imus, corrections = [], []
         for name in meta.train_sequences:
             seq = load_sequence(folder / name, meta.recipe('imu_topic'),
                                 meta.recipe('pose_topic'), meta.recipe('max_gt_gap_s'),
                                 align_poses=meta.recipe('align', 'none'),
                                 poses=meta.recipe('poses'))
-            imus.append(rest_bias.model_input(loaded, seq.imu)[:meta.training_span])
-        bounds = envelope.measure(imus)
+            fed = rest_bias.model_input(loaded, seq.imu)[:meta.training_span]
+            imus.append(fed)
+            corrections.append(correct_gyro(loaded.model, fed) - fed[:, :3])
+        # as training: the mean correction is the fallback where the turn-on bias is not
+        # removed before the model
+        bounds = envelope.measure(imus, None if meta.rest_bias else corrections)
         add_metadata(path, input_envelope=bounds.as_dict())
         print(f'{path}: gyro {bounds.gyro_rad_s:.3f} rad/s, accelerometer '
-              f'{bounds.accel_offset_m_s2:.2f} m/s^2 off gravity, over '
+              f'{bounds.accel_offset_m_s2:.2f} m/s^2 off gravity, fallback '
+              f'{[round(v, 5) for v in bounds.fallback_rad_s]} rad/s, over '
               f'{len(imus)} recordings')
 
 

@@ -23,22 +23,22 @@ def test_the_envelope_is_the_largest_gyro_norm_and_accelerometer_offset_trained_
     b[7, :3] = [3.0, 4.0, 0.0]                      # |gyro| 5 rad/s
     b[9, 3:] = [0.0, 0.0, GRAVITY_M_S2 - 6.5]      # 6.5 m/s^2 below gravity
     assert measure([a, b]) == InputEnvelope(5.0, 6.5)
+    # the fallback: the mean correction over every sample
+    corrections = [np.full((100, 3), 0.01), np.full((50, 3), 0.04)]
+    np.testing.assert_allclose(measure([a, b], corrections).fallback_rad_s, [0.02] * 3)
 
 
-def test_the_correction_is_held_for_a_receptive_field_after_each_sample_outside():
+def test_the_fallback_replaces_the_correction_for_a_receptive_field_after_a_sample_outside():
     fed = _imu(40)
     fed[:, :3] = 0.1
     fed[10, :3] = [0.0, 9.0, 0.0]  # outside
     output = fed[:, :3] + np.arange(40)[:, None] * 1e-3  # a correction that keeps changing
-    guarded = guard_batch(output, fed, InputEnvelope(1.0, 5.0), FIELD)
+    bounds = InputEnvelope(1.0, 5.0, (0.01, -0.02, 0.03))
+    guarded = guard_batch(output, fed, bounds, FIELD)
     inside = [n for n in range(40) if not 10 <= n < 10 + FIELD]
     assert np.array_equal(guarded[inside], output[inside])
-    # samples 10-14 see sample 10 in their receptive field: sample 9's correction, held
-    np.testing.assert_allclose(guarded[10:15], fed[10:15, :3] + 9e-3, rtol=0, atol=1e-15)
-    # outside from the first sample: nothing trusted yet, no correction
-    fed[0, :3] = 9.0
-    np.testing.assert_array_equal(guard_batch(output, fed, InputEnvelope(1.0, 5.0), FIELD)[:5],
-                                  fed[:5, :3])
+    # samples 10-14 see sample 10 in their receptive field: input plus the fallback
+    np.testing.assert_array_equal(guarded[10:15], fed[10:15, :3] + [0.01, -0.02, 0.03])
     assert guard_batch(output, fed, None, FIELD) is output
 
 
@@ -59,9 +59,12 @@ def test_per_sample_equals_the_arrays_bit_for_bit_and_restarts_on_reset():
 
 
 def test_the_model_file_entry_is_checked():
+    stored = InputEnvelope(5.0, 2.0, (0.01, 0.0, -0.08))
+    assert parse_meta({'input_envelope': stored.as_dict()}, 'm').input_envelope == stored
     assert parse_meta({'input_envelope': {'gyro_rad_s': 5.0, 'accel_offset_m_s2': 2.0}},
                       'm').input_envelope == InputEnvelope(5.0, 2.0)
     assert parse_meta({}, 'm').input_envelope is None
-    for bad in ({'gyro_rad_s': -1.0, 'accel_offset_m_s2': 2.0}, {'gyro_rad_s': 5.0}, [5, 2]):
+    for bad in ({'gyro_rad_s': -1.0, 'accel_offset_m_s2': 2.0}, {'gyro_rad_s': 5.0}, [5, 2],
+                {'gyro_rad_s': 5.0, 'accel_offset_m_s2': 2.0, 'fallback_rad_s': [0, 0, 3]}):
         with pytest.raises(ModelFileError, match='m: inconsistent'):
             parse_meta({'input_envelope': bad}, 'm')
