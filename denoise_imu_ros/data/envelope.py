@@ -11,9 +11,11 @@ norm from gravity). Wherever a sample of the receptive field since the last rese
 outside it, the output is the model's input gyro plus a constant: the model's mean
 correction over its training recordings, or nothing where the turn-on bias is removed
 before the model (its input is then the gyro less that bias, the practitioner's
-baseline). Holding the last correction instead was measured worse: a correction taken in
-motion carries that motion's scale terms into faster motion. Every path uses it
-identically, after the network and before the output's bias tracking
+baseline). It comes last, after the output's bias tracking, whose tracker is fed the
+model's output throughout; measured worse (``scripts/experiments/envelope_guard.py``,
+docs/experiments.md): holding the last correction (a correction taken in motion carries
+that motion's scale terms into faster motion) and guarding before the tracking (its
+estimate then follows the fallback through fast motion). Every path uses it identically
 (:func:`guard_batch` over arrays for ``eval``, ``correct`` and ``crossval``;
 :class:`Guard` per sample for the node and ``process-bag``; equal bit for bit).
 """
@@ -21,14 +23,14 @@ identically, after the network and before the output's bias tracking
 from __future__ import annotations
 
 import math
-from typing import Iterable
+from typing import Any, Iterable
 
 import numpy as np
 
 from ..core.limits import GRAVITY_M_S2
 from ..core.schema import InputEnvelope
 
-__all__ = ['excursion', 'Guard', 'guard_batch', 'measure', 'outside']
+__all__ = ['combine', 'excursion', 'Guard', 'guard_batch', 'guarded', 'measure', 'outside']
 
 
 def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -57,6 +59,20 @@ def measure(imus: Iterable[np.ndarray], corrections: Iterable[np.ndarray] | None
                          float(np.max(np.concatenate(accel))), fallback)
 
 
+def combine(envelopes: list[InputEnvelope | None]) -> InputEnvelope | None:
+    """
+    Return the envelope of an ensemble of these models (None if one has none).
+
+    The widest bounds, and the mean fallback: the members' mean corrections averaged, as
+    their outputs are.
+    """
+    if not envelopes or any(e is None for e in envelopes):
+        return None
+    return InputEnvelope(max(e.gyro_rad_s for e in envelopes),
+                         max(e.accel_offset_m_s2 for e in envelopes),
+                         tuple(np.mean([e.fallback_rad_s for e in envelopes], axis=0)))
+
+
 def outside(imu: np.ndarray, envelope: InputEnvelope) -> np.ndarray:
     """Whether each sample of (N, 6) lies outside ``envelope`` (N,)."""
     gyro, accel = excursion(imu)
@@ -80,6 +96,11 @@ def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | N
         return output
     return np.where(untrusted[:, None], fed[:, :3] + np.array(envelope.fallback_rad_s),
                     output)
+
+
+def guarded(loaded: Any, output: np.ndarray, fed: np.ndarray) -> np.ndarray:
+    """Return :func:`guard_batch` with a model file's envelope and receptive field."""
+    return guard_batch(output, fed, loaded.meta.input_envelope, loaded.config.receptive_field)
 
 
 class Guard:

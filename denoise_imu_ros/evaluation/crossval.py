@@ -33,8 +33,8 @@ from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..core.modelfile import sample_rate
-from ..core.schema import BiasTracking, ModelMeta, parse_meta
-from ..data import rest_bias
+from ..core.schema import BiasTracking, InputEnvelope, ModelMeta, parse_meta
+from ..data import envelope, rest_bias
 from ..data.load import load_sequence
 from ..data.rest_bias import track_bias
 from ..learn import parallel
@@ -161,10 +161,18 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                 seq, rest_bias.baseline_gyro(models[0][0], seq.imu))}
             gyros = [{'calibrated': calib.untracked(seq.imu), 'network': net.untracked(seq.imu)}
                      for net, calib in models]
-            tracked[name] = _candidates(seq, {m: np.mean([g[m] for g in gyros], axis=0)
-                                              for m in TRACKED}, sample_rate(models[0][0]))
-            tracked_seed[name] = [_candidates(seq, g, sample_rate(models[0][0]))
-                                  for g in gyros] if seeds is not None else []
+            fed = rest_bias.model_input(models[0][0], seq.imu)  # one recipe, one input
+            fields = {'calibrated': models[0][1].config.receptive_field,
+                      'network': models[0][0].config.receptive_field}
+            bounds = [{'calibrated': calib.meta.input_envelope,
+                       'network': net.meta.input_envelope} for net, calib in models]
+            tracked[name] = _candidates(
+                seq, {m: np.mean([g[m] for g in gyros], axis=0) for m in TRACKED},
+                sample_rate(models[0][0]), fed,
+                {'calibrated': bounds[0]['calibrated'],  # the calibration: seed 0's
+                 'network': envelope.combine([b['network'] for b in bounds])}, fields)
+            tracked_seed[name] = [_candidates(seq, g, sample_rate(models[0][0]), fed, b, fields)
+                                  for g, b in zip(gyros, bounds)] if seeds is not None else []
             fold_of[name] = i
     per_recording, per_seed, tracking = _nested(raw_rows, tracked, tracked_seed, fold_of,
                                                 seeds or [])
@@ -233,11 +241,17 @@ def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
                         Path(f'{label}, calibration')))
 
 
-def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float
+def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float, fed: np.ndarray,
+                bounds: dict[str, InputEnvelope | None], fields: dict[str, int]
                 ) -> dict[str, dict[str, dict[str, float]]]:
-    """Return each tracking candidate's figures (label -> row -> score) of untracked gyros."""
-    return {label: {m: score(seq, track_bias(g, seq.imu[:, 3:], rate_hz, t))
-                    for m, g in gyros.items()} for label, t in CANDIDATES.items()}
+    """
+    Return each tracking candidate's figures (label -> row -> score) of untracked gyros.
+
+    Each tracked gyro is then guarded by its row's input envelope, as every path does.
+    """
+    return {label: {m: score(seq, envelope.guard_batch(
+        track_bias(g, seq.imu[:, 3:], rate_hz, t), fed, bounds[m], fields[m]))
+        for m, g in gyros.items()} for label, t in CANDIDATES.items()}
 
 
 def _choose(tracked: dict[str, Any], names: list[str]) -> dict[str, str]:

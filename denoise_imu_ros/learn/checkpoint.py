@@ -25,9 +25,9 @@ from ..data import envelope, rest_bias
 
 
 # imu/data's filter settings (tune-fusion), the cross-recording verdict and the output
-# bias tracking it chose (crossval --seeds), the input envelope (the same training
-# data): kept by an ensemble when every member carries the same
-SHARED_BY_MEMBERS = ('fusion', 'crossval', 'bias_tracking', 'input_envelope')
+# bias tracking it chose (crossval --seeds): kept by an ensemble when every member
+# carries the same
+SHARED_BY_MEMBERS = ('fusion', 'crossval', 'bias_tracking')
 
 
 class LoadedModel(NamedTuple):
@@ -44,13 +44,13 @@ class LoadedModel(NamedTuple):
 
     def correct(self, imu: np.ndarray) -> np.ndarray:
         """Corrected gyro (N, 3) of a recording's raw samples (N, 6), as online."""
-        return rest_bias.model_output(self, self.untracked(imu), imu)
+        fed = rest_bias.model_input(self, imu)
+        tracked = rest_bias.model_output(self, correct_gyro(self.model, fed), imu)
+        return envelope.guarded(self, tracked, fed)
 
     def untracked(self, imu: np.ndarray) -> np.ndarray:
-        """Return the model's output (N, 3) before its bias tracking, fed as online."""
-        fed = rest_bias.model_input(self, imu)
-        return envelope.guard_batch(correct_gyro(self.model, fed), fed,
-                                    self.meta.input_envelope, self.config.receptive_field)
+        """Return the model's output (N, 3) before its bias tracking and envelope."""
+        return correct_gyro(self.model, rest_bias.model_input(self, imu))
 
 
 def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:
@@ -118,6 +118,9 @@ def save_ensemble(path: str | Path, specs: list[str]) -> LoadedModel:
         'code_version': code_version(),
         'created': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
     }
+    bounds = envelope.combine([m.meta.input_envelope for m in members])
+    if bounds is not None:
+        meta['input_envelope'] = bounds.as_dict()
     for key in SHARED_BY_MEMBERS:  # what every member says alike describes the ensemble
         values = [m.meta.raw.get(key) for m in members]
         if values[0] is not None and all(v == values[0] for v in values):

@@ -40,9 +40,9 @@ perhaps another power-on), a gap does not (the same run). With a
 the model's output less its tracked bias is what every output carries, the open-loop
 attitude and the gravity-aided orientation included; it restarts with the estimate.
 With a :class:`~denoise_imu_ros.data.envelope.Guard` (the model file's
-``input_envelope``), between the model and the tracking, the correction is held at its
-last trusted value while the receptive field holds motion the model was not trained on;
-it restarts with the network's history.
+``input_envelope``), last, the output is the model's input plus a constant while the
+receptive field holds motion the model was not trained on; it restarts with the
+network's history.
 """
 
 from __future__ import annotations
@@ -113,7 +113,7 @@ class OnlineDenoiser:
     accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rest: rest_bias.RestBias | None = None  # the turn-on bias removed before the model
     track: rest_bias.BiasTracker | None = None  # the output's bias tracked after it
-    guard: envelope.Guard | None = None  # the correction held outside the input envelope
+    guard: envelope.Guard | None = None  # the model not trusted beyond its input envelope
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
          'skipped_input_periods', 'non_finite_covariance'), 0))
@@ -240,14 +240,14 @@ class OnlineDenoiser:
         corrected = self.engine.step(fed)
         if not np.isfinite(corrected).all():  # never published: dropped as if lost
             return self._drop(Drop.NON_FINITE_OUTPUT)
-        if self.guard is not None:
-            if event is not None:  # the engine's history restarted
-                self.guard.reset()
-            corrected = self.guard.update(corrected, fed)
         if self.track is not None:
             if event in (Event.START, Event.TIME_JUMP):
                 self.track.reset()
             corrected = corrected - self.track.update(corrected, accel)
+        if self.guard is not None:
+            if event is not None:  # the engine's history restarted
+                self.guard.reset()
+            corrected = self.guard.update(corrected, fed)
         if event in (Event.START, Event.TIME_JUMP):  # another stream: its rate is new too
             self._off_rate_run, self._input_period_ns, self._window_off = 0, 0.0, False
             self._intervals.clear()

@@ -5,7 +5,7 @@
 from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.schema import InputEnvelope, parse_meta
-from denoise_imu_ros.data.envelope import Guard, guard_batch, measure
+from denoise_imu_ros.data.envelope import combine, Guard, guard_batch, measure
 import numpy as np
 import pytest
 
@@ -68,3 +68,12 @@ def test_the_model_file_entry_is_checked():
                 {'gyro_rad_s': 5.0, 'accel_offset_m_s2': 2.0, 'fallback_rad_s': [0, 0, 3]}):
         with pytest.raises(ModelFileError, match='m: inconsistent'):
             parse_meta({'input_envelope': bad}, 'm')
+
+
+def test_an_ensemble_takes_the_widest_bounds_and_the_mean_fallback():
+    a = InputEnvelope(5.0, 2.0, (0.01, 0.0, 0.0))
+    b = InputEnvelope(4.0, 3.0, (0.03, 0.02, 0.0))
+    both = combine([a, b])
+    assert (both.gyro_rad_s, both.accel_offset_m_s2) == (5.0, 3.0)
+    np.testing.assert_allclose(both.fallback_rad_s, [0.02, 0.01, 0.0])
+    assert combine([a, None]) is None
