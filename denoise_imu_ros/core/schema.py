@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, fields
 import math
-from typing import Any
+from typing import Any, Callable
 
 from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
@@ -328,29 +328,18 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
                    tuple(str(n) for fold in folds for n in fold), steps, cfg, report)
 
 
-def _tracking(raw: dict[str, Any], where: str) -> BiasTracking | None:
-    value = raw.get('bias_tracking')
+def _settings(raw: dict[str, Any], key: str, where: str,
+              build: Callable[[dict[str, Any]], Any]) -> Any:
+    """Return ``build`` of a mapping entry (None where absent); its errors name the entry."""
+    value = raw.get(key)
     if value is None:
         return None
     if not isinstance(value, dict):
-        raise _fail(where, 'bias_tracking', value, 'a mapping')
+        raise _fail(where, key, value, 'a mapping')
     try:
-        return BiasTracking(value.get('sigma_motion_deg_s'), value.get('forgetting_s'))
+        return build(value)
     except ValueError as err:
-        raise ModelFileError(f'{where}: inconsistent bias_tracking ({err})') from err
-
-
-def _envelope(raw: dict[str, Any], where: str) -> InputEnvelope | None:
-    value = raw.get('input_envelope')
-    if value is None:
-        return None
-    if not isinstance(value, dict):
-        raise _fail(where, 'input_envelope', value, 'a mapping')
-    try:
-        return InputEnvelope(value.get('gyro_rad_s'), value.get('accel_offset_m_s2'),
-                             value.get('fallback_rad_s', (0.0, 0.0, 0.0)))
-    except ValueError as err:
-        raise ModelFileError(f'{where}: inconsistent input_envelope ({err})') from err
+        raise ModelFileError(f'{where}: inconsistent {key} ({err})') from err
 
 
 def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
@@ -383,7 +372,10 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         fusion=_fusion(raw, where),
         crossval=_verdict(raw, where),
         rest_bias=None if rest is None else RestBiasSettings.from_dict(rest, where),
-        bias_tracking=_tracking(raw, where),
-        input_envelope=_envelope(raw, where),
+        bias_tracking=_settings(raw, 'bias_tracking', where, lambda v: BiasTracking(
+            v.get('sigma_motion_deg_s'), v.get('forgetting_s'))),
+        input_envelope=_settings(raw, 'input_envelope', where, lambda v: InputEnvelope(
+            v.get('gyro_rad_s'), v.get('accel_offset_m_s2'),
+            v.get('fallback_rad_s', (0.0, 0.0, 0.0)))),
         code_version=_optional(raw, 'code_version', where, str, 'a version'),
         members=len(members))

@@ -23,7 +23,7 @@ from typing import Any
 import torch
 from torch import nn
 
-from .parallel import sum_over_processes
+from .parallel import sum_over_processes, update_running_stats
 
 _F, _D = ctypes.POINTER(ctypes.c_float), ctypes.POINTER(ctypes.c_double)
 _I, _SEED = ctypes.c_int64, ctypes.c_uint64
@@ -148,12 +148,7 @@ def block(x: torch.Tensor, norm: nn.BatchNorm1d, gelu: nn.Module,
     seed = int(torch.randint(-2 ** 63, 2 ** 63 - 1, ()).item()) % 2 ** 64
     out, mean, var = _BlockFn.apply(x, norm.weight, norm.bias, norm.running_mean, norm.eps,
                                     dropout.p if dropout.training else 0.0, seed)
-    with torch.no_grad():
-        norm.num_batches_tracked += 1
-        factor = (1.0 / float(norm.num_batches_tracked) if norm.momentum is None
-                  else norm.momentum)
-        norm.running_mean.lerp_(mean, factor)
-        norm.running_var.lerp_(var, factor)
+    update_running_stats(norm, mean, var)
     return out
 
 

@@ -149,14 +149,18 @@ class SyncBatchNorm(nn.BatchNorm1d):
         if not self.training:
             return super().forward(x)
         y, mean, var = _SyncBatchNormFn.apply(x, self.weight, self.bias, self.eps)
-        with torch.no_grad():
-            self.num_batches_tracked += 1
-            # momentum None = cumulative average (what swa_utils.update_bn asks for)
-            factor = (1.0 / float(self.num_batches_tracked) if self.momentum is None
-                      else self.momentum)
-            self.running_mean.lerp_(mean, factor)
-            self.running_var.lerp_(var, factor)
+        update_running_stats(self, mean, var)
         return y
+
+
+@torch.no_grad()
+def update_running_stats(norm: nn.BatchNorm1d, mean: torch.Tensor, var: torch.Tensor) -> None:
+    """Move a BatchNorm's running statistics towards a batch's, as BatchNorm1d does."""
+    norm.num_batches_tracked += 1
+    # momentum None = cumulative average (what swa_utils.update_bn asks for)
+    factor = 1.0 / float(norm.num_batches_tracked) if norm.momentum is None else norm.momentum
+    norm.running_mean.lerp_(mean, factor)
+    norm.running_var.lerp_(var, factor)
 
 
 def sync_batch_norm(model: nn.Module) -> nn.Module:
