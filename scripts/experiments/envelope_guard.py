@@ -10,7 +10,10 @@ accelerometer norm from gravity, or a high percentile of each, over its training
 recordings) and, wherever a sample of the receptive field leaves it, replaces the model's
 output by the raw gyro less its turn-on bias (the "rest bias" row). Prints, per held-out
 recording, the open-loop AOE and the AOE of VQF (defaults) fed each gyro: rest bias, the
-model, the model so guarded (per envelope), and the share of samples guarded.
+model, the model so guarded (per envelope), and the share of samples guarded; then,
+with the largest-value envelope, where the guard goes relative to the output's bias
+tracking: first (the tracker fed the guarded gyro), last (the tracker fed the model's
+output), or the tracker fed the guarded gyro with untrusted samples left untracked.
 Usage: .venv/bin/python scripts/experiments/envelope_guard.py MODEL DATA_DIR
        TRAIN_A,TRAIN_B,... HELD_A,HELD_B,...
 """
@@ -23,6 +26,7 @@ from denoise_imu_ros.data import rest_bias
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation import filters
 from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.model import correct_gyro
 import numpy as np
 from scipy.ndimage import maximum_filter1d
 
@@ -67,7 +71,9 @@ def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
     for name in held:
         seq = load_sequence(Path(data) / name, align_poses=align)
         rest = rest_bias.remove_rest_bias(seq.imu, seq.rate_hz, settings)[:, :3]
-        gyro = net.correct(seq.imu)
+        fed = rest_bias.model_input(net, seq.imu)
+        output = correct_gyro(net.model, fed)
+        gyro = rest_bias.model_output(net, output, seq.imu)
         figures = [score(seq, rest)['aoe_deg'], score(seq, gyro)['aoe_deg']]
         fused = [fused_aoe(seq, rest), fused_aoe(seq, gyro)]
         shares = []
@@ -77,14 +83,23 @@ def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
             figures.append(score(seq, guarded)['aoe_deg'])
             fused.append(fused_aoe(seq, guarded))
             shares.append(out.mean())
-        rows.append((figures, fused))
+        out = outside(seq.imu, envelopes[100.0], field)[:, None]
+        guarded = np.where(out, rest, output)
+        placement = [score(seq, g)['aoe_deg'] for g in (
+            rest_bias.model_output(net, guarded, seq.imu),
+            np.where(out, rest, gyro),
+            np.where(out, rest, rest_bias.model_output(net, guarded, seq.imu)))]
+        rows.append((figures, fused, placement))
         print(f'{name[:34]:34s} open loop ' + ' '.join(f'{v:6.2f}' for v in figures)
               + '  fused ' + ' '.join(f'{v:6.2f}' for v in fused)
-              + '  guarded ' + ' '.join(f'{100 * s:3.0f}%' for s in shares), flush=True)
-    mean = np.mean([r[0] for r in rows], 0), np.mean([r[1] for r in rows], 0)
+              + '  guarded ' + ' '.join(f'{100 * s:3.0f}%' for s in shares)
+              + '  first/last/untracked ' + ' '.join(f'{v:6.2f}' for v in placement),
+              flush=True)
+    mean = [np.mean([r[k] for r in rows], 0) for k in range(3)]
     print('columns: rest bias, model, guarded by p' + ', p'.join(f'{p:g}' for p in PERCENTILES))
     print(f'{"mean":34s} open loop ' + ' '.join(f'{v:6.2f}' for v in mean[0])
-          + '  fused ' + ' '.join(f'{v:6.2f}' for v in mean[1]))
+          + '  fused ' + ' '.join(f'{v:6.2f}' for v in mean[1])
+          + '  first/last/untracked ' + ' '.join(f'{v:6.2f}' for v in mean[2]))
 
 
 if __name__ == '__main__':

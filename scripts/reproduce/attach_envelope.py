@@ -4,12 +4,24 @@
 
 import argparse
 from pathlib import Path
+import sys
 
-from denoise_imu_ros.core.modelfile import add_metadata
+from denoise_imu_ros.core.errors import ModelFileError
+from denoise_imu_ros.core.modelfile import add_metadata, read_model_file
 from denoise_imu_ros.data import envelope, rest_bias
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
+
+
+def _members_data(members: list[dict]) -> str | None:
+    """Return the training folder an ensemble's first member names, if it is readable."""
+    for member in members[:1]:
+        try:
+            return read_model_file(member['file']).meta.data
+        except (KeyError, TypeError, ModelFileError):
+            return None
+    return None
 
 
 def main() -> None:
@@ -22,7 +34,10 @@ def main() -> None:
     for path in args.models:
         loaded = load_model(path)
         meta = loaded.meta
-        folder = Path(args.data or meta.data or '.')
+        folder = args.data or meta.data or _members_data(meta.raw.get('members') or [])
+        if folder is None:
+            sys.exit(f'{path}: the file names no training folder: give --data')
+        folder = Path(folder)
         imus, corrections = [], []
         for name in meta.train_sequences:
             seq = load_sequence(folder / name, meta.recipe('imu_topic'),
