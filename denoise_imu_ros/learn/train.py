@@ -297,6 +297,7 @@ class TrainResult:
     model: GyroNet                                # eval mode, on the CPU
     meta: dict[str, Any]                          # what its model file records
     candidates: dict[str, tuple[GyroNet, dict[str, Any]]]  # name -> (model, figures)
+    envelopes: dict[str, dict[str, Any]]          # name -> its input envelope
 
     def save(self, path: str | Path, candidates_dir: str | Path | None = None) -> None:
         """Write the chosen model, and with ``candidates_dir`` every candidate beside it."""
@@ -305,7 +306,8 @@ class TrainResult:
             return
         for name, (model, figures) in self.candidates.items():
             save_model(Path(candidates_dir) / f'{name}.safetensors', model,
-                       dict(self.meta, selected=name, validation=figures))
+                       dict(self.meta, selected=name, validation=figures,
+                            input_envelope=self.envelopes[name]))
 
 
 def _envelope(model: GyroNet, seqs: list[Sequence], cfg: TrainConfig,
@@ -327,13 +329,14 @@ def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[s
         models[name].load_state_dict({k: v.cpu() for k, v in figures.pop('state').items()})
         models[name].eval()
     chosen = select(candidates, cfg.select)
+    envelopes = {name: _envelope(m, seqs, cfg, rest) for name, m in models.items()}
     meta = {
         'dataset': cfg.dataset,
         'sample_rate_hz': float(np.median([s.rate_hz for s in seqs])),
         'train_sequences': cfg.sequences,
         'train_config': cfg.recipe(),
         'rest_bias': None if rest is None else rest.to_dict(),
-        'input_envelope': _envelope(models[chosen], seqs, cfg, rest),
+        'input_envelope': envelopes[chosen],
         'pose_alignment': {s.name: s.pose_alignment for s in seqs
                            if s.pose_alignment is not None},
         'run': cfg.run_environment(),
@@ -346,7 +349,7 @@ def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[s
         'created': time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime()),
     }
     return TrainResult(models[chosen], meta,
-                       {name: (m, candidates[name]) for name, m in models.items()})
+                       {name: (m, candidates[name]) for name, m in models.items()}, envelopes)
 
 
 # ----------------------------------------------------------------------------------

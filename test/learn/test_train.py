@@ -308,7 +308,7 @@ def _finished_training(monkeypatch):
     from helpers import untrained_model
     result = train_module.TrainResult(untrained_model(), {
         'selected': 'swa', 'train_seconds': 1.0, 'sample_rate_hz': 200.0,
-        'validation': {'step': 1, 'loss': 1.0, 'aoe_mean_deg': 1.0}}, {})
+        'validation': {'step': 1, 'loss': 1.0, 'aoe_mean_deg': 1.0}}, {}, {})
     monkeypatch.setattr(train_module, 'train', lambda cfg, progress: result)
 
 
