@@ -80,11 +80,13 @@ def test_masks_follow_torch_seed():
     assert not torch.equal(draws[0], draws[2])
 
 
-def test_outside_training_on_float64_or_tanh_gelu_the_modules_run():
+def test_outside_cpu_float32_training_with_exact_gelu_the_modules_run():
     norm = _layers(4)
     x = torch.randn(2, 4, 100, dtype=torch.float64)
     assert not fused.fusable(x, norm.double(), nn.GELU())
     assert not fused.fusable(x.float(), norm.float(), nn.GELU(approximate='tanh'))
+    # another device (a GPU in training): PyTorch's layers, as with fused: false
+    assert not fused.fusable(torch.empty(2, 4, 100, device='meta'), norm, nn.GELU())
     assert not fused.fusable(x.float(), norm.eval(), nn.GELU())
     before = norm.running_mean.clone()
     _close(fused.block(x.float(), norm, nn.GELU(), Dropout(0.5).eval()),
