@@ -32,6 +32,19 @@ def test_shipped_models_load_by_name_with_their_provenance(name):
     assert loaded.model.receptive_field == (1 if 'calibrated' in name else 511)
 
 
+@pytest.mark.parametrize('name', sorted(shipped_models()))
+def test_every_shipped_model_is_trusted_within_the_motion_of_its_training_recordings(name):
+    """Its input envelope: its recordings' fastest rotation; a fallback only without rest bias."""
+    meta = read_model_file(name).meta
+    bounds = meta.input_envelope
+    fastest = {'euroc': 2.47, 'tumvi': 4.14, 'broad': 10.47}[name.split('_')[0]]  # rad/s
+    assert abs(bounds.gyro_rad_s - fastest) < 0.01
+    if meta.rest_bias is not None:
+        assert bounds.fallback_rad_s == (0.0, 0.0, 0.0)
+    if name.startswith('euroc'):  # the ADIS16448's turn-on bias about z: 4.5 deg/s
+        assert -0.08 < bounds.fallback_rad_s[2] < -0.075
+
+
 def test_shipped_euroc_model_beats_raw_and_calibrated_on_the_shipped_test_sample(tmp_path):
     report = evaluate_module.evaluate('euroc', str(SAMPLE_DIR), [SAMPLE.name],
                                       str(tmp_path), plots=False)
