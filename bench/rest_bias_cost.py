@@ -7,8 +7,9 @@ Runs the same model over the same real samples through ``OnlineDenoiser.process`
 node's and process-bag's per-sample work, without ROS) with ``rest_bias`` off and on
 (the turn-on bias before the model, and its output's tracking where the file has one),
 alternating rounds so that a change in the machine's speed hits both alike, and each
-estimator alone (``RestBias.update``, ``BiasTracker.update``). Prints the median
-per-sample time of each, and the ratio on/off.
+estimator alone (``RestBias.update``, ``BiasTracker.update``), and the input envelope's
+guard alone where the file has one (``Guard.update``, which both settings run). Prints
+the median per-sample time of each, and the ratio on/off.
 Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
      [--recording 03_undisturbed_slow_rotation_C] [--samples 20000] [--rounds 5]
 """
@@ -18,6 +19,7 @@ from pathlib import Path
 import time
 
 from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
+from denoise_imu_ros.data.envelope import Guard
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.data.rest_bias import BiasTracker, resolve, RestBias
 from denoise_imu_ros.runtime.online import OnlineDenoiser
@@ -46,7 +48,8 @@ def main() -> None:
     model = read_model_file(args.model)
     rec = load_imu(DATA / args.recording)
     stamps, imu = rec.imu_stamp_ns[:args.samples], rec.imu[:args.samples]
-    times = {'off': [], 'on': [], 'estimator alone': [], 'tracker alone': []}
+    times = {'off': [], 'on': [], 'estimator alone': [], 'tracker alone': [],
+             'envelope guard alone': []}
     for _ in range(args.rounds):
         for choice in ('off', 'on'):
             den = OnlineDenoiser.from_model_file(model, rest_choice=choice)
@@ -58,6 +61,11 @@ def main() -> None:
             track = BiasTracker(model.meta.bias_tracking, sample_rate(model))
             times['tracker alone'].append(
                 per_sample_s(lambda t, g, a: track.update(g, a), stamps, imu))
+        if model.meta.input_envelope is not None:
+            guard = Guard(model.meta.input_envelope, model.config.receptive_field)
+            times['envelope guard alone'].append(  # fed as the pipeline feeds it
+                per_sample_s(lambda t, g, a: guard.update(g, np.concatenate([g, a])),
+                             stamps, imu))
     median = {k: float(np.median(v)) for k, v in times.items() if v}
     print(f'{model.path.name}, {len(stamps)} samples of {args.recording}, '
           f'{args.rounds} rounds alternating, median per sample:')

@@ -119,7 +119,7 @@ class Guard:
 
     def update(self, output: np.ndarray, fed: np.ndarray) -> np.ndarray:
         """Return the model's ``output`` (3,) guarded for its input ``fed`` (6,)."""
-        x, y, z, ax, ay, az = (float(v) for v in fed)
+        x, y, z, ax, ay, az = fed.tolist()
         if (math.sqrt(x * x + y * y + z * z) > self.envelope.gyro_rad_s
                 or abs(math.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2)
                 > self.envelope.accel_offset_m_s2):
