@@ -30,7 +30,8 @@ import numpy as np
 from ..core.limits import GRAVITY_M_S2
 from ..core.schema import InputEnvelope
 
-__all__ = ['combine', 'excursion', 'Guard', 'guard_batch', 'guarded', 'measure', 'outside']
+__all__ = ['combine', 'excursion', 'Guard', 'guard_batch', 'guarded', 'measure', 'outside',
+           'untrusted']
 
 
 def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -79,23 +80,26 @@ def outside(imu: np.ndarray, envelope: InputEnvelope) -> np.ndarray:
     return (gyro > envelope.gyro_rad_s) | (accel > envelope.accel_offset_m_s2)
 
 
+def untrusted(fed: np.ndarray, envelope: InputEnvelope, field: int) -> np.ndarray:
+    """Whether any of samples n - field + 1 ... n of (N, 6) is outside, for each n (N,)."""
+    bad = np.concatenate([[0], np.cumsum(outside(fed, envelope))])
+    n = np.arange(len(fed))
+    return bad[n + 1] > bad[np.maximum(n + 1 - field, 0)]
+
+
 def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | None,
                 field: int) -> np.ndarray:
     """
     Return a model's ``output`` (N, 3) guarded for its input ``fed`` (N, 6), one run.
 
-    Sample n is untrusted when any of samples n - field + 1 ... n is outside; it then
-    gets its input gyro plus the envelope's fallback correction.
+    An :func:`untrusted` sample gets its input gyro plus the envelope's fallback correction.
     """
     if envelope is None:
         return output
-    bad = np.concatenate([[0], np.cumsum(outside(fed, envelope))])
-    n = np.arange(len(output))
-    untrusted = bad[n + 1] > bad[np.maximum(n + 1 - field, 0)]
-    if not untrusted.any():
+    mask = untrusted(fed, envelope, field)
+    if not mask.any():
         return output
-    return np.where(untrusted[:, None], fed[:, :3] + np.array(envelope.fallback_rad_s),
-                    output)
+    return np.where(mask[:, None], fed[:, :3] + np.array(envelope.fallback_rad_s), output)
 
 
 def guarded(loaded: Any, output: np.ndarray, fed: np.ndarray) -> np.ndarray:

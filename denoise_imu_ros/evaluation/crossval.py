@@ -40,6 +40,7 @@ from ..data.rest_bias import track_bias
 from ..learn import parallel
 from ..learn.checkpoint import load_model, LoadedModel
 from ..learn.config import load_config
+from ..learn.model import correct_gyro
 from ..learn.train import train
 
 
@@ -152,6 +153,12 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                        + ('' if seed is None else f', seed {seed}'), progress))
         if only_fold is not None:
             return None
+        fields = {'calibrated': models[0][1].config.receptive_field,
+                  'network': models[0][0].config.receptive_field}
+        bounds = [{'calibrated': calib.meta.input_envelope,
+                   'network': net.meta.input_envelope} for net, calib in models]
+        ensemble_bounds = {'calibrated': bounds[0]['calibrated'],  # the calibration: seed 0's
+                           'network': envelope.combine([b['network'] for b in bounds])}
         for name in held_out:  # read as the recipe reads its recordings
             seq = load_sequence(Path(recipe.data) / name, recipe.imu_topic, recipe.pose_topic,
                                 recipe.max_gt_gap_s,
@@ -159,19 +166,14 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                 align_poses=recipe.align, poses=recipe.poses)
             raw_rows[name] = {'raw': score(seq, seq.imu[:, :3]), 'rest bias': score(
                 seq, rest_bias.baseline_gyro(models[0][0], seq.imu))}
-            gyros = [{'calibrated': calib.untracked(seq.imu), 'network': net.untracked(seq.imu)}
-                     for net, calib in models]
             fed = rest_bias.model_input(models[0][0], seq.imu)  # one recipe, one input
-            fields = {'calibrated': models[0][1].config.receptive_field,
-                      'network': models[0][0].config.receptive_field}
-            bounds = [{'calibrated': calib.meta.input_envelope,
-                       'network': net.meta.input_envelope} for net, calib in models]
+            gyros = [{'calibrated': correct_gyro(calib.model, fed),
+                      'network': correct_gyro(net.model, fed)} for net, calib in models]
+            rate = sample_rate(models[0][0])
             tracked[name] = _candidates(
-                seq, {m: np.mean([g[m] for g in gyros], axis=0) for m in TRACKED},
-                sample_rate(models[0][0]), fed,
-                {'calibrated': bounds[0]['calibrated'],  # the calibration: seed 0's
-                 'network': envelope.combine([b['network'] for b in bounds])}, fields)
-            tracked_seed[name] = [_candidates(seq, g, sample_rate(models[0][0]), fed, b, fields)
+                seq, {m: np.mean([g[m] for g in gyros], axis=0) for m in TRACKED}, rate, fed,
+                ensemble_bounds, fields)
+            tracked_seed[name] = [_candidates(seq, g, rate, fed, b, fields)
                                   for g, b in zip(gyros, bounds)] if seeds is not None else []
             fold_of[name] = i
     per_recording, per_seed, tracking = _nested(raw_rows, tracked, tracked_seed, fold_of,

@@ -408,7 +408,7 @@ class GyroDenoiser(Node):
         values.update(self._rest_values())
         guard = self._denoiser.guard
         values['envelope_guard_applied'] = str(guard is not None)
-        if guard is not None:  # samples whose correction was held (motion not trained on)
+        if guard is not None:  # samples given the fallback (motion it was not trained on)
             values['envelope_guarded_samples'] = str(guard.guarded)
             values['envelope_trusted'] = str(guard.trusted)
         status.values = [KeyValue(key=k, value=v) for k, v in values.items()]

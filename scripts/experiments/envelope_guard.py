@@ -22,30 +22,15 @@ from pathlib import Path
 import sys
 
 from denoise_imu_ros.core.metrics import score
-from denoise_imu_ros.data import rest_bias
+from denoise_imu_ros.core.schema import InputEnvelope
+from denoise_imu_ros.data import envelope, rest_bias
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation import filters
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
 import numpy as np
-from scipy.ndimage import maximum_filter1d
 
-GRAVITY = 9.81
 PERCENTILES = (100.0, 99.9, 99.0)
-
-
-def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per sample: gyro norm (rad/s) and |accelerometer norm - g| (m/s^2)."""
-    return (np.linalg.norm(imu[:, :3], axis=1),
-            np.abs(np.linalg.norm(imu[:, 3:], axis=1) - GRAVITY))
-
-
-def outside(imu: np.ndarray, bounds: tuple[float, float], field: int) -> np.ndarray:
-    """Whether any sample of each one's receptive field (causal) leaves the bounds."""
-    gyro, accel = excursion(imu)
-    bad = ((gyro > bounds[0]) | (accel > bounds[1])).astype(np.uint8)
-    # the window [n - field + 1, n]: a centred filter shifted to end at n
-    return maximum_filter1d(bad, field, origin=(field - 1) // 2).astype(bool)
 
 
 def fused_aoe(seq, gyro: np.ndarray) -> float:
@@ -59,13 +44,15 @@ def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
     net = load_model(model)
     align = net.meta.recipe('align', 'none')
     field = net.model.receptive_field
-    train = [excursion(load_sequence(Path(data) / n, align_poses=align).imu) for n in trained]
+    train = [envelope.excursion(load_sequence(Path(data) / n, align_poses=align).imu)
+             for n in trained]
     gyro_all = np.concatenate([g for g, _ in train])
     accel_all = np.concatenate([a for _, a in train])
-    envelopes = {p: (np.percentile(gyro_all, p), np.percentile(accel_all, p))
-                 for p in PERCENTILES}
-    for p, (g, a) in envelopes.items():
-        print(f'envelope p{p:g}: gyro {np.degrees(g):.0f} deg/s, accel {a:.1f} m/s^2 off g')
+    envelopes = {p: InputEnvelope(float(np.percentile(gyro_all, p)),
+                                  float(np.percentile(accel_all, p))) for p in PERCENTILES}
+    for p, e in envelopes.items():
+        print(f'envelope p{p:g}: gyro {np.degrees(e.gyro_rad_s):.0f} deg/s, accel '
+              f'{e.accel_offset_m_s2:.1f} m/s^2 off g')
     settings = rest_bias.baseline_settings(net.meta)
     rows = []
     for name in held:
@@ -78,12 +65,12 @@ def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
         fused = [fused_aoe(seq, rest), fused_aoe(seq, gyro)]
         shares = []
         for p in PERCENTILES:
-            out = outside(seq.imu, envelopes[p], field)
+            out = envelope.untrusted(seq.imu, envelopes[p], field)
             guarded = np.where(out[:, None], rest, gyro)
             figures.append(score(seq, guarded)['aoe_deg'])
             fused.append(fused_aoe(seq, guarded))
             shares.append(out.mean())
-        out = outside(seq.imu, envelopes[100.0], field)[:, None]
+        out = envelope.untrusted(seq.imu, envelopes[100.0], field)[:, None]
         guarded = np.where(out, rest, output)
         placement = [score(seq, g)['aoe_deg'] for g in (
             rest_bias.model_output(net, guarded, seq.imu),

@@ -1,6 +1,6 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
-"""The input envelope: measured, stored, and the correction held beyond it."""
+"""The input envelope: measured, stored, and the fallback beyond it."""
 
 from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.limits import GRAVITY_M_S2

@@ -22,7 +22,7 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     """
     With the model's filter settings, a turn-on bias removed, the output's bias tracked.
 
-    And the last with an input envelope the bag's motion leaves (the correction held).
+    And the last with an input envelope the bag's motion leaves (the fallback beyond it).
     """
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core.modelfile import add_metadata
