@@ -93,6 +93,11 @@ class TrainConfig:
     # estimated causally from stillness (data/rest_bias.py), in training and wherever
     # the model runs; what is learnt then holds across power-ons
     rest_bias: bool = False
+    # True (with rest_bias): each training recording has its own constant gyro bias, learnt
+    # beside the model and not stored in it, and the model's constant terms are held at 0:
+    # what stays constant within a recording but differs between them (the turn-on bias
+    # estimate's error in motion, a VIO's drift) is not learnt as the gyro's
+    recording_bias: bool = False
     steps: int = 1800                  # one step = one batch of every sequence
     lr: float = 0.01                   # Adam
     weight_decay: float = 0.1          # L2 added to the gradient (not AdamW)
@@ -299,6 +304,9 @@ def _check_recipe(cfg: TrainConfig, path: str | Path, source: Callable[[str], st
         raise TrainingError(f'{path}: align must be none, auto or a mapping with '
                             'time_offset_s (seconds, at most 60 either way) and '
                             'imu_from_pose_rotation_xyzw (a unit quaternion)')
+    if cfg.recording_bias and not cfg.rest_bias:
+        raise TrainingError(f'{path}: recording_bias needs rest_bias: without it nothing '
+                            "would remove the gyro's constant bias where the model runs")
     if cfg.device is not None and not DEVICE.fullmatch(cfg.device):
         raise TrainingError(f'device {cfg.device!r}: not a torch device (use cpu or cuda)')
     if cfg.select not in ('best_validation', 'final', 'swa') or (

@@ -220,6 +220,11 @@ def build_model(cfg: TrainConfig, seqs: list[Sequence],
                                         zip(seqs, window_lengths(seqs, cfg))]),
                         dtype=torch.float32)
     model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
+    if cfg.recording_bias:  # the recordings' own biases (_run) hold every constant
+        constant = model.bias if cfg.calibration_only else model.net[-1].bias
+        with torch.no_grad():
+            constant.zero_()
+        constant.requires_grad_(False)
     model.to(cfg.device)
     if cfg.workers > 1:
         parallel.sync_batch_norm(model)
@@ -230,9 +235,18 @@ def build_model(cfg: TrainConfig, seqs: list[Sequence],
 # ----------------------------------------------------------------------------------
 # Optimiser: Adam with L2 weight decay, cosine warm restarts, optional weight average
 
-def build_optimiser(cfg: TrainConfig, model: GyroNet) -> tuple[Any, Any, Any]:
-    """Return the optimiser, its schedule and the weight average (None without SWA)."""
-    optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+def build_optimiser(cfg: TrainConfig, model: GyroNet,
+                    offsets: torch.Tensor | None = None) -> tuple[Any, Any, Any]:
+    """
+    Return the optimiser, its schedule and the weight average (None without SWA).
+
+    ``offsets``, the recordings' own biases, are optimised beside the model without weight
+    decay: nothing pulls a recording's constant towards the model's.
+    """
+    groups = [{'params': list(model.parameters())}]
+    if offsets is not None:
+        groups.append({'params': [offsets], 'weight_decay': 0.0})
+    optimizer = torch.optim.Adam(groups, lr=cfg.lr, weight_decay=cfg.weight_decay)
     scheduler = torch.optim.lr_scheduler.CosineAnnealingWarmRestarts(
         optimizer, T_0=cfg.restart_period, T_mult=cfg.restart_mult, eta_min=cfg.lr_min)
     swa = torch.optim.swa_utils.AveragedModel(model) if cfg.swa_start > 0 else None
@@ -321,7 +335,8 @@ def _envelope(model: GyroNet, seqs: list[Sequence], cfg: TrainConfig,
 
 def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[str, Any]],
             history: list[dict[str, Any]], t_start: float,
-            rest: rest_bias.RestBiasSettings | None) -> TrainResult:
+            rest: rest_bias.RestBiasSettings | None,
+            recording_bias: dict[str, list[float]] | None) -> TrainResult:
     """Rebuild every candidate as a plain eval-mode network; select one; its metadata."""
     models = {}
     for name, figures in candidates.items():
@@ -336,6 +351,7 @@ def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[s
         'train_sequences': cfg.sequences,
         'train_config': cfg.recipe(),
         'rest_bias': None if rest is None else rest.to_dict(),
+        'recording_bias_rad_s': recording_bias,
         'input_envelope': envelopes[chosen],
         'pose_alignment': {s.name: s.pose_alignment for s in seqs
                            if s.pose_alignment is not None},
@@ -438,7 +454,11 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     _setup_process(cfg, rank)
     seqs, rest = without_turn_on_bias(cfg, seqs)
     model, split, gen = build_model(cfg, seqs, rank)
-    optimizer, scheduler, swa = build_optimiser(cfg, model)
+    # each recording's own constant bias, in units of gyro_std (recording_bias)
+    offsets = (torch.zeros(len(seqs), 3, device=cfg.device, requires_grad=True)
+               if cfg.recording_bias else None)
+    optimizer, scheduler, swa = build_optimiser(cfg, model, offsets)
+    learnt = list(model.parameters()) + ([] if offsets is None else [offsets])
     loss_cfg = cfg.loss_config()
     val_start = cfg.window + cfg.max_offset
 
@@ -450,12 +470,15 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     for step in bar:
         if step > 0:
             u, dt, quat, valid = (x.to(cfg.device) for x in batch(split, cfg, gen))
-            loss = increment_loss(model(u), dt, quat, valid, loss_cfg,
+            omega = model(u)
+            if offsets is not None:  # each window's recording adds its own constant
+                omega = omega + model.gyro_std * offsets[split.mine, None, :]
+            loss = increment_loss(omega, dt, quat, valid, loss_cfg,
                                   parallel.sum_over_processes)
             optimizer.zero_grad(set_to_none=True)
             loss.backward()
             if cfg.workers > 1:
-                loss = parallel.all_reduce_grads(list(model.parameters()), loss)
+                loss = parallel.all_reduce_grads(learnt, loss)
             if not torch.isfinite(loss):
                 raise TrainingError(f'non-finite training loss at step {step} (lr '
                                     f'{scheduler.get_last_lr()[0]:.3g}); lower the learning '
@@ -490,4 +513,6 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
         candidates['swa'] = dict(val, step=cfg.steps, state=swa.module.state_dict())
         bar.write(f'SWA from step {cfg.swa_start}: val {val["loss"]:.4g}  '
                   f'val AOE {val["aoe_mean_deg"]:.3f} deg')
-    return _finish(cfg, seqs, candidates, history, t_start, rest)
+    recording_bias = None if offsets is None else {  # rad/s, as the last step left them
+        s.name: (model.gyro_std.cpu() * b).tolist() for s, b in zip(seqs, offsets.detach().cpu())}
+    return _finish(cfg, seqs, candidates, history, t_start, rest, recording_bias)

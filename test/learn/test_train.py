@@ -277,6 +277,7 @@ def test_align_auto_trains_on_poses_of_a_rotated_marker_on_a_late_clock(euroc, t
     ('increment_weights: [1.0, 0]', 'increment_weights must be positive'),
     ('lr_min: 1.0', 'lr_min 1 is above lr 0.01'),
     ('sequences: [a, b, a]', r"sequences listed more than once: \['a'\]"),
+    ('recording_bias: true', 'recording_bias needs rest_bias'),
 ])
 def test_recipe_values_of_the_wrong_type_or_range_are_refused(tmp_path, text, message):
     (tmp_path / 'r.yaml').write_text(('sequences: [a]\n' if ':' in text else '') + text + '\n')
@@ -362,3 +363,35 @@ def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc
     result.save(tmp_path / 'rest.safetensors')
     stored = load_model(tmp_path / 'rest.safetensors').meta.rest_bias
     assert stored == settings
+
+
+@pytest.mark.parametrize('workers', [1, 2])
+def test_each_recording_s_constant_bias_is_learnt_apart_from_the_model(tmp_path, workers):
+    """recording_bias: a constant that differs between recordings stays out of the model."""
+    from helpers import write_asl
+    biases = (0.02, -0.03)  # rad/s about z; never still, so the rest estimate stays at 0
+    for i, b in enumerate(biases):
+        write_asl(tmp_path / f'rec{i}', n_imu=2400, yaw_rate=0.3, gyro_bias=b)
+    common = dict(data=str(tmp_path), sequences=['rec0', 'rec1'], window=1024, steps=60,
+                  val_every=30, restart_period=60, swa_start=0, select='final', lr=0.05,
+                  calibration_only=True, rest_bias=True, workers=workers)
+    result = train(load_config(CONFIG, recording_bias=True, **common), progress=False)
+    learnt = result.meta['recording_bias_rad_s']
+    assert list(learnt) == ['rec0', 'rec1']
+    assert torch.equal(result.model.bias, torch.zeros(3))  # held at 0: not the model's
+    # each recording's own offset takes its bias (the scale makes up the shared part)
+    difference = np.subtract(learnt['rec0'], learnt['rec1'])
+    np.testing.assert_allclose(difference, [0.0, 0.0, biases[1] - biases[0]], atol=2e-3)
+    # without it, the model's one bias fits neither recording
+    plain = train(load_config(CONFIG, **common), progress=False)
+    assert plain.meta['recording_bias_rad_s'] is None
+    assert plain.meta['history'][-1]['train_loss'] > 10 * result.meta['history'][-1][
+        'train_loss']
+
+
+def test_a_network_learning_recording_biases_keeps_its_output_layer_s_bias_at_zero(euroc):
+    cfg = _short(euroc, rest_bias=True, recording_bias=True, steps=6, val_every=6,
+                 swa_start=0, select='final')
+    result = train(cfg, progress=False)
+    assert torch.equal(result.model.net[-1].bias, torch.zeros(3))
+    assert set(result.meta['recording_bias_rad_s']) == {'MH_01_easy', 'V1_02_medium'}
