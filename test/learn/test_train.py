@@ -372,9 +372,10 @@ def test_each_recording_s_constant_bias_is_learnt_apart_from_the_model(tmp_path,
     biases = (0.02, -0.03)  # rad/s about z; never still, so the rest estimate stays at 0
     for i, b in enumerate(biases):
         write_asl(tmp_path / f'rec{i}', n_imu=2400, yaw_rate=0.3, gyro_bias=b)
-    common = dict(data=str(tmp_path), sequences=['rec0', 'rec1'], window=1024, steps=60,
-                  val_every=30, restart_period=60, swa_start=0, select='final', lr=0.05,
-                  calibration_only=True, rest_bias=True, workers=workers)
+    common = {'data': str(tmp_path), 'sequences': ['rec0', 'rec1'], 'window': 1024,
+              'steps': 60, 'val_every': 30, 'restart_period': 60, 'swa_start': 0,
+              'select': 'final', 'lr': 0.05, 'calibration_only': True, 'rest_bias': True,
+              'workers': workers}
     result = train(load_config(CONFIG, recording_bias=True, **common), progress=False)
     learnt = result.meta['recording_bias_rad_s']
     assert list(learnt) == ['rec0', 'rec1']
