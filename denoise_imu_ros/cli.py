@@ -40,6 +40,11 @@ REST_BIAS_OPTION = {  # the node's rest_bias parameter, for the offline tools
     'help': "remove the gyro's turn-on bias, estimated from stillness, before the model, "
             "and track the output's bias after it where the model file says: model (as the "
             'model was trained and cross-validated, the default), on, off (neither)'}
+GUARD_OPTION = {  # the node's envelope_guard parameter, for the offline tools
+    'choices': ('model', 'off'), 'default': 'model',
+    'help': "beyond the motion the model was trained on (its file's input envelope), "
+            'its input gyro plus a constant instead of its correction: model (where the '
+            'file has an envelope, the default) or off (the correction everywhere)'}
 
 
 def _workers(value: str) -> int | str:
@@ -263,7 +268,7 @@ def _correct(args: argparse.Namespace) -> None:
     _guard_output(args.output, [args.input, read_model_file(args.model).path], args.overwrite)
     _warn_if_not_recommended(args.model)
     n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic,
-                       engine=args.engine, rest=args.rest_bias)
+                       engine=args.engine, rest=args.rest_bias, guard=args.envelope_guard)
     print(f'wrote {n} corrected gyro samples to {args.output}')
 
 
@@ -292,7 +297,8 @@ def _process_bag(args: argparse.Namespace) -> None:
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame,
                          compress=args.compress, namespace=args.namespace,
-                         rest=args.rest_bias, embed_attitude=args.embed_attitude)
+                         rest=args.rest_bias, embed_attitude=args.embed_attitude,
+                         guard=args.envelope_guard)
     dropped = ', '.join(f'{k} {v}' for k, v in counts.items() if k in DROP_CAUSES)
     rest = ', '.join(f'{k} {v}' for k, v in counts.items() if k not in DROP_CAUSES)
     print(f'wrote {args.output}: {rest}; dropped: {dropped}')
@@ -470,6 +476,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',
                    help='whole-recording torch network, or the per-sample numpy engine')
     p.add_argument('--rest-bias', **REST_BIAS_OPTION)
+    p.add_argument('--envelope-guard', **GUARD_OPTION)
     p.add_argument('--overwrite', action='store_true', help='replace an existing --output')
     p.set_defaults(func=_correct)
 
@@ -488,6 +495,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--compress', action=argparse.BooleanOptionalAction,
                    help='zstd compression (default: as the input bag says it is compressed)')
     p.add_argument('--rest-bias', **REST_BIAS_OPTION)
+    p.add_argument('--envelope-guard', **GUARD_OPTION)
     p.add_argument('--embed-attitude', action='store_true',
                    help="also write the attitude into /imu/corrected, as the node's "
                         'embed_attitude (orientation σ 0.05 rad)')

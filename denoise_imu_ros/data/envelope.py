@@ -17,7 +17,9 @@ docs/experiments.md): holding the last correction (a correction taken in motion 
 that motion's scale terms into faster motion) and guarding before the tracking (its
 estimate then follows the fallback through fast motion). Every path uses it identically
 (:func:`guard_batch` over arrays for ``eval``, ``correct`` and ``crossval``;
-:class:`Guard` per sample for the node and ``process-bag``; equal bit for bit).
+:class:`Guard` per sample for the node and ``process-bag``; equal bit for bit). The
+node's ``envelope_guard`` parameter (``correct``'s and ``process-bag``'s option) turns it
+off: the model's output everywhere (:func:`resolve`).
 """
 
 from __future__ import annotations
@@ -30,8 +32,10 @@ import numpy as np
 from ..core.limits import GRAVITY_M_S2
 from ..core.schema import InputEnvelope
 
-__all__ = ['combine', 'excursion', 'Guard', 'guard_batch', 'guarded', 'measure', 'outside',
-           'untrusted']
+__all__ = ['CHOICES', 'combine', 'excursion', 'Guard', 'guard_batch', 'guarded', 'measure',
+           'outside', 'resolve', 'untrusted']
+
+CHOICES = ('model', 'off')  # the node's envelope_guard parameter, the offline tools' option
 
 
 def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -102,9 +106,17 @@ def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | N
     return np.where(mask[:, None], fed[:, :3] + np.array(envelope.fallback_rad_s), output)
 
 
-def guarded(loaded: Any, output: np.ndarray, fed: np.ndarray) -> np.ndarray:
-    """Return :func:`guard_batch` with a model file's envelope and receptive field."""
-    return guard_batch(output, fed, loaded.meta.input_envelope, loaded.config.receptive_field)
+def resolve(meta: Any, choice: str) -> InputEnvelope | None:
+    """Return the envelope to guard with: the model file's for ``model``, None for ``off``."""
+    if choice not in CHOICES:
+        raise ValueError(f'envelope guard {choice!r}: one of {", ".join(CHOICES)}')
+    return meta.input_envelope if choice == 'model' else None
+
+
+def guarded(loaded: Any, output: np.ndarray, fed: np.ndarray, choice: str = 'model'
+            ) -> np.ndarray:
+    """Return :func:`guard_batch` with a model file's envelope (``choice``: :func:`resolve`)."""
+    return guard_batch(output, fed, resolve(loaded.meta, choice), loaded.config.receptive_field)
 
 
 class Guard:

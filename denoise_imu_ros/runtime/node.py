@@ -120,6 +120,10 @@ PARAMETERS = [
         "chose so: 'model' (as the model was trained and cross-validated), on or off (neither).",
         read_only=True,
         dynamic=True)),
+    ('envelope_guard', 'model', _param(
+        'Beyond the motion the model was trained on (its input envelope), its input gyro '
+        "plus a constant instead of its correction: 'model' (where the model file has an "
+        'envelope) or off (the correction everywhere).', read_only=True, dynamic=True)),
     ('fused_orientation_stddev', -1.0, _param(
         'rad; imu/data orientation covariance diagonal; < 0: the fused errors the model '
         'file stores (0.05 rad without them); 0: zeros, which ROS reads as "unknown".',
@@ -148,9 +152,10 @@ class GyroDenoiser(Node):
         settings = self._fusion_settings(loaded)  # its accelerometer bias: imu/attitude's too
         fusion = settings if p('publish_fused').value else None
         rest = self._model_or_switch('rest_bias', (True, False))
+        guard = self._model_or_switch('envelope_guard', (False,))
         self._denoiser = OnlineDenoiser.from_model_file(
             loaded, fusion, 'model' if rest is None else ('on' if rest else 'off'),
-            accel_bias=settings.accel_bias_m_s2)
+            'model' if guard is None else 'off', accel_bias=settings.accel_bias_m_s2)
         self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
         self._not_recommended = deployment_warning(loaded)  # kept as a diagnostics WARN
@@ -201,6 +206,10 @@ class GyroDenoiser(Node):
                '; output bias tracked (VQF: sigma in motion '
                f'{self._denoiser.track.settings.sigma_motion_deg_s:g} deg/s, forgetting '
                f'{self._denoiser.track.settings.forgetting_s:g} s)')
+            + ('' if self._denoiser.guard is None else
+               '; no correction beyond the motion trained on (gyro '
+               f'{self._denoiser.guard.envelope.gyro_rad_s:.2f} rad/s, accelerometer '
+               f'{self._denoiser.guard.envelope.accel_offset_m_s2:.1f} m/s^2 from gravity)')
             + f'; {self._sub.topic_name} -> {self._pub_imu.topic_name}'
             + ('' if fusion is None else
                f', {self._pub_fused.topic_name} (VQF: tau_acc {fusion.tau_acc_s:g} s, bias '

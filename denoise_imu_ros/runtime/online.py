@@ -128,7 +128,8 @@ class OnlineDenoiser:
 
     @classmethod
     def from_model_file(cls, model: ModelFile, fusion: FusionSettings | None = None,
-                        rest_choice: str = 'model', **options: Any) -> OnlineDenoiser:
+                        rest_choice: str = 'model', guard_choice: str = 'model',
+                        **options: Any) -> OnlineDenoiser:
         """
         Build the pipeline of a model file (node and process-bag): numpy only, no torch.
 
@@ -137,14 +138,15 @@ class OnlineDenoiser:
         tilt as well (unless ``accel_bias`` is given). ``rest_choice`` (``model``, ``on``,
         ``off``) says whether the turn-on bias is estimated and removed
         (:func:`denoise_imu_ros.data.rest_bias.resolve`) and the output's bias tracked
-        (:func:`denoise_imu_ros.data.rest_bias.tracking`).
+        (:func:`denoise_imu_ros.data.rest_bias.tracking`); ``guard_choice`` (``model``,
+        ``off``) whether the output is guarded (:func:`denoise_imu_ros.data.envelope.resolve`).
         """
         rate = sample_rate(model)
         if fusion is not None:
             options.setdefault('accel_bias', fusion.accel_bias_m_s2)
         settings = rest_bias.resolve(model.meta, rest_choice)
         track = rest_bias.tracking(model.meta, rest_choice)
-        bounds = model.meta.input_envelope
+        bounds = envelope.resolve(model.meta, guard_choice)
         return cls(StreamingCorrector(model.config, model.arrays), rate,
                    guard=None if bounds is None else envelope.Guard(
                        bounds, model.config.receptive_field),

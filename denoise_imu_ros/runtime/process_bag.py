@@ -181,7 +181,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
                 fixed_frame: str = 'odom', compress: bool | None = None,
                 namespace: str = '/', rest: str = 'model',
-                embed_attitude: bool = False) -> dict[str, int]:
+                embed_attitude: bool = False, guard: str = 'model') -> dict[str, int]:
     """
     Copy a bag, add the corrected IMU, orientation and attitude; return the counts.
 
@@ -193,8 +193,9 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     set back starts a new session, :func:`stamp_order`). Copied
     topics keep their recorded QoS; ``compress`` (zstd) defaults to the input's compression.
     The outputs are the node's topics in ``namespace``; a bag that has one already is
-    refused (the two would mix on one topic). ``rest`` and ``embed_attitude`` are the
-    node's ``rest_bias`` and ``embed_attitude``; what is written and withheld is the
+    refused (the two would mix on one topic). ``rest``, ``guard`` and ``embed_attitude``
+    are the node's ``rest_bias``, ``envelope_guard`` and ``embed_attitude``; what is
+    written and withheld is the
     node's, built by the same code (:mod:`denoise_imu_ros.runtime.outputs`).
     """
     src = Path(src)
@@ -202,7 +203,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
         raise DatasetError(f'{src}: bag not found')
     names = output_topics(namespace)
     loaded = read_model_file(model_spec)
-    den = OnlineDenoiser.from_model_file(loaded, loaded.meta.fusion.chosen, rest)
+    den = OnlineDenoiser.from_model_file(loaded, loaded.meta.fusion.chosen, rest, guard)
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
         try:

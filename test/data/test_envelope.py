@@ -5,7 +5,7 @@
 from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.schema import InputEnvelope, parse_meta
-from denoise_imu_ros.data.envelope import combine, Guard, guard_batch, measure
+from denoise_imu_ros.data.envelope import combine, Guard, guard_batch, measure, resolve
 import numpy as np
 import pytest
 
@@ -77,3 +77,13 @@ def test_an_ensemble_takes_the_widest_bounds_and_the_mean_fallback():
     assert (both.gyro_rad_s, both.accel_offset_m_s2) == (5.0, 3.0)
     np.testing.assert_allclose(both.fallback_rad_s, [0.02, 0.01, 0.0])
     assert combine([a, None]) is None
+
+
+def test_the_guard_follows_the_model_file_or_is_turned_off():
+    bounds = {'gyro_rad_s': 1.0, 'accel_offset_m_s2': 2.0}
+    meta = parse_meta({'input_envelope': bounds}, 'm')
+    assert resolve(meta, 'model') == meta.input_envelope is not None
+    assert resolve(meta, 'off') is None
+    assert resolve(parse_meta({}, 'm'), 'model') is None  # a file without one
+    with pytest.raises(ValueError, match="envelope guard 'on': one of model, off"):
+        resolve(meta, 'on')

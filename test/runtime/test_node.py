@@ -420,6 +420,7 @@ print('ok')
     (['-p', 'fusion_tau_acc:=0.0'], 'fusion_tau_acc must be a time constant above 0 s'),
     (['-p', 'fusion_accel_bias:=on'], "fusion_accel_bias must be 'model' or off, not on"),
     (['-p', 'rest_bias:=sometimes'], "rest_bias must be 'model', on or off, not 'sometimes'"),
+    (['-p', 'envelope_guard:=on'], "envelope_guard must be 'model' or off, not on"),
     (['-p', 'qos_overrides./imu/corrected.publisher.reliability:=sometimes'],
      'a qos_overrides value rclpy cannot use (Unexpected QoS override for policy'),
     (['-p', 'qos_overrides./imu/data_raw.subscription.depth:=-5'],

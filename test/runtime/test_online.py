@@ -76,6 +76,12 @@ def test_with_bias_tracking_online_equals_both_offline_engines(seq, tmp_path):
     off = _run(OnlineDenoiser.from_model_file(mf, rest_choice='off'), seq.stamp_ns[:n],
                seq.imu[:n])
     np.testing.assert_allclose(np.array([o.gyro for o in off]), untracked, atol=1e-6)
+    unguarded = _run(OnlineDenoiser.from_model_file(mf, guard_choice='off'), seq.stamp_ns[:n],
+                     seq.imu[:n])
+    assert np.abs(np.array([o.gyro for o in unguarded]) - online).max() > 1e-4  # it acted
+    np.testing.assert_allclose(np.array([o.gyro for o in unguarded]),
+                               corrected_gyro(mf, seq.imu[:n], 'streaming', guard='off'),
+                               atol=1e-6)
 
 
 def test_the_start_attitude_levels_the_accelerometer():

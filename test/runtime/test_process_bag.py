@@ -16,13 +16,15 @@ def _fields(m) -> list[float]:
             *m.linear_acceleration_covariance, o.x, o.y, o.z, o.w, *m.orientation_covariance]
 
 
-@pytest.mark.parametrize('rest,track', [(False, False), (True, False), (True, True)])
+@pytest.mark.parametrize('rest,track,guard', [
+    (False, False, 'model'), (True, False, 'model'), (True, True, 'model'), (True, True, 'off')])
 def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path,
-                                                            rest, track):
+                                                            rest, track, guard):
     """
     With the model's filter settings, a turn-on bias removed, the output's bias tracked.
 
-    And the last with an input envelope the bag's motion leaves (the fallback beyond it).
+    And the last two with an input envelope the bag's motion leaves: guarded (the fallback
+    beyond it), and with the guard turned off.
     """
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core.modelfile import add_metadata
@@ -36,7 +38,7 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
         bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0} if track else None,
         input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0} if track else None)
     assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
-                str(model_file)]) == 0
+                str(model_file), '--envelope-guard', guard]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
         topics = {c.topic: c.msgcount for c in reader.connections}
         bags = {}
@@ -51,7 +53,7 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
             == topics['/imu/attitude'] == 18000)
     assert topics['/groundtruth/pose'] > 17000
     from denoise_imu_ros.runtime.player import read_imu_messages
-    h = harness()
+    h = harness(envelope_guard=guard)
     h.send(read_imu_messages(SAMPLE)[:600])  # the bag's own messages, every field
     assert np.array_equal(np.array([_fields(m) for m in h.corrected]),
                           np.array(bags['/imu/corrected']))
@@ -63,8 +65,8 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     diagnostics = {v.key: v.value for v in h.diagnostics[-1].status[0].values}
     assert diagnostics['rest_bias_applied'] == str(rest)
     assert diagnostics['tracked_bias_applied'] == str(track)
-    assert diagnostics['envelope_guard_applied'] == str(track)
-    if track:  # the turn-on bias removed, the still start's noise exceeds 0.002 rad/s
+    assert diagnostics['envelope_guard_applied'] == str(track and guard == 'model')
+    if track and guard == 'model':  # the still start's noise exceeds 0.002 rad/s
         assert int(diagnostics['envelope_guarded_samples']) > 0
     assert ('tracked_bias_rad_s' in diagnostics) == track
     if rest:  # the bundled sample starts moving: the model's prior, said so
