@@ -16,11 +16,17 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
 - sigma_g: per axis 1.2 times the largest constant gyro bias against the poses, at
   least 0.2 deg/s (the output scale the paper sets by hand: EuRoC [1, 2, 5], TUM-VI 0.2);
 - align: ``auto`` when a recording's clock or frame is off (check-data), else ``none``;
-- rest_bias: off; the reasons say how many recordings start still (VQF's rest detection
-  within their first START_STILL_S). Turning it on removes each run's turn-on bias
-  before the model; measured, it lost on EuRoC (one training) and its network did not
-  beat the turn-on bias alone on BROAD's other power-on (docs/results.md): a choice to
-  measure with ``crossval --sessions``, not to make by rule.
+- rest_bias: off under motion capture; the reasons say how many recordings start still
+  (VQF's rest detection within their first START_STILL_S). Turning it on removes each
+  run's turn-on bias before the model; measured, it lost on EuRoC (one training): a
+  choice to measure with ``crossval --sessions``, not to make by rule. recording_bias
+  goes with it (each recording's constant learnt apart from the model; BROAD's other
+  power-on, docs/results.md).
+- under trajectory files (``poses``: a VIO's or SLAM's estimate) with a recording that
+  starts still: rest_bias and recording_bias on. The trajectory's drift over a recording
+  is what a model learns as the gyro's bias from it (VINS-Mono on EuRoC); the bias is
+  then measured from stillness, and what each recording's trajectory adds stays apart
+  from the model (docs/results.md).
 A recording the poses cannot supervise is left out of the recipe and named, and the
 rules above apply to the others: one with no increment up to 512 samples free of
 ground-truth noise (poses too noisy for its motion, e.g. a fast trial under slow motion
@@ -105,7 +111,10 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         poses=None if poses is None else str(Path(poses).resolve()), increments=increments,
         increment_weights=[1.0, 0.5], window=window, gyro_std_deg=gyro_std,
         align='auto' if off else 'none', swa_start=1200, select='swa',
-        rest_bias=False, workers='auto', threads='auto')
+        rest_bias=False, recording_bias=False, workers='auto', threads='auto')
+    estimate = poses is not None and bool(set(still) & set(sequences))
+    if estimate:  # a trajectory's drift is not the gyro's bias: stillness measures that
+        recipe.update(rest_bias=True, recording_bias=True)
     why = [f'IMU rate {rate:.1f} Hz (the model is for this rate only; receptive field '
            f'511 samples = {511 / rate:.2f} s)',
            f'increments {increments} samples '
@@ -115,10 +124,17 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
            f'({", ".join(f"{b:.3f}" for b in bias)} deg/s), at least {MIN_GYRO_STD_DEG}',
            f'align {recipe["align"]}' + (f': {", ".join(off)} off in clock or frame'
                                          if off else ': clocks and frames agree'),
-           f'rest_bias off: {len(set(still) & set(sequences))} of {len(sequences)} '
-           f'recordings are still within {START_STILL_S:g} s of their start; whether '
-           "removing each run's turn-on bias first helps is measured with crossval "
-           '--sessions, not assumed (docs/method.md)']
+           (f'rest_bias and recording_bias on: the poses are a trajectory estimate, whose '
+            "drift over a recording a model would learn as the gyro's bias; the bias is "
+            f'measured from stillness instead ({len(set(still) & set(sequences))} of '
+            f'{len(sequences)} recordings are still within {START_STILL_S:g} s of their '
+            'start; the others run from their mean until they stop), and what each '
+            "recording's trajectory adds is learnt apart from the model (docs/method.md)"
+            if estimate else
+            f'rest_bias off: {len(set(still) & set(sequences))} of {len(sequences)} '
+            f'recordings are still within {START_STILL_S:g} s of their start; whether '
+            "removing each run's turn-on bias first helps is measured with crossval "
+            '--sessions, not assumed; with it, set recording_bias too (docs/method.md)')]
     if noise:
         why.append(f'left out: {", ".join(noise)}: no increment up to 512 samples is free '
                    'of ground-truth noise there (poses too noisy for the motion), so '
