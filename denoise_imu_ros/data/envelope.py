@@ -12,14 +12,19 @@ outside it, the output is the model's input gyro plus a constant: the model's me
 correction over its training recordings, or nothing where the turn-on bias is removed
 before the model (its input is then the gyro less that bias, the practitioner's
 baseline). It comes last, after the output's bias tracking, whose tracker is fed the
-model's output throughout; measured worse (``scripts/experiments/envelope_guard.py``,
-docs/experiments.md): holding the last correction (a correction taken in motion carries
-that motion's scale terms into faster motion) and guarding before the tracking (its
-estimate then follows the fallback through fast motion). Every path uses it identically
-(:func:`guard_batch` over arrays for ``eval``, ``correct`` and ``crossval``;
-:class:`Guard` per sample for the node and ``process-bag``; equal bit for bit). The
-node's ``envelope_guard`` parameter (``correct``'s and ``process-bag``'s option) turns it
-off: the model's output everywhere (:func:`resolve`).
+model's output throughout, its estimate held (not learning) while the receptive field
+turns faster than the envelope: a network's output beyond the rates it was trained on is
+off by more than a bias, and a tracker that learns it carries the error on (BROAD's fast
+trials 07 and 29); accelerometer excursions alone (tapping) do not hold it. Measured worse
+(``scripts/experiments/envelope_guard.py``, docs/experiments.md): holding the last
+correction (a correction taken in motion carries that motion's scale terms into faster
+motion), guarding before the tracking (its estimate then follows the fallback through
+fast motion), and holding the estimate wherever the guard is (tapping then leaves it
+untracked). Every path uses it identically (:func:`finish` over arrays for ``eval``,
+``correct`` and ``crossval``; :class:`Guard` per sample for the node and ``process-bag``;
+equal bit for bit). The node's ``envelope_guard`` parameter (``correct``'s and
+``process-bag``'s option) turns it off, and the hold with it: the model's output
+everywhere, tracked throughout (:func:`resolve`).
 """
 
 from __future__ import annotations
@@ -29,11 +34,13 @@ from typing import Any, Iterable
 
 import numpy as np
 
+from .rest_bias import track_bias, tracking
 from ..core.limits import GRAVITY_M_S2
-from ..core.schema import InputEnvelope
+from ..core.modelfile import sample_rate
+from ..core.schema import BiasTracking, InputEnvelope
 
-__all__ = ['CHOICES', 'combine', 'excursion', 'Guard', 'guard_batch', 'guarded', 'measure',
-           'outside', 'resolve', 'untrusted']
+__all__ = ['CHOICES', 'combine', 'excursion', 'finish', 'finished', 'Guard', 'guard_batch',
+           'measure', 'outside', 'resolve', 'too_fast', 'untrusted']
 
 CHOICES = ('model', 'off')  # the node's envelope_guard parameter, the offline tools' option
 
@@ -84,11 +91,21 @@ def outside(imu: np.ndarray, envelope: InputEnvelope) -> np.ndarray:
     return (gyro > envelope.gyro_rad_s) | (accel > envelope.accel_offset_m_s2)
 
 
+def _in_field(bad: np.ndarray, field: int) -> np.ndarray:
+    """Whether any of samples n - field + 1 ... n is ``bad`` (N,), for each n (N,)."""
+    count = np.concatenate([[0], np.cumsum(bad)])
+    n = np.arange(len(bad))
+    return count[n + 1] > count[np.maximum(n + 1 - field, 0)]
+
+
 def untrusted(fed: np.ndarray, envelope: InputEnvelope, field: int) -> np.ndarray:
     """Whether any of samples n - field + 1 ... n of (N, 6) is outside, for each n (N,)."""
-    bad = np.concatenate([[0], np.cumsum(outside(fed, envelope))])
-    n = np.arange(len(fed))
-    return bad[n + 1] > bad[np.maximum(n + 1 - field, 0)]
+    return _in_field(outside(fed, envelope), field)
+
+
+def too_fast(fed: np.ndarray, envelope: InputEnvelope, field: int) -> np.ndarray:
+    """Whether any of samples n - field + 1 ... n of (N, 6) turns faster, for each n (N,)."""
+    return _in_field(excursion(fed)[0] > envelope.gyro_rad_s, field)
 
 
 def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | None,
@@ -113,14 +130,34 @@ def resolve(meta: Any, choice: str) -> InputEnvelope | None:
     return meta.input_envelope if choice == 'model' else None
 
 
-def guarded(loaded: Any, output: np.ndarray, fed: np.ndarray, choice: str = 'model'
-            ) -> np.ndarray:
-    """Return :func:`guard_batch` with a model file's envelope (``choice``: :func:`resolve`)."""
-    return guard_batch(output, fed, resolve(loaded.meta, choice), loaded.config.receptive_field)
+def finish(output: np.ndarray, fed: np.ndarray, rate_hz: float,
+           tracking: BiasTracking | None, envelope: InputEnvelope | None, field: int
+           ) -> np.ndarray:
+    """
+    Return a model's ``output`` (N, 3) for its input ``fed`` (N, 6) as every path ends it.
+
+    Its bias tracked (``tracking``; held while the receptive field turns faster than the
+    envelope: :func:`too_fast`), then guarded (:func:`guard_batch`); one run.
+    """
+    hold = None if envelope is None else too_fast(fed, envelope, field)
+    return guard_batch(track_bias(output, fed[:, 3:], rate_hz, tracking, hold),
+                       fed, envelope, field)
+
+
+def finished(loaded: Any, output: np.ndarray, fed: np.ndarray, rest: str = 'model',
+             guard: str = 'model') -> np.ndarray:
+    """
+    Return :func:`finish` with a model file's tracking and envelope.
+
+    ``rest`` as the node's ``rest_bias`` (tracking off with it), ``guard`` as its
+    ``envelope_guard`` (:func:`resolve`).
+    """
+    return finish(output, fed, sample_rate(loaded), tracking(loaded.meta, rest),
+                  resolve(loaded.meta, guard), loaded.config.receptive_field)
 
 
 class Guard:
-    """:func:`guard_batch` one sample at a time (node, process-bag)."""
+    """:func:`guard_batch` one sample at a time (node, process-bag): check, then apply."""
 
     def __init__(self, envelope: InputEnvelope, field: int) -> None:
         self.envelope, self.field = envelope, field
@@ -130,19 +167,24 @@ class Guard:
 
     def reset(self) -> None:
         """Forget the past: a new stream, or the network's history restarted."""
-        self._since_outside = self.field  # no sample outside within the receptive field
-        self.trusted = True
+        self._since_outside = self._since_fast = self.field  # none within the field
+        self.trusted, self.too_fast = True, False
 
-    def update(self, output: np.ndarray, fed: np.ndarray) -> np.ndarray:
-        """Return the model's ``output`` (3,) guarded for its input ``fed`` (6,)."""
+    def check(self, fed: np.ndarray) -> None:
+        """Take the model's input ``fed`` (6,): set :attr:`trusted` and :attr:`too_fast`."""
         x, y, z, ax, ay, az = fed.tolist()
-        if (math.sqrt(x * x + y * y + z * z) > self.envelope.gyro_rad_s
-                or abs(math.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2)
-                > self.envelope.accel_offset_m_s2):
+        fast = math.sqrt(x * x + y * y + z * z) > self.envelope.gyro_rad_s
+        self._since_fast = 0 if fast else self._since_fast + 1
+        if fast or (abs(math.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2)
+                    > self.envelope.accel_offset_m_s2):
             self._since_outside = 0
         else:
             self._since_outside += 1
         self.trusted = self._since_outside >= self.field
+        self.too_fast = self._since_fast < self.field
+
+    def apply(self, output: np.ndarray, fed: np.ndarray) -> np.ndarray:
+        """Return the model's ``output`` (3,) guarded, for the input :meth:`check` took."""
         if self.trusted:
             return output
         self.guarded += 1

@@ -23,7 +23,8 @@ What the turn-on bias at rest does not catch, the bias of the model's output in 
 is tracked after the model where its file says so (``bias_tracking``,
 :class:`~denoise_imu_ros.core.schema.BiasTracking`): a second VQF, its rest and motion
 bias estimators on, fed the model's output from a bias of 0; its estimate is removed
-from the output (:func:`model_output` over arrays, :class:`BiasTracker` per sample).
+from the output (:func:`track_bias` over arrays, :class:`BiasTracker` per sample; held
+through motion faster than the model was trained on: ``envelope.finish``).
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ from ..core.modelfile import code_version, Described, ModelFile, sample_rate, wr
 from ..core.schema import BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings
 
 __all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES', 'estimator',
-           'model_input', 'model_output', 'nominal_bias', 'remove_rest_bias', 'resolve',
+           'model_input', 'nominal_bias', 'remove_rest_bias', 'resolve',
            'RestBias', 'rest_bias_batch', 'RestBiasSettings', 'track_bias', 'tracker',
            'tracking', 'write_rest_only_model']
 
@@ -100,16 +101,24 @@ class BiasTracker:
     def __init__(self, settings: BiasTracking | RestBiasSettings, rate_hz: float) -> None:
         self.settings = settings
         self._rate_hz = rate_hz
-        self._vqf = self._start(settings, rate_hz)
         self._gyro = np.zeros(3)
         self._accel = np.zeros(3)
+        self.reset()
 
     def reset(self) -> None:
         """Start again (a new run: another power-on, a bag loop)."""
         self._vqf = self._start(self.settings, self._rate_hz)
+        self._held: tuple[np.ndarray, np.ndarray] | None = None
 
-    def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
-        """Take one sample (rad/s, m/s^2); return the bias estimate after it (3,)."""
+    def update(self, gyro: np.ndarray, accel: np.ndarray, hold: bool = False) -> np.ndarray:
+        """
+        Take one sample (rad/s, m/s^2); return the bias estimate after it (3,).
+
+        ``hold``: the estimate and its covariance are those of the sample before the hold
+        began, as soon as a sample comes without it (:func:`track_bias`).
+        """
+        if hold != (self._held is not None):
+            self._held = _hold(self._vqf, self._held)
         self._gyro[:] = gyro
         self._accel[:] = accel
         self._vqf.update(self._gyro, self._accel)
@@ -147,14 +156,38 @@ class RestBias(BiasTracker):
         return self.still_samples / self._rate_hz
 
 
+def _hold(vqf: VQF, held: tuple[np.ndarray, np.ndarray] | None
+          ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Begin a hold (None: return the estimate and covariance) or end one (restore them)."""
+    state = vqf.state
+    if held is None:
+        return state['bias'].copy(), state['biasP'].copy()
+    state['bias'], state['biasP'] = held
+    vqf.state = state
+    return None
+
+
 def track_bias(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
-               settings: BiasTracking | None) -> np.ndarray:
-    """Return a model's output (N, 3) less its tracked bias at each sample (None: as is)."""
+               settings: BiasTracking | None, hold: np.ndarray | None = None) -> np.ndarray:
+    """
+    Return a model's output (N, 3) less its tracked bias at each sample (None: as is).
+
+    ``hold`` (N,): samples the tracker is fed without learning from them; after a held
+    stretch its estimate is the one from before it.
+    """
     if settings is None:
         return gyro
-    out = tracker(settings, rate_hz).updateBatch(
-        np.ascontiguousarray(gyro, dtype=float), np.ascontiguousarray(accel, dtype=float))
-    return gyro - out['bias']
+    vqf = tracker(settings, rate_hz)
+    gyro, accel = (np.ascontiguousarray(a, dtype=float) for a in (gyro, accel))
+    hold = np.zeros(len(gyro), bool) if hold is None else hold
+    ends = np.append(np.flatnonzero(np.diff(hold)) + 1, len(gyro))
+    bias, held, start = np.empty_like(gyro), None, 0
+    for end in ends:
+        if hold[start] != (held is not None):
+            held = _hold(vqf, held)
+        bias[start:end] = vqf.updateBatch(gyro[start:end], accel[start:end])['bias']
+        start = end
+    return gyro - bias
 
 
 def rest_bias_batch(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings
@@ -204,12 +237,6 @@ def model_input(loaded: Described, imu: np.ndarray, choice: str = 'model') -> np
     if settings is None:
         return imu
     return remove_rest_bias(imu, sample_rate(loaded), settings)
-
-
-def model_output(loaded: Described, gyro: np.ndarray, imu: np.ndarray,
-                 choice: str = 'model') -> np.ndarray:
-    """Return a model's output ``gyro`` (N, 3) for raw samples ``imu`` (N, 6), as online."""
-    return track_bias(gyro, imu[:, 3:], sample_rate(loaded), tracking(loaded.meta, choice))
 
 
 def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,

@@ -38,7 +38,7 @@ def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch',
         from ..learn.checkpoint import load_model  # torch: the batch engine only
         from ..learn.model import correct_gyro
         gyro = correct_gyro(load_model(mf.path).model, fed)
-    return envelope.guarded(mf, rest_bias.model_output(mf, gyro, imu, rest), fed, guard)
+    return envelope.finished(mf, gyro, fed, rest, guard)
 
 
 def correct_to_csv(model_spec: str, source: str, output: str,

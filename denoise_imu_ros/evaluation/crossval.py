@@ -36,7 +36,6 @@ from ..core.modelfile import sample_rate
 from ..core.schema import BiasTracking, InputEnvelope, ModelMeta, parse_meta
 from ..data import envelope, rest_bias
 from ..data.load import load_sequence
-from ..data.rest_bias import track_bias
 from ..learn import parallel
 from ..learn.checkpoint import load_model, LoadedModel
 from ..learn.config import load_config
@@ -249,11 +248,11 @@ def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float, fed: np.
     """
     Return each tracking candidate's figures (label -> row -> score) of untracked gyros.
 
-    Each tracked gyro is then guarded by its row's input envelope, as every path does.
+    Each gyro tracked and guarded by its row's input envelope, as every path ends it
+    (:func:`~denoise_imu_ros.data.envelope.finish`).
     """
-    return {label: {m: score(seq, envelope.guard_batch(
-        track_bias(g, seq.imu[:, 3:], rate_hz, t), fed, bounds[m], fields[m]))
-        for m, g in gyros.items()} for label, t in CANDIDATES.items()}
+    return {label: {m: score(seq, envelope.finish(g, fed, rate_hz, t, bounds[m], fields[m]))
+                    for m, g in gyros.items()} for label, t in CANDIDATES.items()}
 
 
 def _choose(tracked: dict[str, Any], names: list[str]) -> dict[str, str]:

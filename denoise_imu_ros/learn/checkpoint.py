@@ -45,8 +45,7 @@ class LoadedModel(NamedTuple):
     def correct(self, imu: np.ndarray) -> np.ndarray:
         """Corrected gyro (N, 3) of a recording's raw samples (N, 6), as online."""
         fed = rest_bias.model_input(self, imu)
-        tracked = rest_bias.model_output(self, correct_gyro(self.model, fed), imu)
-        return envelope.guarded(self, tracked, fed)
+        return envelope.finished(self, correct_gyro(self.model, fed), fed)
 
     def untracked(self, imu: np.ndarray) -> np.ndarray:
         """Return the model's output (N, 3) before its bias tracking and envelope."""

@@ -438,8 +438,10 @@ class GyroDenoiser(Node):
                            'rest_bias_sigma_rad_s': f'{sigma:.6f}'})
         if track is not None:
             bias, sigma = track.estimate()
+            guard = self._denoiser.guard  # held through rotation faster than trained on
             values.update({'tracked_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
-                           'tracked_bias_sigma_rad_s': f'{sigma:.6f}'})
+                           'tracked_bias_sigma_rad_s': f'{sigma:.6f}',
+                           'tracked_bias_held': str(guard is not None and guard.too_fast)})
         return values
 
     def _check_namesakes(self) -> None:

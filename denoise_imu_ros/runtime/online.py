@@ -41,8 +41,8 @@ the model's output less its tracked bias is what every output carries, the open-
 attitude and the gravity-aided orientation included; it restarts with the estimate.
 With a :class:`~denoise_imu_ros.data.envelope.Guard` (the model file's
 ``input_envelope``), last, the output is the model's input plus a constant while the
-receptive field holds motion the model was not trained on; it restarts with the
-network's history.
+receptive field holds motion the model was not trained on, and the tracker's estimate is
+held while it turns faster than that; it restarts with the network's history.
 """
 
 from __future__ import annotations
@@ -242,14 +242,17 @@ class OnlineDenoiser:
         corrected = self.engine.step(fed)
         if not np.isfinite(corrected).all():  # never published: dropped as if lost
             return self._drop(Drop.NON_FINITE_OUTPUT)
-        if self.track is not None:
-            if event in (Event.START, Event.TIME_JUMP):
-                self.track.reset()
-            corrected = corrected - self.track.update(corrected, accel)
         if self.guard is not None:
             if event is not None:  # the engine's history restarted
                 self.guard.reset()
-            corrected = self.guard.update(corrected, fed)
+            self.guard.check(fed)
+        if self.track is not None:
+            if event in (Event.START, Event.TIME_JUMP):
+                self.track.reset()
+            corrected = corrected - self.track.update(
+                corrected, accel, self.guard is not None and self.guard.too_fast)
+        if self.guard is not None:
+            corrected = self.guard.apply(corrected, fed)
         if event in (Event.START, Event.TIME_JUMP):  # another stream: its rate is new too
             self._off_rate_run, self._input_period_ns, self._window_off = 0, 0.0, False
             self._intervals.clear()

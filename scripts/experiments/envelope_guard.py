@@ -13,7 +13,9 @@ recording, the open-loop AOE and the AOE of VQF (defaults) fed each gyro: rest b
 model, the model so guarded (per envelope), and the share of samples guarded; then,
 with the largest-value envelope, where the guard goes relative to the output's bias
 tracking: first (the tracker fed the guarded gyro), last (the tracker fed the model's
-output), or the tracker fed the guarded gyro with untrusted samples left untracked.
+output), or the tracker fed the guarded gyro with untrusted samples left untracked; and,
+the guard last, the tracker's estimate held wherever the guard is, or only where the
+receptive field turns faster than the envelope (what ships: ``envelope.finish``).
 Usage: .venv/bin/python scripts/experiments/envelope_guard.py MODEL DATA_DIR
        TRAIN_A,TRAIN_B,... HELD_A,HELD_B,...
 """
@@ -58,9 +60,14 @@ def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
     for name in held:
         seq = load_sequence(Path(data) / name, align_poses=align)
         rest = rest_bias.remove_rest_bias(seq.imu, seq.rate_hz, settings)[:, :3]
+
+        def track(gyro: np.ndarray, hold: np.ndarray | None = None) -> np.ndarray:
+            return rest_bias.track_bias(gyro, seq.imu[:, 3:], seq.rate_hz,
+                                        net.meta.bias_tracking, hold)
+
         fed = rest_bias.model_input(net, seq.imu)
         output = correct_gyro(net.model, fed)
-        gyro = rest_bias.model_output(net, output, seq.imu)
+        gyro = track(output)
         figures = [score(seq, rest)['aoe_deg'], score(seq, gyro)['aoe_deg']]
         fused = [fused_aoe(seq, rest), fused_aoe(seq, gyro)]
         shares = []
@@ -72,21 +79,23 @@ def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
             shares.append(out.mean())
         out = envelope.untrusted(seq.imu, envelopes[100.0], field)[:, None]
         guarded = np.where(out, rest, output)
+        fast = envelope.too_fast(seq.imu, envelopes[100.0], field)
         placement = [score(seq, g)['aoe_deg'] for g in (
-            rest_bias.model_output(net, guarded, seq.imu),
-            np.where(out, rest, gyro),
-            np.where(out, rest, rest_bias.model_output(net, guarded, seq.imu)))]
+            track(guarded), np.where(out, rest, gyro), np.where(out, rest, track(guarded)),
+            np.where(out, rest, track(output, out[:, 0])),
+            np.where(out, rest, track(output, fast)))]
         rows.append((figures, fused, placement))
         print(f'{name[:34]:34s} open loop ' + ' '.join(f'{v:6.2f}' for v in figures)
               + '  fused ' + ' '.join(f'{v:6.2f}' for v in fused)
               + '  guarded ' + ' '.join(f'{100 * s:3.0f}%' for s in shares)
-              + '  first/last/untracked ' + ' '.join(f'{v:6.2f}' for v in placement),
+              + '  first/last/untracked/held/held-fast '
+              + ' '.join(f'{v:6.2f}' for v in placement),
               flush=True)
     mean = [np.mean([r[k] for r in rows], 0) for k in range(3)]
     print('columns: rest bias, model, guarded by p' + ', p'.join(f'{p:g}' for p in PERCENTILES))
     print(f'{"mean":34s} open loop ' + ' '.join(f'{v:6.2f}' for v in mean[0])
           + '  fused ' + ' '.join(f'{v:6.2f}' for v in mean[1])
-          + '  first/last/untracked ' + ' '.join(f'{v:6.2f}' for v in mean[2]))
+          + '  first/last/untracked/held/held-fast ' + ' '.join(f'{v:6.2f}' for v in mean[2]))
 
 
 if __name__ == '__main__':

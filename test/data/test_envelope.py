@@ -5,7 +5,8 @@
 from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.schema import InputEnvelope, parse_meta
-from denoise_imu_ros.data.envelope import combine, Guard, guard_batch, measure, resolve
+from denoise_imu_ros.data.envelope import (combine, Guard, guard_batch, measure, resolve,
+                                           too_fast, untrusted)
 import numpy as np
 import pytest
 
@@ -42,6 +43,16 @@ def test_the_fallback_replaces_the_correction_for_a_receptive_field_after_a_samp
     assert guard_batch(output, fed, None, FIELD) is output
 
 
+def _online(guard: Guard, output: np.ndarray, fed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the guarded outputs and the per-sample too-fast flags."""
+    rows, fast = [], []
+    for o, f in zip(output, fed):
+        guard.check(f)
+        fast.append(guard.too_fast)
+        rows.append(guard.apply(o, f))
+    return np.array(rows), np.array(fast)
+
+
 def test_per_sample_equals_the_arrays_bit_for_bit_and_restarts_on_reset():
     fed = _imu(2000, 2)
     fed[300:320, 3:] *= 3.0     # a shock on the accelerometer
@@ -50,12 +61,24 @@ def test_per_sample_equals_the_arrays_bit_for_bit_and_restarts_on_reset():
     bounds = InputEnvelope(2.5, 8.0)
     batch = guard_batch(output, fed, bounds, 51)
     guard = Guard(bounds, 51)
-    online = np.array([guard.update(o, f) for o, f in zip(output, fed)])
+    online, fast = _online(guard, output, fed)
     assert np.array_equal(online, batch)
+    assert np.array_equal(fast, too_fast(fed, bounds, 51))
     assert 0 < guard.guarded == int((batch != output).any(axis=1).sum()) < 2000
     guard.reset()
-    again = np.array([guard.update(o, f) for o, f in zip(output[1000:], fed[1000:])])
+    again, _ = _online(guard, output[1000:], fed[1000:])
     assert np.array_equal(again, guard_batch(output[1000:], fed[1000:], bounds, 51))
+
+
+def test_too_fast_is_the_gyro_alone_over_the_receptive_field():
+    fed = _imu(400, 4)
+    fed[:, :3] = 0.1
+    fed[100:103, 3:] = [0.0, 0.0, 40.0]   # a tap: outside, not too fast
+    fed[200, :3] = [0.0, 0.0, 3.0]        # one fast sample
+    bounds = InputEnvelope(1.0, 5.0)
+    fast = too_fast(fed, bounds, FIELD)
+    assert np.flatnonzero(fast).tolist() == list(range(200, 200 + FIELD))
+    assert untrusted(fed, bounds, FIELD)[100:103 + FIELD - 1].all()
 
 
 def test_the_model_file_entry_is_checked():

@@ -171,6 +171,25 @@ def test_the_tracked_bias_online_equals_batch_and_finds_a_bias_in_motion():
     assert np.array_equal(imu[0, :3] - online.update(imu[0, :3], imu[0, 3:]), batch[0])
 
 
+def test_a_held_stretch_leaves_the_estimate_where_it_was_online_as_in_batch():
+    from denoise_imu_ros.core.schema import BiasTracking
+    settings = BiasTracking(0.05, 30.0)
+    imu = _tilted_turns(60.0, np.array([0.004, -0.003, 0.002]), seed=1)
+    hold = np.zeros(len(imu), bool)
+    hold[2000:5000] = hold[8000:8400] = True
+    imu[2000:5000, :3] += 0.3  # what a model beyond its training rates might output
+    batch = rest_bias.track_bias(imu[:, :3], imu[:, 3:], RATE, settings, hold)
+    online = rest_bias.BiasTracker(settings, RATE)
+    step = np.array([s[:3] - online.update(s[:3], s[3:], h) for s, h in zip(imu, hold)])
+    assert np.array_equal(step, batch)
+    # after the hold the estimate goes on from where it was before it; learning moves it
+    free = rest_bias.track_bias(imu[:, :3], imu[:, 3:], RATE, settings)
+    held, learnt = imu[:, :3] - batch, imu[:, :3] - free
+    assert np.abs(held[5000] - held[1999]).max() < 2e-4
+    assert np.abs(learnt[5000] - learnt[1999]).max() > 2e-3
+    assert np.array_equal(held[:2000], learnt[:2000])
+
+
 def test_tracking_runs_where_the_model_file_says_unless_switched_off():
     from denoise_imu_ros.core.errors import ModelFileError
     from denoise_imu_ros.core.schema import BiasTracking

@@ -69,6 +69,8 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     if track and guard == 'model':  # the still start's noise exceeds 0.002 rad/s
         assert int(diagnostics['envelope_guarded_samples']) > 0
     assert ('tracked_bias_rad_s' in diagnostics) == track
+    if track:  # faster than 0.002 rad/s throughout: the tracker holds its estimate
+        assert diagnostics['tracked_bias_held'] == str(guard == 'model')
     if rest:  # the bundled sample starts moving: the model's prior, said so
         assert diagnostics['rest_bias_source'] == 'prior'
         assert diagnostics['rest_bias_rad_s'] == '0.010000 -0.020000 0.030000'
