@@ -122,8 +122,9 @@ PARAMETERS = [
         dynamic=True)),
     ('envelope_guard', 'model', _param(
         'Beyond the motion the model was trained on (its input envelope), its input gyro '
-        "plus a constant instead of its correction: 'model' (where the model file has an "
-        'envelope) or off (the correction everywhere).', read_only=True, dynamic=True)),
+        "plus a constant instead of its correction, and the output's bias tracking held "
+        "through faster rotation: 'model' (where the model file has an envelope) or off "
+        '(the correction everywhere, tracked throughout).', read_only=True, dynamic=True)),
     ('fused_orientation_stddev', -1.0, _param(
         'rad; imu/data orientation covariance diagonal; < 0: the fused errors the model '
         'file stores (0.05 rad without them); 0: zeros, which ROS reads as "unknown".',
