@@ -8,8 +8,8 @@ node's and process-bag's per-sample work, without ROS) with ``rest_bias`` off an
 (the turn-on bias before the model, and its output's tracking where the file has one),
 alternating rounds so that a change in the machine's speed hits both alike, and each
 estimator alone (``RestBias.update``, ``BiasTracker.update``), and the input envelope's
-guard alone where the file has one (``Guard.update``, which both settings run). Prints
-the median per-sample time of each, and the ratio on/off.
+guard alone where the file has one (``Guard.check`` and ``Guard.apply``, which both
+settings run). Prints the median per-sample time of each, and the ratio on/off.
 Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
      [--recording 03_undisturbed_slow_rotation_C] [--samples 20000] [--rounds 5]
 """
@@ -63,9 +63,13 @@ def main() -> None:
                 per_sample_s(lambda t, g, a: track.update(g, a), stamps, imu))
         if model.meta.input_envelope is not None:
             guard = Guard(model.meta.input_envelope, model.config.receptive_field)
-            times['envelope guard alone'].append(  # fed as the pipeline feeds it
-                per_sample_s(lambda t, g, a: guard.update(g, np.concatenate([g, a])),
-                             stamps, imu))
+
+            def guarded(t: int, g: np.ndarray, a: np.ndarray) -> np.ndarray:
+                fed = np.concatenate([g, a])  # fed as the pipeline feeds it
+                guard.check(fed)
+                return guard.apply(g, fed)
+
+            times['envelope guard alone'].append(per_sample_s(guarded, stamps, imu))
     median = {k: float(np.median(v)) for k, v in times.items() if v}
     print(f'{model.path.name}, {len(stamps)} samples of {args.recording}, '
           f'{args.rounds} rounds alternating, median per sample:')

@@ -12,19 +12,21 @@ outside it, the output is the model's input gyro plus a constant: the model's me
 correction over its training recordings, or nothing where the turn-on bias is removed
 before the model (its input is then the gyro less that bias, the practitioner's
 baseline). It comes last, after the output's bias tracking, whose tracker is fed the
-model's output throughout, its estimate held (not learning) while the receptive field
-turns faster than the envelope: a network's output beyond the rates it was trained on is
-off by more than a bias, and a tracker that learns it carries the error on (BROAD's fast
-trials 07 and 29); accelerometer excursions alone (tapping) do not hold it. Measured worse
+model's output throughout; after each stretch where the receptive field turned faster
+than the envelope its estimate and covariance are restored to those from before it: a
+network's output beyond the rates it was trained on is off by more than a bias, and a
+tracker that kept what it learnt there carried the error on (BROAD's fast trials 07 and
+29); accelerometer excursions alone (tapping) do not hold it. Measured worse
 (``scripts/experiments/envelope_guard.py``, docs/experiments.md): holding the last
 correction (a correction taken in motion carries that motion's scale terms into faster
 motion), guarding before the tracking (its estimate then follows the fallback through
-fast motion), and holding the estimate wherever the guard is (tapping then leaves it
-untracked). Every path uses it identically (:func:`finish` over arrays for ``eval``,
-``correct`` and ``crossval``; :class:`Guard` per sample for the node and ``process-bag``;
-equal bit for bit). The node's ``envelope_guard`` parameter (``correct``'s and
-``process-bag``'s option) turns it off, and the hold with it: the model's output
-everywhere, tracked throughout (:func:`resolve`).
+fast motion), holding the estimate wherever the guard is (tapping then leaves it
+untracked), and feeding the tracker the fallback through the held stretches. Every path
+uses it identically (:func:`finish` over arrays for ``eval``, ``correct`` and
+``crossval``; :class:`Guard` per sample for the node and ``process-bag``; equal bit for
+bit). The node's ``envelope_guard`` parameter (``correct``'s and ``process-bag``'s
+option) turns it off, and the hold with it: the model's output everywhere, tracked
+throughout (:func:`resolve`).
 """
 
 from __future__ import annotations
@@ -49,7 +51,7 @@ def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     Return per sample of (N, 6) the gyro norm (rad/s) and |accelerometer norm - g| (m/s^2).
 
-    Summed in the order :meth:`Guard.update` sums one sample's, so both agree bit for bit.
+    Summed in the order :meth:`Guard.check` sums one sample's, so both agree bit for bit.
     """
     x, y, z, ax, ay, az = imu.T
     return (np.sqrt(x * x + y * y + z * z),
@@ -136,8 +138,9 @@ def finish(output: np.ndarray, fed: np.ndarray, rate_hz: float,
     """
     Return a model's ``output`` (N, 3) for its input ``fed`` (N, 6) as every path ends it.
 
-    Its bias tracked (``tracking``; held while the receptive field turns faster than the
-    envelope: :func:`too_fast`), then guarded (:func:`guard_batch`); one run.
+    Its bias tracked (``tracking``; held through stretches where the receptive field turns
+    faster than the envelope: :func:`too_fast`), then guarded (:func:`guard_batch`); one
+    run.
     """
     hold = None if envelope is None else too_fast(fed, envelope, field)
     return guard_batch(track_bias(output, fed[:, 3:], rate_hz, tracking, hold),
@@ -157,7 +160,12 @@ def finished(loaded: Any, output: np.ndarray, fed: np.ndarray, rest: str = 'mode
 
 
 class Guard:
-    """:func:`guard_batch` one sample at a time (node, process-bag): check, then apply."""
+    """
+    :func:`guard_batch` and :func:`too_fast` one sample at a time (node, process-bag).
+
+    :meth:`check` each input first (the tracker reads :attr:`too_fast` before the output
+    is guarded), then :meth:`apply` to the output.
+    """
 
     def __init__(self, envelope: InputEnvelope, field: int) -> None:
         self.envelope, self.field = envelope, field

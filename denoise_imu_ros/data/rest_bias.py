@@ -23,8 +23,8 @@ What the turn-on bias at rest does not catch, the bias of the model's output in 
 is tracked after the model where its file says so (``bias_tracking``,
 :class:`~denoise_imu_ros.core.schema.BiasTracking`): a second VQF, its rest and motion
 bias estimators on, fed the model's output from a bias of 0; its estimate is removed
-from the output (:func:`track_bias` over arrays, :class:`BiasTracker` per sample; held
-through motion faster than the model was trained on: ``envelope.finish``).
+from the output (:func:`track_bias` over arrays, :class:`BiasTracker` per sample; its
+estimate restored after motion faster than the model was trained on: ``envelope.finish``).
 """
 
 from __future__ import annotations
@@ -114,8 +114,8 @@ class BiasTracker:
         """
         Take one sample (rad/s, m/s^2); return the bias estimate after it (3,).
 
-        ``hold``: the estimate and its covariance are those of the sample before the hold
-        began, as soon as a sample comes without it (:func:`track_bias`).
+        ``hold``: this sample is within a held stretch; at the first sample after one, the
+        estimate and its covariance are restored to those from before it (:func:`track_bias`).
         """
         if hold != (self._held is not None):
             self._held = _hold(self._vqf, self._held)
@@ -172,10 +172,12 @@ def track_bias(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
     """
     Return a model's output (N, 3) less its tracked bias at each sample (None: as is).
 
-    ``hold`` (N,): samples the tracker is fed without learning from them; after a held
-    stretch its estimate is the one from before it.
+    ``hold`` (N,): held stretches. The tracker runs through them (its orientation goes
+    on), and at the first sample after each its bias estimate and covariance are restored
+    to those from before it: what it learnt there is forgotten (not what it learns after,
+    from an orientation the stretch may have moved).
     """
-    if settings is None:
+    if settings is None or not len(gyro):
         return gyro
     vqf = tracker(settings, rate_hz)
     gyro, accel = (np.ascontiguousarray(a, dtype=float) for a in (gyro, accel))

@@ -122,7 +122,7 @@ PARAMETERS = [
         dynamic=True)),
     ('envelope_guard', 'model', _param(
         'Beyond the motion the model was trained on (its input envelope), its input gyro '
-        "plus a constant instead of its correction, and the output's bias tracking held "
+        "plus a constant instead of its correction, and the output's bias estimate held "
         "through faster rotation: 'model' (where the model file has an envelope) or off "
         '(the correction everywhere, tracked throughout).', read_only=True, dynamic=True)),
     ('fused_orientation_stddev', -1.0, _param(

@@ -42,7 +42,8 @@ attitude and the gravity-aided orientation included; it restarts with the estima
 With a :class:`~denoise_imu_ros.data.envelope.Guard` (the model file's
 ``input_envelope``), last, the output is the model's input plus a constant while the
 receptive field holds motion the model was not trained on, and the tracker's estimate is
-held while it turns faster than that; it restarts with the network's history.
+held through stretches where it turns faster than that (restored after each); it restarts
+with the network's history, and a gap ends a held stretch.
 """
 
 from __future__ import annotations

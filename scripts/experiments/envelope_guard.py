@@ -14,8 +14,10 @@ model, the model so guarded (per envelope), and the share of samples guarded; th
 with the largest-value envelope, where the guard goes relative to the output's bias
 tracking: first (the tracker fed the guarded gyro), last (the tracker fed the model's
 output), or the tracker fed the guarded gyro with untrusted samples left untracked; and,
-the guard last, the tracker's estimate held wherever the guard is, or only where the
-receptive field turns faster than the envelope (what ships: ``envelope.finish``).
+the guard last, the tracker's estimate held (restored after each stretch) wherever the
+guard is, or only where the receptive field turns faster than the envelope (what ships,
+``envelope.finish``, there on the model's input and with its stored envelope), or there
+with the tracker fed the fallback through those stretches.
 Usage: .venv/bin/python scripts/experiments/envelope_guard.py MODEL DATA_DIR
        TRAIN_A,TRAIN_B,... HELD_A,HELD_B,...
 """
@@ -83,19 +85,21 @@ def main(model: str, data: str, trained: list[str], held: list[str]) -> None:
         placement = [score(seq, g)['aoe_deg'] for g in (
             track(guarded), np.where(out, rest, gyro), np.where(out, rest, track(guarded)),
             np.where(out, rest, track(output, out[:, 0])),
-            np.where(out, rest, track(output, fast)))]
+            np.where(out, rest, track(output, fast)),
+            np.where(out, rest, track(np.where(fast[:, None], rest, output), fast)))]
         rows.append((figures, fused, placement))
         print(f'{name[:34]:34s} open loop ' + ' '.join(f'{v:6.2f}' for v in figures)
               + '  fused ' + ' '.join(f'{v:6.2f}' for v in fused)
               + '  guarded ' + ' '.join(f'{100 * s:3.0f}%' for s in shares)
-              + '  first/last/untracked/held/held-fast '
+              + '  first/last/untracked/held/held-fast/fed-fallback '
               + ' '.join(f'{v:6.2f}' for v in placement),
               flush=True)
     mean = [np.mean([r[k] for r in rows], 0) for k in range(3)]
     print('columns: rest bias, model, guarded by p' + ', p'.join(f'{p:g}' for p in PERCENTILES))
     print(f'{"mean":34s} open loop ' + ' '.join(f'{v:6.2f}' for v in mean[0])
           + '  fused ' + ' '.join(f'{v:6.2f}' for v in mean[1])
-          + '  first/last/untracked/held/held-fast ' + ' '.join(f'{v:6.2f}' for v in mean[2]))
+          + '  first/last/untracked/held/held-fast/fed-fallback '
+          + ' '.join(f'{v:6.2f}' for v in mean[2]))
 
 
 if __name__ == '__main__':
