@@ -241,12 +241,12 @@ class OnlineDenoiser:
             gyro = gyro - self.rest.update(gyro, accel)
         fed = np.concatenate([gyro, accel])
         corrected = self.engine.step(fed)
-        if not np.isfinite(corrected).all():  # never published: dropped as if lost
-            return self._drop(Drop.NON_FINITE_OUTPUT)
-        if self.guard is not None:
-            if event is not None:  # the engine's history restarted
+        if self.guard is not None:  # every input the engine's history holds
+            if event is not None:  # that history restarted
                 self.guard.reset()
             self.guard.check(fed)
+        if not np.isfinite(corrected).all():  # never published: dropped as if lost
+            return self._drop(Drop.NON_FINITE_OUTPUT)
         if self.track is not None:
             if event in (Event.START, Event.TIME_JUMP):
                 self.track.reset()

@@ -9,7 +9,7 @@ from denoise_imu_ros.core.rotation import from_gravity
 from denoise_imu_ros.core.schema import parse_meta
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn.model import correct_gyro
-from denoise_imu_ros.runtime.online import DROP_CAUSES, Event, OnlineDenoiser, Output
+from denoise_imu_ros.runtime.online import Drop, DROP_CAUSES, Event, OnlineDenoiser, Output
 from denoise_imu_ros.runtime.streaming import StreamingCorrector
 from helpers import SAMPLE, untrained_model
 from hypothesis import given, HealthCheck, settings, strategies as st
@@ -322,3 +322,32 @@ def test_with_a_rest_bias_the_model_sees_what_the_batch_path_feeds_it(seq, model
     _run(den, seq.stamp_ns[:10], seq.imu[:10])
     np.testing.assert_array_equal(den.rest.estimate()[0],
                                   rest_bias_batch(seq.imu[:10], 200.0, settings)['bias'][-1])
+
+
+def test_a_dropped_non_finite_output_still_counts_its_input_for_the_guard():
+    """The engine stepped on it: its motion is in the receptive field that follows."""
+    from denoise_imu_ros.core.schema import InputEnvelope
+    from denoise_imu_ros.data.envelope import Guard
+
+    class Broken:  # a model whose output is non-finite beyond 1 rad/s
+        receptive_field = 5
+
+        def reset(self) -> None:
+            pass
+
+        def step(self, fed: np.ndarray) -> np.ndarray:
+            gyro = fed[:3].copy()
+            return gyro * np.nan if np.linalg.norm(gyro) > 1.0 else gyro + 0.5
+
+    den = OnlineDenoiser(Broken(), 200.0,
+                         guard=Guard(InputEnvelope(1.0, 50.0, (0.01, 0.0, 0.0)), 5))
+    gyro = np.full((12, 3), 0.1)
+    gyro[3] = [2.0, 0.0, 0.0]
+    accel = np.array([0.0, 0.0, 9.81])
+    outs = [den.process(1_000_000_000 + k * 5_000_000, g, accel) for k, g in enumerate(gyro)]
+    assert outs[3] is Drop.NON_FINITE_OUTPUT and den.counts['non_finite_output'] == 1
+    published = {k: o.gyro for k, o in enumerate(outs) if isinstance(o, Output)}
+    for k in (4, 5, 6, 7):  # sample 3 is within their receptive field: the fallback
+        np.testing.assert_allclose(published[k], gyro[k] + [0.01, 0.0, 0.0])
+    for k in (0, 1, 2, 8, 9):  # outside it: the model's output
+        np.testing.assert_allclose(published[k], gyro[k] + 0.5)
