@@ -20,9 +20,9 @@ tracker that kept what it learnt there carried the error on (BROAD's fast trials
 (``scripts/experiments/envelope_guard.py``, docs/experiments.md): holding the last
 correction (a correction taken in motion carries that motion's scale terms into faster
 motion), guarding before the tracking (its estimate then follows the fallback through
-fast motion), holding the estimate wherever the guard is (tapping then leaves it
-untracked), and feeding the tracker the fallback through the held stretches. Every path
-uses it identically (:func:`finish` over arrays for ``eval``, ``correct`` and
+fast motion), holding the estimate wherever the guard is (what it learns through tapping
+is then discarded), and feeding the tracker the fallback through the held stretches.
+Every path uses it identically (:func:`finish` over arrays for ``eval``, ``correct`` and
 ``crossval``; :class:`Guard` per sample for the node and ``process-bag``; equal bit for
 bit). The node's ``envelope_guard`` parameter (``correct``'s and ``process-bag``'s
 option) turns it off, and the hold with it: the model's output everywhere, tracked
