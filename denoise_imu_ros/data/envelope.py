@@ -142,7 +142,7 @@ def finish(output: np.ndarray, fed: np.ndarray, rate_hz: float,
     faster than the envelope: :func:`too_fast`), then guarded (:func:`guard_batch`); one
     run.
     """
-    hold = None if envelope is None else too_fast(fed, envelope, field)
+    hold = None if envelope is None or tracking is None else too_fast(fed, envelope, field)
     return guard_batch(track_bias(output, fed[:, 3:], rate_hz, tracking, hold),
                        fed, envelope, field)
 
