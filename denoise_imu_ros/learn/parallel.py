@@ -66,6 +66,17 @@ def join_torchrun() -> tuple[int, int]:
     return dist.get_rank(), dist.get_world_size()
 
 
+def leave_together() -> None:
+    """
+    Wait until every process is done, so that they leave the group at once.
+
+    A process that leaves while another still works (the first one validates and writes
+    after the last collective step) has been seen aborting at exit under torchrun.
+    """
+    if dist.is_initialized():
+        dist.barrier()
+
+
 def spawn(target: Callable[..., None], args: tuple[Any, ...]) -> multiprocessing.Process:
     """Start ``target(*args)`` in a fresh interpreter (fork would copy torch's threads)."""
     proc = multiprocessing.get_context('spawn').Process(target=target, args=args, daemon=True)

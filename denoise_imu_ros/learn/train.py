@@ -503,6 +503,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
         torch.optim.swa_utils.update_bn(
             [batch(split, cfg, gen)[0].to(cfg.device) for _ in range(8)], swa)
     if rank > 0:
+        parallel.leave_together()
         return None
 
     # candidates: the loop validated the final weights at its last step
@@ -515,4 +516,6 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
                   f'val AOE {val["aoe_mean_deg"]:.3f} deg')
     recording_bias = None if offsets is None else {  # rad/s, as the last step left them
         s.name: (model.gyro_std.cpu() * b).tolist() for s, b in zip(seqs, offsets.detach().cpu())}
-    return _finish(cfg, seqs, candidates, history, t_start, rest, recording_bias)
+    result = _finish(cfg, seqs, candidates, history, t_start, rest, recording_bias)
+    parallel.leave_together()
+    return result
