@@ -46,6 +46,7 @@ class LossConfig:
     increments: tuple[int, ...] = (16, 32)  # samples per increment, powers of two, rising
     weights: tuple[float, ...] = (1.0, 0.5)  # per increment length (the reference code's)
     skip_blocks: int = 5         # first blocks of a window are warm-up (padded input)
+    heading_weight: float = 1.0  # scales each error's component about the poses' vertical
 
     def __post_init__(self) -> None:
         """Check the increments and their weights (user input through the training recipe)."""
@@ -117,6 +118,10 @@ class TrainConfig:
     increments: list[int] = field(default_factory=lambda: [16, 32])  # loss increments
     increment_weights: list[float] = field(default_factory=lambda: [1.0, 0.5])
     skip_blocks: int = 5               # warm-up blocks left out of the training loss
+    # below 1: each increment's error about the poses' vertical (their world's z, gravity)
+    # counts less than its tilt: for poses whose heading drifts (a VIO's yaw is not
+    # observable) while their tilt is held by gravity
+    heading_weight: float = 1.0
     val_every: int = 100               # steps between validations (and at the end)
     swa_start: int = 0                 # > 0: average weights from this step on (SWA)
     select: str = 'best_validation'    # kept: best_validation (of all candidates), final, swa
@@ -136,7 +141,8 @@ class TrainConfig:
     def loss_config(self) -> LossConfig:
         """Return the loss constants of this recipe."""
         return LossConfig(huber_delta=self.huber_delta, increments=tuple(self.increments),
-                          weights=tuple(self.increment_weights), skip_blocks=self.skip_blocks)
+                          weights=tuple(self.increment_weights), skip_blocks=self.skip_blocks,
+                          heading_weight=self.heading_weight)
 
     def recipe(self) -> dict[str, Any]:
         """Return what the model learns from: every key but the run environment."""
@@ -155,6 +161,7 @@ RANGES = {
     'gyro_noise': (0, None, True), 'accel_noise': (0, None, True),
     'gyro_bias': (0, None, True), 'accel_bias': (0, None, True),
     'huber_delta': (0, None, False), 'skip_blocks': (0, None, True),
+    'heading_weight': (0, None, True),
     'val_every': (1, None, True), 'swa_start': (0, None, True), 'threads': (1, None, True),
     'workers': (1, None, True), 'dropout': (0, 1, True), 'max_gt_gap_s': (0, None, False),
     'seed': (0, 2 ** 32, True),  # numpy's seeds, and torch's

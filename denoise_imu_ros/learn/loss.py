@@ -9,6 +9,8 @@ ordered product of exp(omega_hat_k dt_k) over the block, formed by a log2(j)-dee
 of batched products in float64. Blocks do not overlap. A block counts only if the
 ground truth is valid at every sample it spans. The increment lengths are powers of two
 (16 and 32 in the paper); longer ones suit ground truth with more jitter per sample.
+With ``heading_weight`` below 1 each error is turned into the poses' world frame, where
+its component about the vertical is scaled down.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ import torch
 import torch.nn.functional as F  # noqa: N812
 
 from .config import LossConfig
-from .so3 import quat_conj, quat_exp, quat_log, quat_mul, tree_product
+from .so3 import quat_conj, quat_exp, quat_log, quat_mul, quat_rotate, tree_product
 
 
 Count = Callable[[torch.Tensor], torch.Tensor]
@@ -63,6 +65,9 @@ def increment_loss(omega_hat: torch.Tensor, dt: torch.Tensor, gt_quat: torch.Ten
             pred, truth = tree_product(pred, 1), tree_product(truth, 1)
             ok = ok[:, 0::2] & ok[:, 1::2]
             j *= 2
-        total = total + weight * _huber(quat_log(quat_mul(quat_conj(pred), truth)), ok, cfg,
-                                        reduce_count)
+        residual = quat_log(quat_mul(quat_conj(pred), truth))  # in the body frame at its end
+        if cfg.heading_weight != 1.0:
+            residual = quat_rotate(gt[:, j::j], residual) * residual.new_tensor(
+                [1.0, 1.0, cfg.heading_weight])
+        total = total + weight * _huber(residual, ok, cfg, reduce_count)
     return total

@@ -59,6 +59,13 @@ def quat_log(q: torch.Tensor) -> torch.Tensor:
     return k * v
 
 
+def quat_rotate(q: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
+    """Rotate vectors (..., 3) by unit quaternions (..., 4): q v q^-1."""
+    u, w = q[..., :3], q[..., 3:]
+    t = 2.0 * torch.linalg.cross(u, v, dim=-1)
+    return v + w * t + torch.linalg.cross(u, t, dim=-1)
+
+
 def tree_product(q: torch.Tensor, levels: int) -> torch.Tensor:
     """
     Ordered products of 2**levels consecutive quaternions along dim -2.

@@ -33,6 +33,24 @@ def test_true_rate_gives_zero_loss_and_a_bias_on_any_single_axis_does_not():
         assert increment_loss(biased, dt, quat, valid).item() > 0.05
 
 
+def test_heading_weight_scales_only_the_error_about_the_poses_vertical():
+    omega, dt, quat, valid = _truth()
+    body_from_world = Rotation.from_quat(quat[0, :-1].numpy()).inv()
+    losses = {}
+    for axis in (0, 2):  # a rate error about the world's x (tilt), then its z (heading)
+        error = np.zeros(3)
+        error[axis] = 0.01
+        biased = omega + torch.tensor(body_from_world.apply(error))[None]
+        losses[axis] = [increment_loss(biased, dt, quat, valid, LossConfig(heading_weight=w))
+                        .item() for w in (1.0, 0.5, 0.0)]
+    tilt, heading = losses[0], losses[2]
+    assert tilt[0] == pytest.approx(increment_loss(omega + torch.tensor(
+        body_from_world.apply([0.01, 0, 0]))[None], dt, quat, valid).item())  # 1: as before
+    assert tilt[2] == pytest.approx(tilt[0], rel=0.05)   # the tilt error counts in full
+    assert heading[1] == pytest.approx(0.25 * heading[0], rel=0.05)  # small: quadratic
+    assert heading[2] < 1e-3 * heading[0]                # and not at all at 0
+
+
 def test_ground_truth_holes_are_masked_in_both_terms():
     omega, dt, quat, valid = _truth()
     omega = omega + 0.002  # a real residual, so the masked mean is not trivially zero

@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """Torch quaternion helpers against scipy, including at zero rotation."""
 
-from denoise_imu_ros.learn.so3 import quat_exp, quat_log, quat_mul, tree_product
+from denoise_imu_ros.learn.so3 import quat_exp, quat_log, quat_mul, quat_rotate, tree_product
 import numpy as np
 from scipy.spatial.transform import Rotation
 import torch
@@ -18,6 +18,14 @@ def test_exp_mul_log_match_scipy():
     pq = quat_mul(torch.tensor(Rotation.from_rotvec(w).as_quat()), q)
     expect = (Rotation.from_rotvec(w) * Rotation.from_rotvec(v)).as_rotvec()
     np.testing.assert_allclose(quat_log(pq).numpy(), expect, atol=1e-10)
+
+
+def test_rotate_matches_scipy():
+    rng = np.random.default_rng(2)
+    r = Rotation.from_rotvec(rng.normal(size=(50, 3)))
+    v = rng.normal(size=(50, 3))
+    np.testing.assert_allclose(quat_rotate(torch.tensor(r.as_quat()), torch.tensor(v)).numpy(),
+                               r.apply(v), atol=1e-12)
 
 
 def test_tree_product_is_the_ordered_product():
