@@ -10,7 +10,9 @@ profile integrates the gyro with one constant bias removed (fitted to the ground
 and reports the RMS increment residual per length j; divided by the increment's
 duration it is the gyro error (deg/s) the noise alone would stand for. Above
 NOISE_RATE_LIMIT_DEG_S, more than the corrections the method makes (at most ~1 deg/s,
-the paper), an increment length is noise-dominated.
+the paper), an increment length is noise-dominated. The residual is also split, in the
+poses' world turned level, into its heading (about the vertical) and its tilt: a VIO's
+heading, which gravity does not hold, is noisier than its tilt.
 
 Supervision: noise that averages out is not the only way poses mislead the loss. A
 constant bias fitted on the poses' own increments (the paper's lengths and ~1 s) is
@@ -31,14 +33,14 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
+from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment, level,
                              MAX_OFFSET_S, needs_alignment, not_following)
 from .pose_jumps import describe as describe_jumps, find_jumps, Jump, mask_jumps
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
 from ..core.limits import accel_units, DEG_S_HINT, imu_holes, MAX_GAP_FACTOR
 from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residuals, integrate,
-                            integrate_from_trusted, sequence_errors)
+                            integrate_from_trusted, sequence_errors, trusted_blocks)
 from ..core.records import Recording, Sequence
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
@@ -84,6 +86,7 @@ def label_noise(seq: Sequence) -> dict[str, Any]:
         bias = np.zeros(3)
     profile = {}
     est = integrate(seq.gt_quat[0], gyro[:-1] - bias, seq.dt)  # one for every length
+    world = level(seq)[0].gt_quat  # the same increments, the vertical along z
     for j in LENGTHS:
         if (len(seq) - 1) // j < 2:
             break
@@ -91,8 +94,12 @@ def label_noise(seq: Sequence) -> dict[str, Any]:
         if len(res) == 0:
             continue
         rms = float(np.sqrt(np.mean(res ** 2)))  # per axis
+        # each residual is in the body frame at its block's end
+        turned = Rotation.from_quat(world[trusted_blocks(seq.gt_valid, j) + j]).apply(res)
         profile[j] = {'residual_mrad': 1e3 * rms,
-                      'noise_rate_deg_s': math.degrees(rms / (j * dt))}
+                      'noise_rate_deg_s': math.degrees(rms / (j * dt)),
+                      'heading_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, 2] ** 2))),
+                      'tilt_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, :2] ** 2)))}
     noisy = [j for j, p in profile.items() if p['noise_rate_deg_s'] > NOISE_RATE_LIMIT_DEG_S]
     return {'gyro_bias_deg_s': np.degrees(bias).tolist(), 'increments': profile,
             'noise_dominated_increments': noisy}

@@ -27,6 +27,11 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
   is what a model learns as the gyro's bias from it (VINS-Mono on EuRoC); the bias is
   then measured from stillness, and what each recording's trajectory adds stays apart
   from the model (docs/results.md).
+- heading_weight: 0 under trajectory files whose heading disagrees with the gyro more
+  than their tilt does (check-data's label noise at the first increment, pooled over
+  the recordings): a VIO's heading is not held by gravity, and a model taught it learns
+  its drift (VINS-Mono on EuRoC: heading 2.1x tilt; a model then learns from the tilt
+  alone); else 1.
 A recording the poses cannot supervise is left out of the recipe and named, and the
 rules above apply to the others: one with no increment up to 512 samples free of
 ground-truth noise (poses too noisy for its motion, e.g. a fast trial under slow motion
@@ -115,6 +120,9 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     estimate = poses is not None and bool(set(still) & set(sequences))
     if estimate:  # a trajectory's drift is not the gyro's bias: stillness measures that
         recipe.update(rest_bias=True, recording_bias=True)
+    heading = _heading_ratio(reports.values(), increments[0])
+    if poses is not None and heading > 1.0:
+        recipe.update(heading_weight=0.0)
     why = [f'IMU rate {rate:.1f} Hz (the model is for this rate only; receptive field '
            f'511 samples = {511 / rate:.2f} s)',
            f'increments {increments} samples '
@@ -135,6 +143,13 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
             f'recordings are still within {START_STILL_S:g} s of their start; whether '
             "removing each run's turn-on bias first helps is measured with crossval "
             '--sessions, not assumed; with it, set recording_bias too (docs/method.md)')]
+    if poses is not None:
+        why.append(f"heading_weight {recipe['heading_weight']:g}: the poses' heading disagrees "
+                   f'with the gyro {heading:.2f}x as much as their tilt ({increments[0]}-sample '
+                   'increments); ' + (
+                       'a heading gravity does not hold would teach the model the '
+                       "trajectory's drift: learnt from the tilt alone" if heading > 1.0 else
+                       'no worse than the tilt: both taught'))
     if noise:
         why.append(f'left out: {", ".join(noise)}: no increment up to 512 samples is free '
                    'of ground-truth noise there (poses too noisy for the motion), so '
@@ -162,6 +177,16 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         why.append('one recording: train works, crossval (whether the network beats plain '
                    'integration on a recording it never saw) needs at least two')
     return recipe, why
+
+
+def _heading_ratio(reports: Any, length: int) -> float:
+    """Heading residual over tilt residual of the poses' increments, over all recordings."""
+    profiles = [r['increments'][length] for r in reports if length in r['increments']]
+    if not profiles:
+        return 1.0
+    heading = np.sqrt(np.mean([p['heading_mrad'] ** 2 for p in profiles]))
+    tilt = np.sqrt(np.mean([p['tilt_mrad'] ** 2 for p in profiles]))
+    return float(heading / tilt) if tilt > 0 else 1.0
 
 
 def _starts_still(imu: np.ndarray, rate_hz: float) -> bool:

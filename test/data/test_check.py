@@ -40,6 +40,21 @@ def test_clean_and_jittery_ground_truth_are_told_apart(tmp_path):
         'increments of 16 and 32 samples are dominated by ground-truth noise; from 64')
 
 
+def test_the_poses_noise_is_split_into_their_heading_and_their_tilt(tmp_path):
+    rec = read_asl(write_asl(tmp_path / 's', n_imu=6000, gt_rate=120.0, gt_dir='mocap0'))
+    rng = np.random.default_rng(1)
+    split = {}
+    for axis in (0, 2):  # jitter about the world's x (tilt), then its vertical (heading)
+        about = np.zeros((len(rec.gt_quat), 3))
+        about[:, axis] = rng.normal(0, 3e-3, len(rec.gt_quat))
+        jittered = dataclasses.replace(rec, gt_quat=(
+            Rotation.from_rotvec(about) * Rotation.from_quat(rec.gt_quat)).as_quat())
+        profile = label_noise(onto_imu_stamps(jittered))['increments'][64]
+        split[axis] = profile['heading_mrad'], profile['tilt_mrad']
+    assert split[0][1] > 5 * split[0][0]  # tilt noise is tilt
+    assert split[2][0] > 5 * split[2][1]  # heading noise is heading
+
+
 def test_poses_whose_increments_disagree_with_their_own_attitude_cannot_supervise(tmp_path):
     rec = read_asl(write_asl(tmp_path / 's', n_imu=12000, gt_rate=120.0, gt_dir='mocap0',
                              gyro_bias=0.01))

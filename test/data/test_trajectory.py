@@ -119,6 +119,8 @@ def test_the_recordings_own_poses_as_tum_files_give_the_same_recipe(euroc, tmp_p
     # the trajectory's drift is kept out of the model; the bias comes from stillness
     assert [k for k in own if own[k] != from_files[k]] == ['rest_bias', 'recording_bias']
     assert from_files['rest_bias'] and from_files['recording_bias']
+    assert any(line.startswith("heading_weight 1: the poses' heading disagrees with the gyro")
+               and line.endswith('no worse than the tilt: both taught') for line in said)
     assert any(line.startswith('rest_bias and recording_bias on: the poses are a trajectory '
                                'estimate') and '1 of 2 recordings are still' in line
                for line in said)
@@ -141,3 +143,22 @@ def test_scoring_a_cameras_trajectory_as_the_imus_poses_is_refused_in_one_line(
     assert err.startswith(f'denoise-imu {command}: error: ') and re.search(
         r'MH_01_easy: poses -89\.\d ms off the IMU clock and in a frame 88\.\d\d deg from the '
         r"IMU's: figures against them as they are would be wrong; give --align auto", err)
+
+
+def test_poses_whose_heading_is_noisier_than_their_tilt_teach_the_tilt_alone(euroc, tmp_path):
+    from denoise_imu_ros.data.load import load_recording as read
+    from denoise_imu_ros.learn.recipe import init_recipe
+    from scipy.spatial.transform import Rotation
+    names = ['MH_01_easy', 'V2_01_easy']
+    rng = np.random.default_rng(0)
+    for name in names:  # the motion capture, its heading (about the world's z) jittered
+        rec = read(euroc / name)
+        about = np.zeros((len(rec.gt_quat), 3))
+        about[:, 2] = rng.normal(0, 2e-3, len(rec.gt_quat))
+        quat = (Rotation.from_rotvec(about) * Rotation.from_quat(rec.gt_quat)).as_quat()
+        rows = np.column_stack([rec.gt_stamp_ns * 1e-9, rec.gt_pos, quat])
+        np.savetxt(tmp_path / f'{name}.txt', rows, fmt='%.9f')
+    recipe, said = init_recipe(euroc, names, poses=tmp_path)
+    assert recipe['heading_weight'] == 0.0
+    assert any(line.startswith('heading_weight 0: ') and 'learnt from the tilt alone' in line
+               for line in said)
