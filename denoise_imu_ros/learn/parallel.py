@@ -33,7 +33,8 @@ import torch.distributed as dist
 import torch.nn.functional as F  # noqa: N812
 
 HOST = '127.0.0.1'
-TIMEOUT = datetime.timedelta(minutes=10)  # rank 0 validates while the others wait
+# rank 0 validates, and at the end chooses and writes the model, while the others wait
+TIMEOUT = datetime.timedelta(minutes=10)
 
 
 def serve(world: int) -> dist.TCPStore:

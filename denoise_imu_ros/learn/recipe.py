@@ -28,10 +28,10 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
   then measured from stillness, and what each recording's trajectory adds stays apart
   from the model (docs/results.md).
 - heading_weight: 0 under trajectory files whose heading disagrees with the gyro more
-  than their tilt does (check-data's label noise at the first increment, pooled over
-  the recordings): a VIO's heading is not held by gravity, and a model taught it learns
-  its drift (VINS-Mono on EuRoC: heading 2.1x tilt; a model then learns from the tilt
-  alone); else 1.
+  than HEADING_RATIO times their tilt does (check-data's label noise at the first
+  increment, pooled over the recordings): a VIO's heading is not held by gravity, and a
+  model taught it learns its drift (VINS-Mono on EuRoC: heading 2.1x tilt; a model then
+  learns from the tilt alone); else 1.
 A recording the poses cannot supervise is left out of the recipe and named, and the
 rules above apply to the others: one with no increment up to 512 samples free of
 ground-truth noise (poses too noisy for its motion, e.g. a fast trial under slow motion
@@ -44,6 +44,7 @@ whatever its other keys.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -62,6 +63,10 @@ from ..data.load import load_recording
 WINDOW_S = 80.0
 START_STILL_S = 5.0  # a recording still within this many seconds of its start starts still
 MIN_GYRO_STD_DEG = 0.2
+# heading residual over tilt residual above which the heading is left out of the loss
+# (pooled; EuRoC at 1.28 s: motion capture 0.85, at most 1.28 on one recording;
+# VINS-Mono 2.1; ORB-SLAM2 1.6)
+HEADING_RATIO = 1.3
 
 
 def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = None,
@@ -121,7 +126,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     if estimate:  # a trajectory's drift is not the gyro's bias: stillness measures that
         recipe.update(rest_bias=True, recording_bias=True)
     heading = _heading_ratio(reports.values(), increments[0])
-    if poses is not None and heading > 1.0:
+    if poses is not None and heading is not None and heading > HEADING_RATIO:
         recipe.update(heading_weight=0.0)
     why = [f'IMU rate {rate:.1f} Hz (the model is for this rate only; receptive field '
            f'511 samples = {511 / rate:.2f} s)',
@@ -144,12 +149,14 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
             "removing each run's turn-on bias first helps is measured with crossval "
             '--sessions, not assumed; with it, set recording_bias too (docs/method.md)')]
     if poses is not None:
-        why.append(f"heading_weight {recipe['heading_weight']:g}: the poses' heading disagrees "
-                   f'with the gyro {heading:.2f}x as much as their tilt ({increments[0]}-sample '
-                   'increments); ' + (
-                       'a heading gravity does not hold would teach the model the '
-                       "trajectory's drift: learnt from the tilt alone" if heading > 1.0 else
-                       'no worse than the tilt: both taught'))
+        measured = ('not measured (no increment of that length with trusted poses)'
+                    if heading is None else
+                    f"the poses' heading disagrees with the gyro {heading:.2f}x as much as "
+                    f'their tilt ({increments[0]}-sample increments)')
+        why.append(f"heading_weight {recipe['heading_weight']:g}: {measured}; " + (
+            "a heading gravity does not hold would teach the model the trajectory's "
+            'drift: learnt from the tilt alone' if recipe['heading_weight'] == 0 else
+            f'not above {HEADING_RATIO:g}x: both taught'))
     if noise:
         why.append(f'left out: {", ".join(noise)}: no increment up to 512 samples is free '
                    'of ground-truth noise there (poses too noisy for the motion), so '
@@ -179,14 +186,14 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     return recipe, why
 
 
-def _heading_ratio(reports: Any, length: int) -> float:
+def _heading_ratio(reports: Iterable[dict[str, Any]], length: int) -> float | None:
     """Heading residual over tilt residual of the poses' increments, over all recordings."""
     profiles = [r['increments'][length] for r in reports if length in r['increments']]
     if not profiles:
-        return 1.0
+        return None
     heading = np.sqrt(np.mean([p['heading_mrad'] ** 2 for p in profiles]))
     tilt = np.sqrt(np.mean([p['tilt_mrad'] ** 2 for p in profiles]))
-    return float(heading / tilt) if tilt > 0 else 1.0
+    return float(heading / tilt) if tilt > 0 else None
 
 
 def _starts_still(imu: np.ndarray, rate_hz: float) -> bool:

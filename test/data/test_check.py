@@ -42,6 +42,11 @@ def test_clean_and_jittery_ground_truth_are_told_apart(tmp_path):
 
 def test_the_poses_noise_is_split_into_their_heading_and_their_tilt(tmp_path):
     rec = read_asl(write_asl(tmp_path / 's', n_imu=6000, gt_rate=120.0, gt_dir='mocap0'))
+    # the IMU mounted rolled over: its z is horizontal, so the split needs the world frame
+    mount = Rotation.from_rotvec([math.pi / 2, 0.0, 0.0])
+    rec = dataclasses.replace(
+        rec, gt_quat=(Rotation.from_quat(rec.gt_quat) * mount).as_quat(),
+        imu=np.hstack([mount.inv().apply(rec.imu[:, :3]), mount.inv().apply(rec.imu[:, 3:])]))
     rng = np.random.default_rng(1)
     split = {}
     for axis in (0, 2):  # jitter about the world's x (tilt), then its vertical (heading)
