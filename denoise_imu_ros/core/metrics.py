@@ -127,6 +127,7 @@ class AttitudeErrors(NamedTuple):
 
     aoe: float                 # RMS of the 3-D orientation error angle
     aoe_yaw: float             # RMS of the yaw error (about world z)
+    tilt: float                # RMS of the tilt error (how far the vertical is off)
     roe: dict[float, np.ndarray]  # relative orientation errors per distance (m)
     error_deg: np.ndarray      # (N,) 3-D error angle at each stamp (NaN in GT holes)
 
@@ -152,12 +153,12 @@ def error_components(est: Rotation, gt: Rotation) -> tuple[np.ndarray, ...]:
 def attitude_errors(est: Rotation, gt: Rotation, gt_pos: np.ndarray, valid: np.ndarray,
                     distances: tuple[float, ...] = ROE_DISTANCES_M) -> AttitudeErrors:
     """
-    AOE (3-D and yaw) and ROE, skipping stamps where ground truth is not valid.
+    AOE (3-D, yaw and tilt) and ROE, skipping stamps where ground truth is not valid.
 
     Yaw error is the first angle of the intrinsic Z-Y-X decomposition of the world-frame
     error R_est R_gt^T, i.e. its rotation about the world z axis.
     """
-    angle, _, yaw = error_components(est, gt)
+    angle, tilt, yaw = error_components(est, gt)
     roe = {}
     travelled = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(gt_pos, axis=0),
                                                                 axis=1))])
@@ -177,6 +178,7 @@ def attitude_errors(est: Rotation, gt: Rotation, gt_pos: np.ndarray, valid: np.n
     return AttitudeErrors(
         aoe=float(np.sqrt(np.mean(angle[valid] ** 2))),
         aoe_yaw=float(np.sqrt(np.mean(yaw[valid] ** 2))),
+        tilt=float(np.sqrt(np.mean(tilt[valid] ** 2))),
         roe=roe,
         error_deg=np.where(valid, angle, np.nan))
 
@@ -205,9 +207,9 @@ def sequence_errors(seq: Sequence, gyro: np.ndarray,
 
 
 def score(seq: Sequence, gyro: np.ndarray) -> dict[str, float]:
-    """AOE 3-D and yaw (deg) of one method's gyro integrated over a whole sequence."""
+    """AOE 3-D, yaw and tilt (deg) of one method's gyro integrated over a whole sequence."""
     err = sequence_errors(seq, gyro, distances=())[1]
-    return {'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw}
+    return {'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw, 'tilt_deg': err.tilt}
 
 
 def tilt_growth_deg_min(t_s: np.ndarray, tilt_deg: np.ndarray, valid: np.ndarray) -> float:

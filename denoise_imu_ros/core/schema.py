@@ -201,7 +201,8 @@ class Verdict:
 
     deploy: str | None              # one of DEPLOY_CHOICES; None in a report that chose none
     verdict: str                    # its one sentence
-    mean_aoe_deg: dict[str, float]  # row ("raw", "calibrated", ...) -> mean AOE, unseen data
+    mean_deg: dict[str, float]      # row ("raw", "calibrated", ...) -> the judged figure's
+    judged_on: str                  # mean on unseen data: "aoe_deg", or "tilt_deg"
     held_out: tuple[str, ...]       # every recording a fold held out
     steps: int | None               # how long the folds trained
     train_config: dict[str, Any]    # the folds' recipe
@@ -313,8 +314,11 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
     mean = report.get('mean') or {}
     if not isinstance(mean, dict):
         raise _fail(where, 'crossval.mean', mean, 'a mapping of rows')
-    aoe = {row: float(v['aoe_deg']) for row, v in mean.items()
-           if isinstance(v, dict) and _number(v.get('aoe_deg'))}
+    key = report.get('judged_on', 'aoe_deg')
+    if key not in ('aoe_deg', 'tilt_deg'):
+        raise _fail(where, 'crossval.judged_on', key, '"aoe_deg" or "tilt_deg"')
+    figures = {row: float(v[key]) for row, v in mean.items()
+               if isinstance(v, dict) and _number(v.get(key))}
     folds = report.get('folds') or []
     if not (isinstance(folds, list) and all(isinstance(f, list) for f in folds)):
         raise _fail(where, 'crossval.folds', folds, 'a list of recording lists')
@@ -324,7 +328,7 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
     cfg = report.get('train_config') or {}
     if not isinstance(cfg, dict):
         raise _fail(where, 'crossval.train_config', cfg, 'a mapping')
-    return Verdict(deploy, str(report.get('verdict', '')), aoe,
+    return Verdict(deploy, str(report.get('verdict', '')), figures, key,
                    tuple(str(n) for fold in folds for n in fold), steps, cfg, report)
 
 

@@ -16,6 +16,9 @@ is chosen here too, on recordings no model saw: the shipped model's, for the net
 for the calibration, is the candidate of lowest mean AOE over every held-out recording
 (none among them); the figures of a fold's recordings use the candidate the other folds'
 recordings choose, so that no figure was picked on itself.
+
+Both compare the AOE, or the tilt error alone where the recipe leaves the poses' heading
+out (:func:`judged_on`).
 """
 
 from __future__ import annotations
@@ -58,6 +61,24 @@ def tracking_label(settings: BiasTracking | None) -> str:
 
 
 CANDIDATES = {tracking_label(t): t for t in (None, *TRACKING_GRID)}  # label -> settings
+JUDGED = {'aoe_deg': 'AOE', 'tilt_deg': 'tilt error'}  # a figure the verdict compares
+
+
+def judged_on(heading_weight: float) -> tuple[str, str | None]:
+    """
+    Return the figure the verdict compares (a key of JUDGED) and, if not the AOE, why.
+
+    A recipe that leaves the poses' heading out of its loss (``heading_weight`` below 1, as
+    ``init-recipe`` writes for a VIO's) does not trust their rotation about the vertical:
+    over a whole held-out recording the AOE against them is then mostly their own heading
+    drift, which a model that learnt without it cannot share. Their tilt, which gravity
+    holds, still judges.
+    """
+    if heading_weight >= 1:
+        return 'aoe_deg', None
+    return 'tilt_deg', (f"the recipe leaves the poses' heading out of its loss "
+                        f'(heading_weight {heading_weight:g}), so the verdict leaves it out '
+                        'too: the heading is not judged')
 
 
 def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:
@@ -175,9 +196,10 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
             tracked_seed[name] = [_candidates(seq, g, rate, fed, b, fields)
                                   for g, b in zip(gyros, bounds)] if seeds is not None else []
             fold_of[name] = i
+    key, why = judged_on(recipe.heading_weight)
     per_recording, per_seed, tracking = _nested(raw_rows, tracked, tracked_seed, fold_of,
-                                                seeds or [])
-    report = summarize(per_recording)
+                                                seeds or [], key)
+    report = summarize(per_recording, key)
     sizes = sorted({len(recipe.sequences) - len(f) for f in fold_list})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
                   train_config=recipe.recipe(),
@@ -187,9 +209,10 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                  f"recipe's {len(recipe.sequences)} recordings; a model of "
                                  'the whole recipe trains on all of them, so these figures '
                                  'judge networks trained on less data than it'),
-                  tracking=tracking,
+                  tracking=tracking, judged_on=key,
+                  **({} if why is None else {'judged_on_why': why}),
                   **({'seed': recipe.seed} if seeds is None else {
-                      'seeds': runs, 'per_seed': {str(s): summarize(r)
+                      'seeds': runs, 'per_seed': {str(s): summarize(r, key)
                                                   for s, r in per_seed.items()}}))
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
@@ -255,22 +278,23 @@ def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float, fed: np.
                     for m, g in gyros.items()} for label, t in CANDIDATES.items()}
 
 
-def _choose(tracked: dict[str, Any], names: list[str]) -> dict[str, str]:
-    """Return, per row, the candidate of lowest mean AOE over ``names``."""
+def _choose(tracked: dict[str, Any], names: list[str], key: str) -> dict[str, str]:
+    """Return, per row, the candidate of lowest mean ``key`` figure over ``names``."""
     return {m: min(CANDIDATES, key=lambda label: np.mean(
-        [tracked[n][label][m]['aoe_deg'] for n in names])) for m in TRACKED}
+        [tracked[n][label][m][key] for n in names])) for m in TRACKED}
 
 
 def _nested(raw_rows: dict[str, Any], tracked: dict[str, Any], tracked_seed: dict[str, Any],
-            fold_of: dict[str, int], seeds: list[int]
+            fold_of: dict[str, int], seeds: list[int], key: str
             ) -> tuple[dict[str, Any], dict[int, Any], dict[str, Any]]:
     """
     Return the held-out figures, each seed's, and the report's ``tracking`` entry.
 
     Each fold's recordings are scored with the tracking candidate the other folds'
-    recordings chose; the shipped models get the one all of them choose.
+    recordings chose (on the ``key`` figure); the shipped models get the one all of them
+    choose.
     """
-    choice = {f: _choose(tracked, [n for n in tracked if fold_of[n] != f])
+    choice = {f: _choose(tracked, [n for n in tracked if fold_of[n] != f], key)
               for f in set(fold_of.values())}
 
     def rows(name: str, figures: dict[str, Any]) -> dict[str, Any]:
@@ -278,16 +302,15 @@ def _nested(raw_rows: dict[str, Any], tracked: dict[str, Any], tracked_seed: dic
     per_recording = {name: rows(name, tracked[name]) for name in tracked}
     per_seed = {seed: {name: rows(name, tracked_seed[name][k]) for name in tracked}
                 for k, seed in enumerate(seeds)}
-    shipped = _choose(tracked, list(tracked))
+    shipped = _choose(tracked, list(tracked), key)
     return per_recording, per_seed, {
         'chosen': {m: _labelled(shipped[m]) for m in TRACKED},
-        'chosen_on': "the mean AOE over every held-out recording; each fold's figures use "
-                     "the other folds' choice",
+        'chosen_on': f"the mean {JUDGED[key]} over every held-out recording; each fold's "
+                     "figures use the other folds' choice",
         'per_fold': {str(f): c for f, c in choice.items()},
-        'candidates': {m: {label: float(np.mean([tracked[n][label][m]['aoe_deg']
-                                                 for n in tracked]))
+        'candidates': {m: {label: float(np.mean([tracked[n][label][m][key] for n in tracked]))
                            for label in CANDIDATES} for m in TRACKED},
-        'recordings': {n: {m: {label: tracked[n][label][m]['aoe_deg'] for label in CANDIDATES}
+        'recordings': {n: {m: {label: tracked[n][label][m][key] for label in CANDIDATES}
                            for m in TRACKED} for n in tracked}}
 
 
@@ -321,21 +344,23 @@ def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any
     return models[0], models[1]
 
 
-def summarize(per_recording: dict[str, dict[str, dict[str, float]]]) -> dict[str, Any]:
-    """Means per method and the verdict, from AOE figures per held-out recording."""
-    mean = {m: {key: float(np.mean([r[m][key] for r in per_recording.values()]))
-                for key in ('aoe_deg', 'aoe_yaw_deg')} for m in CROSSVAL_METHODS
+def summarize(per_recording: dict[str, dict[str, dict[str, float]]],
+              key: str = 'aoe_deg') -> dict[str, Any]:
+    """Means per method and the verdict on the ``key`` figure, per held-out recording."""
+    mean = {m: {k: float(np.mean([r[m][k] for r in per_recording.values()]))
+                for k in ('aoe_deg', 'aoe_yaw_deg', 'tilt_deg')} for m in CROSSVAL_METHODS
             if all(m in r for r in per_recording.values())}
-    deploy, line = verdict(per_recording, mean)
+    deploy, line = verdict(per_recording, mean, key)
     return {'recordings': per_recording, 'mean': mean, 'deploy': deploy, 'verdict': line}
 
 
 def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
-            mean: dict[str, dict[str, float]]) -> tuple[str, str]:
+            mean: dict[str, dict[str, float]], key: str = 'aoe_deg') -> tuple[str, str]:
     """
     Return what to deploy (``network``, ``calibration``, ``rest bias`` or ``none``), and why.
 
-    The network only if it beats the baseline on most recordings and on average. The
+    Judged on the ``key`` figure (:func:`judged_on`). The network only if it beats the
+    baseline on most recordings and on average. The
     baseline is the best on average of the calibrated IMU, the raw gyro less its turn-on
     bias and plain integration, so a calibration that hurts new recordings (an already
     calibrated IMU) is not the bar, nor is a raw gyro that a still start would fix. On a
@@ -343,18 +368,18 @@ def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
     """
     simpler = ('raw', 'rest bias', 'calibrated')
     base = min((m for m in simpler if m in mean),
-               key=lambda m: (mean[m]['aoe_deg'], simpler.index(m)))
+               key=lambda m: (mean[m][key], simpler.index(m)))
     label = {'calibrated': 'the calibrated IMU', 'raw': 'plain integration',
              'rest bias': 'the raw gyro less its turn-on bias'}[base]
     n = len(per_recording)
-    wins = sum(r['network']['aoe_deg'] < r[base]['aoe_deg'] for r in per_recording.values())
-    gain = 100 * (1 - mean['network']['aoe_deg'] / mean[base]['aoe_deg'])
+    wins = sum(r['network'][key] < r[base][key] for r in per_recording.values())
+    gain = 100 * (1 - mean['network'][key] / mean[base][key])
     if wins > n / 2 and gain > 0:
         return 'network', (f'the network beats {label} on {wins} of {n} unseen recordings, '
-                           f'by {gain:.0f} % in mean AOE: deploy the network')
+                           f'by {gain:.0f} % in mean {JUDGED[key]}: deploy the network')
     deploy = {'calibrated': 'calibration', 'rest bias': 'rest bias', 'raw': 'none'}[base]
     return deploy, (f'the network does not beat {label} on unseen recordings ({wins} of {n}, '
-                    f'{gain:+.0f} % in mean AOE): deploy '
+                    f'{gain:+.0f} % in mean {JUDGED[key]}): deploy '
                     + {'calibration': 'the calibration', 'rest bias': 'no learnt correction, '
                        'only the turn-on bias removed (rest_bias)',
                        'none': 'no correction'}[deploy])

@@ -200,8 +200,7 @@ def _score(seq: Sequence, gyros: dict[str, np.ndarray],
         estimates[method], err = sequence_errors(seq, gyro)
         tilt = error_components(estimates[method], Rotation.from_quat(seq.gt_quat))[1]
         results[method] = {
-            'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw,
-            'tilt_deg': float(np.sqrt(np.mean(tilt[seq.gt_valid] ** 2))),
+            'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw, 'tilt_deg': err.tilt,
             'tilt_growth_deg_min': tilt_growth_deg_min(t, tilt, seq.gt_valid),
             'roe_median_deg': {str(int(d)): v for d, v in err.roe_median().items()}}
         roe[method] = err.roe

@@ -61,19 +61,23 @@ def eval_table(results: dict[str, Any], average: dict[str, Any]) -> str:
 
 
 def crossval_table(report: dict[str, Any]) -> str:
-    """AOE 3-D / yaw (deg) of each method per held-out recording, the mean, the verdict."""
+    """AOE 3-D / yaw / tilt (deg) of each method per held-out recording, the mean, the verdict."""
     names = list(report['recordings'])
+    rows = [m for m in CROSSVAL_METHODS if m in report['mean']]  # older: no rest bias
+    keys = ['aoe_deg', 'aoe_yaw_deg'] + (['tilt_deg'] if all(  # older: no tilt
+        'tilt_deg' in report['mean'][m] for m in rows) else [])
     lines = ['| method | ' + ' | '.join(names) + ' | mean |\n',
              '|---' * (len(names) + 2) + '|\n']
-    for m in (m for m in CROSSVAL_METHODS if m in report['mean']):  # older: no rest bias
-        cells = [f'{report["recordings"][s][m]["aoe_deg"]:.2f}/'
-                 f'{report["recordings"][s][m]["aoe_yaw_deg"]:.2f}' for s in names]
-        avg = report['mean'][m]
-        lines.append(f'| {m} | ' + ' | '.join(cells)
-                     + f' | **{avg["aoe_deg"]:.2f}/{avg["aoe_yaw_deg"]:.2f}** |\n')
+    for m in rows:
+        cells = ['/'.join(f'{report["recordings"][s][m][k]:.2f}' for k in keys) for s in names]
+        avg = '/'.join(f'{report["mean"][m][k]:.2f}' for k in keys)
+        lines.append(f'| {m} | ' + ' | '.join(cells) + f' | **{avg}** |\n')
     kind = report.get('fold_kind', 'leave recordings out')
-    lines.append(f'\nUnseen recordings (folds: {kind}), AOE 3-D / yaw in degrees. '
+    said = ' / tilt' if 'tilt_deg' in keys else ''
+    lines.append(f'\nUnseen recordings (folds: {kind}), AOE 3-D / yaw{said} in degrees. '
                  f'Verdict: {report["verdict"]}.\n')
+    if 'judged_on_why' in report:
+        lines.append(f'\nJudged on the tilt error alone: {report["judged_on_why"]}.\n')
     if 'fold_training' in report:
         lines.append(f'\nNote: {report["fold_training"]}.\n')
     if 'tracking' in report:

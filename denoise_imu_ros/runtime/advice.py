@@ -32,9 +32,10 @@ def deployment_warning(loaded: ModelFile) -> str | None:
     verdict, kind = loaded.meta.crossval, model_kind(loaded)
     if verdict is None or verdict.deploy is None or verdict.deploy == kind:
         return None
-    figures = [verdict.mean_aoe_deg.get(_ROWS[k]) for k in (kind, verdict.deploy)]
+    figures = [verdict.mean_deg.get(_ROWS[k]) for k in (kind, verdict.deploy)]
     label = {'none': 'no correction'}.get(verdict.deploy, verdict.deploy)
-    said = (f' ({kind} {figures[0]:.2f}° against {label} {figures[1]:.2f}° in mean AOE on '
-            'unseen recordings)' if None not in figures else '')
+    judged = {'tilt_deg': 'tilt error'}.get(verdict.judged_on, 'AOE')
+    said = (f' ({kind} {figures[0]:.2f}° against {label} {figures[1]:.2f}° in mean {judged} '
+            'on unseen recordings)' if None not in figures else '')
     return (f'{loaded.path.name} is a {kind} model, but the cross-recording validation of '
             f'its recipe says{said}: {verdict.verdict}')

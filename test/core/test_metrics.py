@@ -39,7 +39,7 @@ def test_aoe_matches_evo_ape_rotation_error_on_a_real_raw_gyro_trajectory(euroc)
     assert ours.aoe > 50  # raw EuRoC gyro drifts by tens of degrees (paper: 119 deg)
 
 
-def test_yaw_is_the_rotation_about_world_z_and_roe_ignores_a_constant_world_offset():
+def test_yaw_and_tilt_split_the_error_and_roe_ignores_a_constant_world_offset():
     n = 2000
     t = np.linspace(0, 20, n)
     gt = Rotation.from_rotvec(np.stack([0.3 * np.sin(t), 0.2 * np.cos(t), 0.5 * t], 1))
@@ -48,10 +48,12 @@ def test_yaw_is_the_rotation_about_world_z_and_roe_ignores_a_constant_world_offs
     world_yaw = Rotation.from_euler('z', 10, degrees=True) * gt
     err = attitude_errors(world_yaw, gt, pos, valid, distances=(7.0,))
     assert err.aoe == pytest.approx(10) and err.aoe_yaw == pytest.approx(10)
+    assert err.tilt < 1e-6  # a heading error leaves the vertical where it is
     assert err.roe_median()[7.0] < 1e-9  # relative rotations are untouched
     tilt = Rotation.from_euler('x', 5, degrees=True) * gt
     err = attitude_errors(tilt, gt, pos, valid, distances=(35.0,))
     assert err.aoe == pytest.approx(5) and err.aoe_yaw < 1e-9
+    assert err.tilt == pytest.approx(5)
     assert np.isnan(err.roe_median()[35.0])  # never travelled 35 m
 
 

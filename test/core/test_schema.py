@@ -34,7 +34,8 @@ def test_typed_entries_and_what_this_version_does_not_know_survive_a_copy():
     assert meta.rest_bias.prior_rad_s == (0.001, 0.0, 0.0)
     assert meta.fusion.chosen.accel_bias_m_s2 == (0.1, -0.2, 0.05)
     assert meta.fusion.orientation_std_rad == (0.01, 0.02, 0.03)
-    assert meta.crossval.mean_aoe_deg == {'raw': 9.0, 'network': 2.0}
+    assert meta.crossval.mean_deg == {'raw': 9.0, 'network': 2.0}
+    assert meta.crossval.judged_on == 'aoe_deg'  # a report from before the tilt verdict
     assert meta.crossval.held_out == ('a', 'b') and meta.raw is stored
 
 
@@ -58,6 +59,7 @@ def test_typed_entries_and_what_this_version_does_not_know_survive_a_copy():
     ({'fusion': 'tuned'}, "fusion 'tuned' is not a mapping"),
     ({'crossval': {'deploy': 'everything'}}, 'crossval.deploy'),
     ({'crossval': {'folds': 'a'}}, 'crossval.folds'),
+    ({'crossval': {'judged_on': 'aoe_yaw_deg'}}, 'crossval.judged_on'),
     ({'train_sequences': 'MH_01'}, 'train_sequences'),
     ({'kind': 3}, 'kind 3 is not a model kind'),
     ({'validation': {'step': 'last'}}, 'validation.step'),

@@ -15,7 +15,7 @@ import yaml
 
 
 def _figures(net, calib, raw):
-    return {m: {'aoe_deg': v, 'aoe_yaw_deg': v / 2}
+    return {m: {'aoe_deg': v, 'aoe_yaw_deg': v / 2, 'tilt_deg': v / 3}
             for m, v in (('network', net), ('calibrated', calib), ('raw', raw))}
 
 
@@ -44,8 +44,8 @@ def test_verdict_follows_the_figures():
     assert plain['verdict'].startswith('the network does not beat plain integration')
     assert plain['verdict'].endswith('deploy no correction') and plain['deploy'] == 'none'
     # another power-on: the raw gyro less its turn-on bias is the bar when it is the best
-    rest = {'raw': {'aoe_deg': 40.0, 'aoe_yaw_deg': 20.0},
-            'rest bias': {'aoe_deg': 3.0, 'aoe_yaw_deg': 2.0}}
+    rest = {'raw': {'aoe_deg': 40.0, 'aoe_yaw_deg': 20.0, 'tilt_deg': 0.0},
+            'rest bias': {'aoe_deg': 3.0, 'aoe_yaw_deg': 2.0, 'tilt_deg': 0.0}}
     after = summarize({'a': dict(_figures(3.5, 30.0, 40.0), **rest),
                        'b': dict(_figures(2.0, 30.0, 40.0), **rest)})
     assert after['mean']['rest bias']['aoe_deg'] == 3.0
@@ -54,10 +54,54 @@ def test_verdict_follows_the_figures():
     assert after['deploy'] == 'rest bias'
     assert after['verdict'].endswith('only the turn-on bias removed (rest_bias)')
     # recordings never still: the rest bias is the raw gyro, and the simpler is deployed
-    same = {'raw': {'aoe_deg': 1.4, 'aoe_yaw_deg': 1.2},
-            'rest bias': {'aoe_deg': 1.4, 'aoe_yaw_deg': 1.2}}
+    same = {'raw': {'aoe_deg': 1.4, 'aoe_yaw_deg': 1.2, 'tilt_deg': 0.0},
+            'rest bias': {'aoe_deg': 1.4, 'aoe_yaw_deg': 1.2, 'tilt_deg': 0.0}}
     never_still = summarize({'a': dict(_figures(2.1, 2.0, 1.4), **same)})
     assert never_still['deploy'] == 'none'
+
+
+def test_a_recipe_that_leaves_the_heading_out_is_judged_on_the_tilt_alone():
+    """Against a VIO's poses the whole-recording AOE is mostly their own heading drift."""
+    from denoise_imu_ros.evaluation.crossval import judged_on
+    assert judged_on(1.0) == ('aoe_deg', None)
+    key, why = judged_on(0.0)
+    assert key == 'tilt_deg' and 'heading_weight 0' in why and 'not judged' in why
+    drifted = {'a': {'rest bias': {'aoe_deg': 9.0, 'aoe_yaw_deg': 7.0, 'tilt_deg': 5.0},
+                     'raw': {'aoe_deg': 90.0, 'aoe_yaw_deg': 80.0, 'tilt_deg': 40.0},
+                     'calibrated': {'aoe_deg': 11.0, 'aoe_yaw_deg': 10.5, 'tilt_deg': 4.0},
+                     'network': {'aoe_deg': 11.5, 'aoe_yaw_deg': 11.0, 'tilt_deg': 3.5}}}
+    assert summarize(drifted)['deploy'] == 'rest bias'
+    tilt = summarize(drifted, 'tilt_deg')
+    assert tilt['deploy'] == 'network' and tilt['mean']['network']['tilt_deg'] == 3.5
+    assert tilt['verdict'] == ('the network beats the calibrated IMU on 1 of 1 unseen '
+                               'recordings, by 12 % in mean tilt error: deploy the network')
+
+
+def test_crossval_of_a_recipe_without_the_heading_chooses_and_reports_on_the_tilt(tmp_path):
+    from denoise_imu_ros.evaluation.crossval import crossval
+    data = tmp_path / 'data'
+    for i, bias in enumerate((0.010, 0.012)):
+        write_asl(data / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=bias)
+    recipe = {'dataset': 'synthetic', 'data': str(data), 'sequences': ['rec0', 'rec1'],
+              'window': 1024, 'steps': 10, 'val_every': 10, 'restart_period': 10,
+              'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1, 'heading_weight': 0.0}
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
+    report = crossval(tmp_path / 'r.yaml', progress=False)
+    assert report['judged_on'] == 'tilt_deg' and 'heading_weight 0' in report['judged_on_why']
+    assert report['tracking']['chosen_on'].startswith('the mean tilt error')
+    tracking = report['tracking']
+    for fold, name in (('0', 'rec0'), ('1', 'rec1')):  # the candidates' figures are tilts
+        for m in ('network', 'calibrated'):
+            label = tracking['per_fold'][fold][m]
+            assert tracking['recordings'][name][m][label] == report['recordings'][name][m][
+                'tilt_deg'] != report['recordings'][name][m]['aoe_deg']
+    from denoise_imu_ros.evaluation.reports import crossval_table
+    printed = crossval_table(report)
+    assert 'AOE 3-D / yaw / tilt in degrees' in printed
+    assert 'Judged on the tilt error alone: the recipe leaves' in printed
+    verdict = parse_meta({'crossval': report}, 'm').crossval
+    assert verdict.judged_on == 'tilt_deg'
+    assert verdict.mean_deg['network'] == report['mean']['network']['tilt_deg']
 
 
 def test_attaching_a_report_of_other_recordings_or_a_shorter_training_is_named():
