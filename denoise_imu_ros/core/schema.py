@@ -201,8 +201,8 @@ class Verdict:
 
     deploy: str | None              # one of DEPLOY_CHOICES; None in a report that chose none
     verdict: str                    # its one sentence
-    mean_deg: dict[str, float]      # row ("raw", "calibrated", ...) -> the judged figure's
-    judged_on: str                  # mean on unseen data: "aoe_deg", or "tilt_deg"
+    mean_deg: dict[str, float]      # row ("raw", "calibrated", ...) -> its mean, unseen data,
+    judged_on: str                  # of this figure: "aoe_deg", or "tilt_deg" (no heading)
     held_out: tuple[str, ...]       # every recording a fold held out
     steps: int | None               # how long the folds trained
     train_config: dict[str, Any]    # the folds' recipe

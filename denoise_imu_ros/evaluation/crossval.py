@@ -360,11 +360,11 @@ def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
     Return what to deploy (``network``, ``calibration``, ``rest bias`` or ``none``), and why.
 
     Judged on the ``key`` figure (:func:`judged_on`). The network only if it beats the
-    baseline on most recordings and on average. The
-    baseline is the best on average of the calibrated IMU, the raw gyro less its turn-on
-    bias and plain integration, so a calibration that hurts new recordings (an already
-    calibrated IMU) is not the bar, nor is a raw gyro that a still start would fix. On a
-    tie the simpler wins (recordings never still: the rest bias is the raw gyro).
+    baseline on most recordings and on average. The baseline is the best on average of the
+    calibrated IMU, the raw gyro less its turn-on bias and plain integration, so a
+    calibration that hurts new recordings (an already calibrated IMU) is not the bar, nor
+    is a raw gyro that a still start would fix. On a tie the simpler wins (recordings never
+    still: the rest bias is the raw gyro).
     """
     simpler = ('raw', 'rest bias', 'calibrated')
     base = min((m for m in simpler if m in mean),
