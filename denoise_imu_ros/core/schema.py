@@ -20,12 +20,14 @@ from typing import Any, Callable
 from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
 
-__all__ = ['BiasTracking', 'Fusion', 'FusionSettings', 'InputEnvelope', 'MAX_ACCEL_BIAS_M_S2',
-           'ModelMeta', 'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'Validation', 'Verdict']
+__all__ = ['BiasTracking', 'Fusion', 'FusionSettings', 'InputEnvelope', 'JUDGED',
+           'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'parse_meta', 'REST_ONLY', 'RestBiasSettings',
+           'Validation', 'Verdict']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
 MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
 DEPLOY_CHOICES = ('network', 'calibration', REST_ONLY, 'none')
+JUDGED = {'aoe_deg': 'AOE', 'tilt_deg': 'tilt error'}  # figures a verdict compares, named
 
 
 def _number(v: Any) -> bool:
@@ -315,8 +317,8 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
     if not isinstance(mean, dict):
         raise _fail(where, 'crossval.mean', mean, 'a mapping of rows')
     key = report.get('judged_on', 'aoe_deg')
-    if key not in ('aoe_deg', 'tilt_deg'):
-        raise _fail(where, 'crossval.judged_on', key, '"aoe_deg" or "tilt_deg"')
+    if key not in JUDGED:
+        raise _fail(where, 'crossval.judged_on', key, f'one of {", ".join(JUDGED)}')
     figures = {row: float(v[key]) for row, v in mean.items()
                if isinstance(v, dict) and _number(v.get(key))}
     folds = report.get('folds') or []

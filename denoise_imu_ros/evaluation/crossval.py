@@ -36,7 +36,7 @@ from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..core.modelfile import sample_rate
-from ..core.schema import BiasTracking, InputEnvelope, ModelMeta, parse_meta
+from ..core.schema import BiasTracking, InputEnvelope, JUDGED, ModelMeta, parse_meta
 from ..data import envelope, rest_bias
 from ..data.load import load_sequence
 from ..learn import parallel
@@ -61,7 +61,6 @@ def tracking_label(settings: BiasTracking | None) -> str:
 
 
 CANDIDATES = {tracking_label(t): t for t in (None, *TRACKING_GRID)}  # label -> settings
-JUDGED = {'aoe_deg': 'AOE', 'tilt_deg': 'tilt error'}  # a figure the verdict compares
 
 
 def judged_on(heading_weight: float) -> tuple[str, str | None]:

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core.metrics import ROE_DISTANCES_M
-from ..core.schema import ModelMeta
+from ..core.schema import JUDGED, ModelMeta
 
 CROSSVAL_METHODS = ('raw', 'rest bias', 'calibrated', 'network')
 
@@ -90,11 +90,12 @@ def crossval_table(report: dict[str, Any]) -> str:
                      f'models this verdict is attached to); the figures above: '
                      f'{"; ".join(folds)}.\n')
     if 'per_seed' in report:
-        alone = [f'seed {s} {r["mean"]["network"]["aoe_deg"]:.2f}'
+        key = report.get('judged_on', 'aoe_deg')
+        alone = [f'seed {s} {r["mean"]["network"][key]:.2f}'
                  for s, r in report['per_seed'].items()]
         lines.append(f'\nThe network rows average the corrected gyros of seeds '
                      f'{", ".join(map(str, report["seeds"]))} (the ensemble); each seed '
-                     f'alone, mean AOE: {", ".join(alone)}.\n')
+                     f'alone, mean {JUDGED[key]}: {", ".join(alone)}.\n')
     return ''.join(lines)
 
 

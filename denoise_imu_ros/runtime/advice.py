@@ -5,7 +5,7 @@
 from __future__ import annotations
 
 from ..core.modelfile import ModelFile
-from ..core.schema import REST_ONLY
+from ..core.schema import JUDGED, REST_ONLY
 
 __all__ = ['deployment_warning', 'model_kind']
 
@@ -34,8 +34,7 @@ def deployment_warning(loaded: ModelFile) -> str | None:
         return None
     figures = [verdict.mean_deg.get(_ROWS[k]) for k in (kind, verdict.deploy)]
     label = {'none': 'no correction'}.get(verdict.deploy, verdict.deploy)
-    judged = {'tilt_deg': 'tilt error'}.get(verdict.judged_on, 'AOE')
-    said = (f' ({kind} {figures[0]:.2f}° against {label} {figures[1]:.2f}° in mean {judged} '
-            'on unseen recordings)' if None not in figures else '')
+    said = (f' ({kind} {figures[0]:.2f}° against {label} {figures[1]:.2f}° in mean '
+            f'{JUDGED[verdict.judged_on]} on unseen recordings)' if None not in figures else '')
     return (f'{loaded.path.name} is a {kind} model, but the cross-recording validation of '
             f'its recipe says{said}: {verdict.verdict}')
