@@ -54,6 +54,21 @@ def test_a_model_of_another_kind_than_its_validation_recommends_says_so(
                            f'validation of its recipe says: ... deploy {deploy}')
 
 
+def test_the_warning_names_the_figure_the_verdict_compared(tmp_path):
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.runtime.advice import deployment_warning
+    mean = {'network': {'aoe_deg': 11.5, 'tilt_deg': 3.7},
+            'calibrated': {'aoe_deg': 11.3, 'tilt_deg': 3.9}}
+    for judged, said in (({}, '11.50° against calibration 11.30° in mean AOE'),
+                         ({'judged_on': 'tilt_deg'},
+                          '3.70° against calibration 3.90° in mean tilt error')):
+        save_model(tmp_path / 'm.safetensors', _model(), {'sample_rate_hz': 200.0, 'crossval': {
+            'deploy': 'calibration', 'verdict': 'deploy the calibration', 'mean': mean,
+            **judged}})
+        assert f'(network {said} on unseen recordings)' in deployment_warning(
+            read_model_file(tmp_path / 'm.safetensors'))
+
+
 def test_corrupt_foreign_and_missing_files_raise_model_file_error(tmp_path):
     good = tmp_path / 'good.safetensors'
     save_model(good, _model(), {})
