@@ -203,8 +203,8 @@ class Verdict:
 
     deploy: str | None              # one of DEPLOY_CHOICES; None in a report that chose none
     verdict: str                    # its one sentence
-    mean_deg: dict[str, float]      # row ("raw", "calibrated", ...) -> its mean, unseen data,
-    judged_on: str                  # of this figure: "aoe_deg", or "tilt_deg" (no heading)
+    mean_deg: dict[str, float]      # row ("raw", "calibrated", ...) -> mean judged figure
+    judged_on: str                  # that figure: "aoe_deg", or "tilt_deg" (heading untrusted)
     held_out: tuple[str, ...]       # every recording a fold held out
     steps: int | None               # how long the folds trained
     train_config: dict[str, Any]    # the folds' recipe
@@ -317,7 +317,7 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
     if not isinstance(mean, dict):
         raise _fail(where, 'crossval.mean', mean, 'a mapping of rows')
     key = report.get('judged_on', 'aoe_deg')
-    if key not in JUDGED:
+    if not isinstance(key, str) or key not in JUDGED:
         raise _fail(where, 'crossval.judged_on', key, f'one of {", ".join(JUDGED)}')
     figures = {row: float(v[key]) for row, v in mean.items()
                if isinstance(v, dict) and _number(v.get(key))}

@@ -67,17 +67,17 @@ def judged_on(heading_weight: float) -> tuple[str, str | None]:
     """
     Return the figure the verdict compares (a key of JUDGED) and, if not the AOE, why.
 
-    A recipe that leaves the poses' heading out of its loss (``heading_weight`` below 1, as
-    ``init-recipe`` writes for a VIO's) does not trust their rotation about the vertical:
-    over a whole held-out recording the AOE against them is then mostly their own heading
-    drift, which a model that learnt without it cannot share. Their tilt, which gravity
-    holds, still judges.
+    A recipe that leaves the poses' heading out of its loss or lowers its weight
+    (``heading_weight`` below 1; ``init-recipe`` writes 0 for a VIO's) does not trust
+    their rotation about the vertical: over a whole held-out recording the AOE against
+    them is then mostly their own heading drift, which a model that learnt less of it
+    cannot share. Their tilt, which gravity holds, still judges.
     """
     if heading_weight >= 1:
         return 'aoe_deg', None
-    return 'tilt_deg', (f"the recipe leaves the poses' heading out of its loss "
-                        f'(heading_weight {heading_weight:g}), so the verdict leaves it out '
-                        'too: the heading is not judged')
+    return 'tilt_deg', (f"the recipe does not trust the poses' heading (heading_weight "
+                        f'{heading_weight:g}), so neither does the verdict: the heading is '
+                        'not judged')
 
 
 def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:

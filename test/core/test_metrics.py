@@ -55,6 +55,11 @@ def test_yaw_and_tilt_split_the_error_and_roe_ignores_a_constant_world_offset():
     assert err.aoe == pytest.approx(5) and err.aoe_yaw < 1e-9
     assert err.tilt == pytest.approx(5)
     assert np.isnan(err.roe_median()[35.0])  # never travelled 35 m
+    # yaw and tilt at once: the vertical 5 deg off; the 40 deg in the holes counts for nothing
+    odd = np.arange(n) % 2 == 1
+    both = Rotation.from_euler('ZX', np.where(odd[:, None], [30, 5], [0, 40]), degrees=True)
+    err = attitude_errors(both * gt, gt, pos, odd, distances=())
+    assert err.tilt == pytest.approx(5) and err.aoe > 30
 
 
 def test_ground_truth_holes_are_skipped():

@@ -7,7 +7,9 @@ import json
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import TrainingError
 from denoise_imu_ros.core.schema import parse_meta
-from denoise_imu_ros.evaluation.crossval import attach_mismatches, folds, summarize
+from denoise_imu_ros.evaluation.crossval import (attach_mismatches, crossval, folds, judged_on,
+                                                  summarize)
+from denoise_imu_ros.evaluation.reports import crossval_table
 from denoise_imu_ros.learn.checkpoint import load_model
 from helpers import write_asl
 import pytest
@@ -62,8 +64,8 @@ def test_verdict_follows_the_figures():
 
 def test_a_recipe_that_leaves_the_heading_out_is_judged_on_the_tilt_alone():
     """Against a VIO's poses the whole-recording AOE is mostly their own heading drift."""
-    from denoise_imu_ros.evaluation.crossval import judged_on
-    assert judged_on(1.0) == ('aoe_deg', None)
+    assert judged_on(1.0) == judged_on(2.0) == ('aoe_deg', None)
+    assert judged_on(0.5)[0] == 'tilt_deg'
     key, why = judged_on(0.0)
     assert key == 'tilt_deg' and 'heading_weight 0' in why and 'not judged' in why
     drifted = {'a': {'rest bias': {'aoe_deg': 9.0, 'aoe_yaw_deg': 7.0, 'tilt_deg': 5.0},
@@ -77,8 +79,27 @@ def test_a_recipe_that_leaves_the_heading_out_is_judged_on_the_tilt_alone():
                                'recordings, by 12 % in mean tilt error: deploy the network')
 
 
+def test_the_tracking_is_chosen_on_the_judged_figure():
+    """Candidates ranked one way by the AOE and the other by the tilt: the key decides."""
+    from denoise_imu_ros.evaluation.crossval import _nested, CANDIDATES
+    first, second = list(CANDIDATES)[1:3]  # two trackings (the first is none)
+    figures = {first: {'aoe_deg': 1.0, 'aoe_yaw_deg': 0.9, 'tilt_deg': 0.5},
+               second: {'aoe_deg': 2.0, 'aoe_yaw_deg': 1.9, 'tilt_deg': 0.2}}
+    tracked = {n: {label: {m: figures.get(label, {'aoe_deg': 9.0, 'aoe_yaw_deg': 9.0,
+                                                  'tilt_deg': 9.0})
+                           for m in ('network', 'calibrated')} for label in CANDIDATES}
+               for n in ('a', 'b')}
+    raw = {n: {} for n in tracked}
+    for key, best in (('aoe_deg', first), ('tilt_deg', second)):
+        rows, _, tracking = _nested(raw, tracked, {}, {'a': 0, 'b': 1}, [], key)
+        assert tracking['chosen']['network']['label'] == best
+        assert tracking['per_fold'] == {'0': {'network': best, 'calibrated': best},
+                                        '1': {'network': best, 'calibrated': best}}
+        assert tracking['candidates']['network'][best] == figures[best][key]
+        assert rows['a']['network'] == figures[best]
+
+
 def test_crossval_of_a_recipe_without_the_heading_chooses_and_reports_on_the_tilt(tmp_path):
-    from denoise_imu_ros.evaluation.crossval import crossval
     data = tmp_path / 'data'
     for i, bias in enumerate((0.010, 0.012)):
         write_asl(data / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=bias)
@@ -95,10 +116,10 @@ def test_crossval_of_a_recipe_without_the_heading_chooses_and_reports_on_the_til
             label = tracking['per_fold'][fold][m]
             assert tracking['recordings'][name][m][label] == report['recordings'][name][m][
                 'tilt_deg'] != report['recordings'][name][m]['aoe_deg']
-    from denoise_imu_ros.evaluation.reports import crossval_table
     printed = crossval_table(report)
     assert 'AOE 3-D / yaw / tilt in degrees' in printed
-    assert 'Judged on the tilt error alone: the recipe leaves' in printed
+    assert "Judged on the tilt error alone: the recipe does not trust the poses' heading" \
+        in printed
     verdict = parse_meta({'crossval': report}, 'm').crossval
     assert verdict.judged_on == 'tilt_deg'
     assert verdict.mean_deg['network'] == report['mean']['network']['tilt_deg']
@@ -195,7 +216,6 @@ def test_held_out_recordings_are_aligned_like_the_training_ones(tmp_path):
     import dataclasses
     from denoise_imu_ros.data.asl import read_asl
     from denoise_imu_ros.data.bags import write_bag
-    from denoise_imu_ros.evaluation.crossval import crossval
     from scipy.spatial.transform import Rotation
     marker = Rotation.from_rotvec([30.0, -20.0, 45.0], degrees=True)  # imu_from_pose
     recipe = {'dataset': 'synthetic', 'sequences': ['rec0', 'rec1'], 'window': 1024,
