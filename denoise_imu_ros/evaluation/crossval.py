@@ -61,6 +61,7 @@ def tracking_label(settings: BiasTracking | None) -> str:
 
 
 CANDIDATES = {tracking_label(t): t for t in (None, *TRACKING_GRID)}  # label -> settings
+HEADING_GUARD = 2.0  # judged on the tilt: a heading this many times the rest bias's is off
 
 
 def judged_on(heading_weight: float) -> tuple[str, str | None]:
@@ -353,32 +354,58 @@ def summarize(per_recording: dict[str, dict[str, dict[str, float]]],
     return {'recordings': per_recording, 'mean': mean, 'deploy': deploy, 'verdict': line}
 
 
+def heading_off(mean: dict[str, dict[str, float]], key: str) -> list[str]:
+    """
+    Return the learnt rows a verdict on the tilt must not deploy: their heading is off.
+
+    The tilt cannot see a heading a model or its tracking ruins. Against a VIO's poses the
+    heading error of every row holds the poses' own drift, and the gyro less its turn-on
+    bias learnt nothing from them: a row whose mean yaw error exceeds HEADING_GUARD times
+    the rest bias's disagrees with the poses more than their drift alone explains.
+    """
+    if key != 'tilt_deg' or 'rest bias' not in mean:
+        return []
+    bar = HEADING_GUARD * mean['rest bias']['aoe_yaw_deg']
+    return [m for m in ('calibrated', 'network') if m in mean and mean[m]['aoe_yaw_deg'] > bar]
+
+
 def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
             mean: dict[str, dict[str, float]], key: str = 'aoe_deg') -> tuple[str, str]:
     """
     Return what to deploy (``network``, ``calibration``, ``rest bias`` or ``none``), and why.
 
-    Judged on the ``key`` figure (:func:`judged_on`). The network only if it beats the
-    baseline on most recordings and on average. The baseline is the best on average of the
-    calibrated IMU, the raw gyro less its turn-on bias and plain integration, so a
-    calibration that hurts new recordings (an already calibrated IMU) is not the bar, nor
-    is a raw gyro that a still start would fix. On a tie the simpler wins (recordings never
-    still: the rest bias is the raw gyro).
+    Judged on the ``key`` figure (:func:`judged_on`), never deploying a row whose heading
+    is off (:func:`heading_off`). The network only if it beats the baseline on most
+    recordings and on average. The baseline is the best on average of the calibrated IMU,
+    the raw gyro less its turn-on bias and plain integration, so a calibration that hurts
+    new recordings (an already calibrated IMU) is not the bar, nor is a raw gyro that a
+    still start would fix. On a tie the simpler wins (recordings never still: the rest
+    bias is the raw gyro).
     """
-    simpler = ('raw', 'rest bias', 'calibrated')
-    base = min((m for m in simpler if m in mean),
-               key=lambda m: (mean[m][key], simpler.index(m)))
+    off = heading_off(mean, key)
+    order = ('raw', 'rest bias', 'calibrated')
+    base = min((m for m in order if m in mean and m not in off),
+               key=lambda m: (mean[m][key], order.index(m)))
     label = {'calibrated': 'the calibrated IMU', 'raw': 'plain integration',
              'rest bias': 'the raw gyro less its turn-on bias'}[base]
+    names = {'calibrated': 'the calibration', 'network': 'the network'}
+    yaw = ', '.join(f'{names[m]} {mean[m]["aoe_yaw_deg"]:.2f}' for m in off)
+    guard = '' if not off else (
+        f'{" and ".join(names[m] for m in off)} disagree{"s" if len(off) == 1 else ""} with '
+        f"the poses' heading more than {HEADING_GUARD:g}x as much as the gyro less its "
+        f'turn-on bias (mean yaw {yaw} against {mean["rest bias"]["aoe_yaw_deg"]:.2f} deg): '
+        'not deployed; ')
     n = len(per_recording)
     wins = sum(r['network'][key] < r[base][key] for r in per_recording.values())
     gain = 100 * (1 - mean['network'][key] / mean[base][key])
-    if wins > n / 2 and gain > 0:
-        return 'network', (f'the network beats {label} on {wins} of {n} unseen recordings, '
-                           f'by {gain:.0f} % in mean {JUDGED[key]}: deploy the network')
+    if 'network' not in off and wins > n / 2 and gain > 0:
+        return 'network', (f'{guard}the network beats {label} on {wins} of {n} unseen '
+                           f'recordings, by {gain:.0f} % in mean {JUDGED[key]}: deploy the '
+                           'network')
     deploy = {'calibrated': 'calibration', 'rest bias': 'rest bias', 'raw': 'none'}[base]
-    return deploy, (f'the network does not beat {label} on unseen recordings ({wins} of {n}, '
-                    f'{gain:+.0f} % in mean {JUDGED[key]}): deploy '
+    why = ('' if 'network' in off else f'the network does not beat {label} on unseen '
+           f'recordings ({wins} of {n}, {gain:+.0f} % in mean {JUDGED[key]}): ')
+    return deploy, (f'{guard}{why}deploy '
                     + {'calibration': 'the calibration', 'rest bias': 'no learnt correction, '
                        'only the turn-on bias removed (rest_bias)',
                        'none': 'no correction'}[deploy])

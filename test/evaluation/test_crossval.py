@@ -77,6 +77,16 @@ def test_a_recipe_that_leaves_the_heading_out_is_judged_on_the_tilt_alone():
     assert tilt['deploy'] == 'network' and tilt['mean']['network']['tilt_deg'] == 3.5
     assert tilt['verdict'] == ('the network beats the calibrated IMU on 1 of 1 unseen '
                                'recordings, by 12 % in mean tilt error: deploy the network')
+    # a heading the poses' drift cannot explain (more than twice the rest bias's): not deployed
+    ruined = {'a': dict(drifted['a'], network={'aoe_deg': 16.0, 'aoe_yaw_deg': 15.0,
+                                               'tilt_deg': 3.5})}
+    assert summarize(ruined, 'tilt_deg')['deploy'] == 'calibration'
+    ruined['a']['calibrated'] = {'aoe_deg': 15.0, 'aoe_yaw_deg': 14.1, 'tilt_deg': 4.0}
+    alone = summarize(ruined, 'tilt_deg')
+    assert alone['deploy'] == 'rest bias'
+    assert alone['verdict'].startswith("the calibration and the network disagree with the poses' "
+                                       'heading more than 2x as much')
+    assert summarize(ruined)['deploy'] == 'rest bias'  # judged on the AOE: no guard needed
 
 
 def test_the_tracking_is_chosen_on_the_judged_figure():
