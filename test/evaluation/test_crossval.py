@@ -107,6 +107,12 @@ def test_the_tracking_is_chosen_on_the_judged_figure():
                                         '1': {'network': best, 'calibrated': best}}
         assert tracking['candidates']['network'][best] == figures[best][key]
         assert rows['a']['network'] == figures[best]
+    # judged on the tilt, a tracking whose heading is off (yaw over twice the rest bias's)
+    # is not chosen however good its tilt
+    rest = {n: {'rest bias': {'aoe_deg': 1.0, 'aoe_yaw_deg': 0.5, 'tilt_deg': 0.8}}
+            for n in tracked}
+    tracking = _nested(rest, tracked, {}, {'a': 0, 'b': 1}, [], 'tilt_deg')[2]
+    assert tracking['chosen']['network']['label'] == first  # yaw 0.9 <= 1.0 < 1.9
 
 
 def test_crossval_of_a_recipe_without_the_heading_chooses_and_reports_on_the_tilt(tmp_path):
