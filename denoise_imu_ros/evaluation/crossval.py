@@ -17,8 +17,9 @@ for the calibration, is the candidate of lowest mean AOE over every held-out rec
 (none among them); the figures of a fold's recordings use the candidate the other folds'
 recordings choose, so that no figure was picked on itself.
 
-Both compare the AOE, or the tilt error alone where the recipe leaves the poses' heading
-out (:func:`judged_on`).
+Both compare the AOE, or the tilt error alone where the recipe does not trust the poses'
+heading (:func:`judged_on`); then neither deploys nor chooses what ruins the heading
+beyond the poses' drift (:func:`heading_off`).
 """
 
 from __future__ import annotations
