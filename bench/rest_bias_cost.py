@@ -9,9 +9,12 @@ node's and process-bag's per-sample work, without ROS) with ``rest_bias`` off an
 alternating rounds so that a change in the machine's speed hits both alike, and each
 estimator alone (``RestBias.update``, ``BiasTracker.update``), and the input envelope's
 guard alone where the file has one (``Guard.check`` and ``Guard.apply``, which both
-settings run). Prints the median per-sample time of each, and the ratio on/off.
+settings run), and the vertical's projection alone (``Vertical.apply``, which both run for
+a model taught without its poses' heading). Prints the median per-sample time of each,
+and the ratio on/off.
 Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
-     [--recording 03_undisturbed_slow_rotation_C] [--samples 20000] [--rounds 5]
+     [--data ../shared/data/broad] [--recording 03_undisturbed_slow_rotation_C]
+     [--samples 20000] [--rounds 5]
 """
 
 import argparse
@@ -22,6 +25,7 @@ from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
 from denoise_imu_ros.data.envelope import Guard
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.data.rest_bias import BiasTracker, resolve, RestBias
+from denoise_imu_ros.data.vertical import Vertical
 from denoise_imu_ros.runtime.online import OnlineDenoiser
 import numpy as np
 
@@ -41,15 +45,16 @@ def main() -> None:
     """Print the per-sample cost with rest_bias off and on, and of each estimator alone."""
     parser = argparse.ArgumentParser()
     parser.add_argument('--model', default='broad_network')
+    parser.add_argument('--data', type=Path, default=DATA)
     parser.add_argument('--recording', default='03_undisturbed_slow_rotation_C')
     parser.add_argument('--samples', type=int, default=20000)
     parser.add_argument('--rounds', type=int, default=5)
     args = parser.parse_args()
     model = read_model_file(args.model)
-    rec = load_imu(DATA / args.recording)
+    rec = load_imu(args.data / args.recording)
     stamps, imu = rec.imu_stamp_ns[:args.samples], rec.imu[:args.samples]
     times = {'off': [], 'on': [], 'estimator alone': [], 'tracker alone': [],
-             'envelope guard alone': []}
+             'envelope guard alone': [], 'vertical alone': []}
     for _ in range(args.rounds):
         for choice in ('off', 'on'):
             den = OnlineDenoiser.from_model_file(model, rest_choice=choice)
@@ -70,6 +75,12 @@ def main() -> None:
                 return guard.apply(g, fed)
 
             times['envelope guard alone'].append(per_sample_s(guarded, stamps, imu))
+        vertical = Vertical(sample_rate(model))
+
+        def projected(t: int, g: np.ndarray, a: np.ndarray) -> np.ndarray:
+            return vertical.apply(g, np.concatenate([g, a]))
+
+        times['vertical alone'].append(per_sample_s(projected, stamps, imu))
     median = {k: float(np.median(v)) for k, v in times.items() if v}
     print(f'{model.path.name}, {len(stamps)} samples of {args.recording}, '
           f'{args.rounds} rounds alternating, median per sample:')

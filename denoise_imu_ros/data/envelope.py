@@ -37,6 +37,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from .rest_bias import track_bias, tracking
+from .vertical import drop_vertical, drops_vertical
 from ..core.limits import GRAVITY_M_S2
 from ..core.modelfile import sample_rate
 from ..core.schema import BiasTracking, InputEnvelope
@@ -133,30 +134,34 @@ def resolve(meta: Any, choice: str) -> InputEnvelope | None:
 
 
 def finish(output: np.ndarray, fed: np.ndarray, rate_hz: float,
-           tracking: BiasTracking | None, envelope: InputEnvelope | None, field: int
-           ) -> np.ndarray:
+           tracking: BiasTracking | None, envelope: InputEnvelope | None, field: int,
+           vertical: bool = False) -> np.ndarray:
     """
     Return a model's ``output`` (N, 3) for its input ``fed`` (N, 6) as every path ends it.
 
     Its bias tracked (``tracking``; held through stretches where the receptive field turns
-    faster than the envelope: :func:`too_fast`), then guarded (:func:`guard_batch`); one
-    run.
+    faster than the envelope: :func:`too_fast`), then guarded (:func:`guard_batch`), then,
+    with ``vertical``, its correction about the vertical dropped
+    (:func:`~denoise_imu_ros.data.vertical.drop_vertical`); one run.
     """
     hold = None if envelope is None or tracking is None else too_fast(fed, envelope, field)
-    return guard_batch(track_bias(output, fed[:, 3:], rate_hz, tracking, hold),
-                       fed, envelope, field)
+    output = guard_batch(track_bias(output, fed[:, 3:], rate_hz, tracking, hold),
+                         fed, envelope, field)
+    return drop_vertical(output, fed, rate_hz) if vertical else output
 
 
 def finished(loaded: Any, output: np.ndarray, fed: np.ndarray, rest: str = 'model',
              guard: str = 'model') -> np.ndarray:
     """
-    Return :func:`finish` with a model file's tracking and envelope.
+    Return :func:`finish` with a model file's tracking, envelope and vertical.
 
     ``rest`` as the node's ``rest_bias`` (tracking off with it), ``guard`` as its
-    ``envelope_guard`` (:func:`resolve`).
+    ``envelope_guard`` (:func:`resolve`); the vertical as the model file says
+    (:func:`~denoise_imu_ros.data.vertical.drops_vertical`).
     """
     return finish(output, fed, sample_rate(loaded), tracking(loaded.meta, rest),
-                  resolve(loaded.meta, guard), loaded.config.receptive_field)
+                  resolve(loaded.meta, guard), loaded.config.receptive_field,
+                  drops_vertical(loaded.meta))
 
 
 class Guard:

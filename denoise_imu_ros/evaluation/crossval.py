@@ -38,7 +38,7 @@ from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..core.modelfile import sample_rate
 from ..core.schema import BiasTracking, InputEnvelope, JUDGED, ModelMeta, parse_meta
-from ..data import envelope, rest_bias
+from ..data import envelope, rest_bias, vertical
 from ..data.load import load_sequence
 from ..learn import parallel
 from ..learn.checkpoint import load_model, LoadedModel
@@ -65,9 +65,9 @@ CANDIDATES = {tracking_label(t): t for t in (None, *TRACKING_GRID)}  # label -> 
 HEADING_GUARD = 2.0  # judged on the tilt: a heading this many times the rest bias's is off
 
 
-def judged_on(heading_weight: float) -> tuple[str, str | None]:
+def judged_on(heading_weight: float, who: str = 'the verdict') -> tuple[str, str | None]:
     """
-    Return the figure the verdict compares (a key of JUDGED) and, if not the AOE, why.
+    Return the figure ``who`` compares (a key of JUDGED) and, if not the AOE, why.
 
     A recipe that leaves the poses' heading out of its loss or lowers its weight
     (``heading_weight`` below 1; ``init-recipe`` writes 0 for a VIO's) does not trust
@@ -78,7 +78,7 @@ def judged_on(heading_weight: float) -> tuple[str, str | None]:
     if heading_weight >= 1:
         return 'aoe_deg', None
     return 'tilt_deg', (f"the recipe does not trust the poses' heading (heading_weight "
-                        f'{heading_weight:g}), so neither does the verdict: the heading is '
+                        f'{heading_weight:g}), so neither does {who}: the heading is '
                         'not judged')
 
 
@@ -190,11 +190,11 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
             fed = rest_bias.model_input(models[0][0], seq.imu)  # one recipe, one input
             gyros = [{'calibrated': correct_gyro(calib.model, fed),
                       'network': correct_gyro(net.model, fed)} for net, calib in models]
-            rate = sample_rate(models[0][0])
+            rate, drop = sample_rate(models[0][0]), vertical.drops_vertical(models[0][0].meta)
             tracked[name] = _candidates(
                 seq, {m: np.mean([g[m] for g in gyros], axis=0) for m in TRACKED}, rate, fed,
-                ensemble_bounds, fields)
-            tracked_seed[name] = [_candidates(seq, g, rate, fed, b, fields)
+                ensemble_bounds, fields, drop)
+            tracked_seed[name] = [_candidates(seq, g, rate, fed, b, fields, drop)
                                   for g, b in zip(gyros, bounds)] if seeds is not None else []
             fold_of[name] = i
     key, why = judged_on(recipe.heading_weight)
@@ -267,15 +267,17 @@ def _fold_models(folder: Path | None, cfg: Any, calib_cfg: Any, label: str,
 
 
 def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float, fed: np.ndarray,
-                bounds: dict[str, InputEnvelope | None], fields: dict[str, int]
-                ) -> dict[str, dict[str, dict[str, float]]]:
+                bounds: dict[str, InputEnvelope | None], fields: dict[str, int],
+                drop: bool) -> dict[str, dict[str, dict[str, float]]]:
     """
     Return each tracking candidate's figures (label -> row -> score) of untracked gyros.
 
-    Each gyro tracked and guarded by its row's input envelope, as every path ends it
+    Each gyro tracked and guarded by its row's input envelope, and its correction about
+    the vertical dropped where the recipe's is (``drop``), as every path ends it
     (:func:`~denoise_imu_ros.data.envelope.finish`).
     """
-    return {label: {m: score(seq, envelope.finish(g, fed, rate_hz, t, bounds[m], fields[m]))
+    return {label: {m: score(seq, envelope.finish(g, fed, rate_hz, t, bounds[m], fields[m],
+                                                  drop))
                     for m, g in gyros.items()} for label, t in CANDIDATES.items()}
 
 

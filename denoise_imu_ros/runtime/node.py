@@ -211,6 +211,8 @@ class GyroDenoiser(Node):
                '; no correction beyond the motion trained on (gyro '
                f'{self._denoiser.guard.envelope.gyro_rad_s:.2f} rad/s, accelerometer '
                f'{self._denoiser.guard.envelope.accel_offset_m_s2:.1f} m/s^2 from gravity)')
+            + ('' if self._denoiser.vertical is None else
+               "; no correction about the vertical (taught without its poses' heading)")
             + f'; {self._sub.topic_name} -> {self._pub_imu.topic_name}'
             + ('' if fusion is None else
                f', {self._pub_fused.topic_name} (VQF: tau_acc {fusion.tau_acc_s:g} s, bias '
@@ -430,7 +432,8 @@ class GyroDenoiser(Node):
         """Return the bias estimates for /diagnostics: applied, seconds still, values."""
         rest, track = self._denoiser.rest, self._denoiser.track
         values = {'rest_bias_applied': str(rest is not None),
-                  'tracked_bias_applied': str(track is not None)}
+                  'tracked_bias_applied': str(track is not None),
+                  'vertical_correction_dropped': str(self._denoiser.vertical is not None)}
         if rest is not None:
             bias, sigma = rest.estimate()
             values.update({'rest_bias_seconds_still': f'{rest.seconds_still:.1f}',

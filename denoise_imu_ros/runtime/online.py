@@ -43,7 +43,10 @@ With a :class:`~denoise_imu_ros.data.envelope.Guard` (the model file's
 ``input_envelope``), last, the output is the model's input plus a constant while the
 receptive field holds motion the model was not trained on, and the tracker's estimate is
 held through stretches where it turns faster than that (restored after each); it restarts
-with the network's history, and a gap ends a held stretch.
+with the network's history, and a gap ends a held stretch. With a
+:class:`~denoise_imu_ros.data.vertical.Vertical` (a model taught without its poses'
+heading), last of all, the output keeps only the part of its correction orthogonal to
+the vertical; it restarts with the turn-on bias's estimate.
 """
 
 from __future__ import annotations
@@ -61,6 +64,7 @@ from ..core.limits import in_range, MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import ModelFile, sample_rate
 from ..core.msgs import finite_covariance, imu_fields, UNKNOWN_COVARIANCE
 from ..data import envelope, rest_bias
+from ..data.vertical import drops_vertical, Vertical
 
 
 class Drop(str, Enum):
@@ -115,6 +119,7 @@ class OnlineDenoiser:
     rest: rest_bias.RestBias | None = None  # the turn-on bias removed before the model
     track: rest_bias.BiasTracker | None = None  # the output's bias tracked after it
     guard: envelope.Guard | None = None  # the model not trusted beyond its input envelope
+    vertical: Vertical | None = None  # its correction about the vertical dropped
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
          'skipped_input_periods', 'non_finite_covariance'), 0))
@@ -141,6 +146,8 @@ class OnlineDenoiser:
         (:func:`denoise_imu_ros.data.rest_bias.resolve`) and the output's bias tracked
         (:func:`denoise_imu_ros.data.rest_bias.tracking`); ``guard_choice`` (``model``,
         ``off``) whether the output is guarded (:func:`denoise_imu_ros.data.envelope.resolve`).
+        The correction about the vertical is dropped where the model file says so
+        (:func:`denoise_imu_ros.data.vertical.drops_vertical`).
         """
         rate = sample_rate(model)
         if fusion is not None:
@@ -154,6 +161,7 @@ class OnlineDenoiser:
                    fusion=None if fusion is None else GravityFilter(rate, fusion),
                    rest=None if settings is None else rest_bias.RestBias(settings, rate),
                    track=None if track is None else rest_bias.BiasTracker(track, rate),
+                   vertical=Vertical(rate) if drops_vertical(model.meta) else None,
                    **options)
 
     def _count_input_periods(self, interval_ns: int) -> None:
@@ -254,6 +262,10 @@ class OnlineDenoiser:
                 corrected, accel, self.guard is not None and self.guard.too_fast)
         if self.guard is not None:
             corrected = self.guard.apply(corrected, fed)
+        if self.vertical is not None:
+            if event in (Event.START, Event.TIME_JUMP):
+                self.vertical.reset()
+            corrected = self.vertical.apply(corrected, fed)
         if event in (Event.START, Event.TIME_JUMP):  # another stream: its rate is new too
             self._off_rate_run, self._input_period_ns, self._window_off = 0, 0.0, False
             self._intervals.clear()

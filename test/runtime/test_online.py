@@ -84,6 +84,34 @@ def test_with_bias_tracking_online_equals_both_offline_engines(seq, tmp_path):
                                atol=1e-6)
 
 
+def test_taught_without_the_heading_online_equals_both_offline_engines(seq, tmp_path):
+    """The correction about the vertical dropped per sample as offline, again after a reset."""
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.data.rest_bias import RestBiasSettings
+    from denoise_imu_ros.evaluation.correct import corrected_gyro
+    from helpers import write_untrained_model
+    n, cut = 2000, 1200
+    meta = {'sample_rate_hz': 200.0, 'rest_bias': RestBiasSettings().to_dict(),
+            'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0}}
+    files = {w: read_model_file(write_untrained_model(tmp_path / f'm{w}.safetensors', dict(
+        meta, train_config={'heading_weight': w}))) for w in (0.0, 1.0)}
+    denoiser = OnlineDenoiser.from_model_file(files[0.0])
+    assert denoiser.vertical is not None
+    assert OnlineDenoiser.from_model_file(files[1.0]).vertical is None
+    # the stream jumps back to its start after `cut` samples: everything restarts
+    stamps = np.concatenate([seq.stamp_ns[:cut], seq.stamp_ns[:n - cut]])
+    imu = np.concatenate([seq.imu[:cut], seq.imu[:n - cut]])
+    outs = _run(denoiser, stamps, imu)
+    assert outs[cut].event == Event.TIME_JUMP
+    online = np.array([o.gyro for o in outs])
+    for engine in ('streaming', 'batch'):
+        offline = np.concatenate([corrected_gyro(files[0.0], imu[:cut], engine),
+                                  corrected_gyro(files[0.0], imu[cut:], engine)])
+        np.testing.assert_allclose(online, offline, atol=1e-6)
+    kept = corrected_gyro(files[1.0], imu[:cut], 'streaming')
+    assert np.abs(online[:cut] - kept).max() > 1e-4  # the same network, its vertical kept
+
+
 def test_the_start_attitude_levels_the_accelerometer():
     tilt = Rotation.from_euler('ZYX', [0.0, 0.2, -0.4])
     accel = tilt.inv().apply([0.0, 0.0, 9.81])

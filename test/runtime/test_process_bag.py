@@ -16,15 +16,17 @@ def _fields(m) -> list[float]:
             *m.linear_acceleration_covariance, o.x, o.y, o.z, o.w, *m.orientation_covariance]
 
 
-@pytest.mark.parametrize('rest,track,guard', [
-    (False, False, 'model'), (True, False, 'model'), (True, True, 'model'), (True, True, 'off')])
+@pytest.mark.parametrize('rest,track,guard,heading', [
+    (False, False, 'model', 1.0), (True, False, 'model', 1.0), (True, True, 'model', 1.0),
+    (True, True, 'off', 0.0)])
 def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file, tmp_path,
-                                                            rest, track, guard):
+                                                            rest, track, guard, heading):
     """
     With the model's filter settings, a turn-on bias removed, the output's bias tracked.
 
     And the last two with an input envelope the bag's motion leaves: guarded (the fallback
-    beyond it), and with the guard turned off.
+    beyond it), and with the guard turned off, that model taught without its poses' heading
+    (its correction about the vertical dropped).
     """
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core.modelfile import add_metadata
@@ -36,7 +38,8 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
         4.0, False, (0.02, -0.1, 0.05)).as_dict(), 'orientation_std_rad': [0.01, 0.02, 0.03]},
         rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict() if rest else None,
         bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0} if track else None,
-        input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0} if track else None)
+        input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0} if track else None,
+        train_config={'heading_weight': heading})
     assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
                 str(model_file), '--envelope-guard', guard]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
@@ -65,6 +68,7 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     diagnostics = {v.key: v.value for v in h.diagnostics[-1].status[0].values}
     assert diagnostics['rest_bias_applied'] == str(rest)
     assert diagnostics['tracked_bias_applied'] == str(track)
+    assert diagnostics['vertical_correction_dropped'] == str(heading == 0)
     assert diagnostics['envelope_guard_applied'] == str(track and guard == 'model')
     if track and guard == 'model':  # the still start's noise exceeds 0.002 rad/s
         assert int(diagnostics['envelope_guarded_samples']) > 0
