@@ -25,6 +25,7 @@ import imufusion
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from .crossval import judged_on
 from ..core.compat import check_baseline
 from ..core.errors import DatasetError, ModelFileError
 from ..core.limits import check_rate, GRAVITY_M_S2
@@ -32,7 +33,7 @@ from ..core.metrics import fused_errors, FusedErrors
 from ..core.modelfile import read_model_file, sample_rate
 from ..core.records import Sequence
 from ..core.rotation import from_gravity
-from ..core.schema import MAX_ACCEL_BIAS_M_S2, ModelMeta
+from ..core.schema import JUDGED, MAX_ACCEL_BIAS_M_S2, ModelMeta
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..runtime.fusion import fuse, FusionSettings, step_periods
@@ -193,16 +194,22 @@ def fit_accel_bias(seqs: list[Sequence], end: int) -> tuple[np.ndarray, int] | N
     return bias, len(read)
 
 
+FUSED = {'aoe_deg': 'aoe', 'tilt_deg': 'tilt'}  # a judged figure's FusedErrors field
+
+
 def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: float,
          kinds: dict[str, tuple[str, ...]],
-         accel_bias: tuple[float, float, float] | None = None) -> dict[str, Any]:
+         accel_bias: tuple[float, float, float] | None = None,
+         key: str = 'aoe_deg') -> dict[str, Any]:
     """
-    Choose every filter's settings for every gyro on the tails: the lowest mean 3-D AOE.
+    Choose every filter's settings for every gyro on the tails: the lowest mean ``key``.
 
     ``gyros`` maps a source (raw, calibrated, network) to its gyro on each tail;
     ``kinds`` the filters to tune for it; with ``accel_bias`` every setting is tried with
-    it removed from the accelerometer too. Returns, per source and filter, the chosen
-    filter, its figures (3-D, tilt, yaw; the per-axis error std) and every candidate's.
+    it removed from the accelerometer too; ``key`` the figure compared (``aoe_deg``, the
+    3-D AOE, or ``tilt_deg``, as :func:`~denoise_imu_ros.evaluation.crossval.judged_on`
+    says). Returns, per source and filter, the chosen filter, its figures (3-D, tilt,
+    yaw; the per-axis error std) and every candidate's (the compared figure).
     """
     report: dict[str, Any] = {}
     for source, per_tail in gyros.items():
@@ -212,11 +219,12 @@ def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: flo
                 errs = [score(seq, run(flt, g, seq.imu[:, 3:], rate_hz, seq.stamp_ns))
                         for seq, g in zip(tails, per_tail)]
                 figures[flt] = errs
-            mean = {f: float(np.mean([e.aoe for e in errs])) for f, errs in figures.items()}
+            mean = {f: float(np.mean([getattr(e, FUSED[key]) for e in errs]))
+                    for f, errs in figures.items()}
             best = min(mean, key=mean.get)
             errs = figures[best]
             report[f'{source} {kind}'] = dict(best.as_dict(), **{
-                'aoe_deg': mean[best],
+                'aoe_deg': float(np.mean([e.aoe for e in errs])),
                 'tilt_deg': float(np.mean([e.tilt for e in errs])),
                 'aoe_yaw_deg': float(np.mean([e.aoe_yaw for e in errs])),
                 'orientation_std_rad': np.sqrt(np.mean([e.std_rad ** 2 for e in errs],
@@ -277,8 +285,11 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
         print('accelerometer bias from the poses before the tails: ' + (
             'none usable' if fitted is None else
             f'{np.round(fitted[0], 4).tolist()} m/s^2 ({fitted[1]} samples)'), flush=True)
-    report = tune(tails, gyros, sample_rate(net), KINDS, bias)
-    return {'chosen_on': f'validation tails of {", ".join(names)} (from sample {start} on)',
+    key, why = judged_on(meta.recipe('heading_weight', 1.0), 'the choice')
+    report = tune(tails, gyros, sample_rate(net), KINDS, bias, key)
+    return {'chosen_on': f'validation tails of {", ".join(names)} (from sample {start} on), '
+                         f'the lowest mean {JUDGED[key]}' + ('' if why is None else f' ({why})'),
+            'judged_on': key,
             'accel_bias': None if fitted is None else {
                 'm_s2': list(bias), 'samples': fitted[1],
                 'fitted_on': f'poses of {", ".join(names)} before sample {start}'},

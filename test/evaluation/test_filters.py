@@ -79,6 +79,14 @@ def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):
     offered = filters.tune([seq], {'raw': [biased]}, 200.0, {'raw': ('vqf',)}, (0.0, 0.3, 0.0))
     assert len(offered['raw vqf']['candidates']) == 8
     assert offered['raw vqf']['settings'] == chosen['settings']
+    # judged on the tilt (poses whose heading is not trusted): the yaw drift not compared
+    drifting = biased + [0.0, 0.0, 0.01]
+    by_aoe = filters.tune([seq], {'raw': [drifting]}, 200.0, {'raw': ('vqf',)})['raw vqf']
+    by_tilt = filters.tune([seq], {'raw': [drifting]}, 200.0, {'raw': ('vqf',)},
+                           key='tilt_deg')['raw vqf']
+    assert by_tilt['tilt_deg'] == min(by_tilt['candidates'].values())
+    assert by_aoe['aoe_deg'] == min(by_aoe['candidates'].values())
+    assert max(by_aoe['candidates'].values()) > max(by_tilt['candidates'].values()) + 0.1
 
 
 def _moving_sequence(bias: np.ndarray, n: int = 6000) -> Sequence:
