@@ -44,7 +44,7 @@ from ..core.metrics import (increment_residuals, RESIDUAL_BLOCK, sequence_errors
 from ..core.modelfile import code_version
 from ..core.records import Sequence
 from ..data import envelope, rest_bias
-from ..data.load import load_sequence
+from ..data.load import load_imu, load_sequence
 
 RANK_SEED_STRIDE = 7919  # data-parallel process r draws its dropout masks from seed + r * this
 
@@ -113,19 +113,22 @@ def without_turn_on_bias(cfg: TrainConfig, seqs: list[Sequence]
     """
     With ``cfg.rest_bias``: every sequence's gyro less its causal turn-on bias estimate.
 
-    The estimate starts from a prior, the mean rest bias of the training sequences that
+    The estimate starts from a prior, the mean rest bias of the training recordings that
     are ever still: a recording that starts moving (and a robot that does) is corrected
-    with it until its first stillness, in training as online. The bias clip (the largest
-    bias, and the slowest steady turn taken for motion) is VQF's 2 deg/s, or twice the
-    largest training rest bias where that is more (found with a wide clip). Returns
-    the settings the model file records, None without ``cfg.rest_bias``.
+    with it until its first stillness, in training as online. The prior is measured on
+    each recording's whole IMU stream, not only where it has poses: a VIO's or a SLAM's
+    trajectory starts after its initialisation, and the stillness before (the same
+    power-on) measures the bias best. The bias clip (the largest bias, and the slowest
+    steady turn taken for motion) is VQF's 2 deg/s, or twice the largest training rest
+    bias where that is more (found with a wide clip). Returns the settings the model file
+    records, None without ``cfg.rest_bias``.
     """
     if not cfg.rest_bias:
         return seqs, None
     rate = float(np.median([s.rate_hz for s in seqs]))
     settings = rest_bias.RestBiasSettings()
     prior, _ = rest_bias.nominal_bias(
-        (s.imu for s in seqs), rate,
+        (load_imu(Path(cfg.data) / name, cfg.imu_topic).imu for name in cfg.sequences), rate,
         dataclasses.replace(settings, bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S))
     if prior is not None:
         clip = max(settings.bias_clip_deg_s, 2 * math.degrees(max(map(abs, prior))))

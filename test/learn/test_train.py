@@ -7,7 +7,7 @@ from pathlib import Path
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError, TrainingError
-from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.data.load import load_imu, load_sequence
 from denoise_imu_ros.learn import train as train_module
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.config import load_config, machine_share
@@ -343,6 +343,29 @@ def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path, capsys, monkeypa
     assert capsys.readouterr().err.strip() == 'denoise-imu train: interrupted'
 
 
+def test_the_prior_is_measured_before_the_poses_start_too(euroc, tmp_path):
+    """A trajectory that starts after the still start (a VIO's initialisation): same prior."""
+    from denoise_imu_ros.data import rest_bias
+    mav = tmp_path / 'MH_01_easy' / 'mav0'
+    (mav / 'state_groundtruth_estimate0').mkdir(parents=True)
+    (mav / 'imu0').symlink_to(euroc / 'MH_01_easy' / 'mav0' / 'imu0')
+    lines = (euroc / 'MH_01_easy' / 'mav0' / 'state_groundtruth_estimate0' / 'data.csv'
+             ).read_text().splitlines(keepends=True)
+    late = int(lines[1].split(',')[0]) + 40 * 10 ** 9  # poses from 40 s in, moving
+    (mav / 'state_groundtruth_estimate0' / 'data.csv').write_text(''.join(
+        [lines[0]] + [ln for ln in lines[1:] if int(ln.split(',')[0]) >= late]))
+    cfg = _short(euroc, rest_bias=True, sequences=['MH_01_easy'])
+    whole = train_module.without_turn_on_bias(cfg, train_module.load_sequences(cfg))[1]
+    cut = dataclasses.replace(cfg, data=str(tmp_path))
+    seqs = train_module.load_sequences(cut)
+    assert len(seqs[0].imu) < len(load_imu(euroc / 'MH_01_easy').imu) - 40 * 190
+    assert train_module.without_turn_on_bias(cut, seqs)[1] == whole
+    wide = dataclasses.replace(rest_bias.RestBiasSettings(),
+                               bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S)
+    # from the samples with poses alone it would differ
+    assert rest_bias.nominal_bias([seqs[0].imu], 200.0, wide)[0] != whole.prior_rad_s
+
+
 def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc, tmp_path):
     from denoise_imu_ros.data import rest_bias
     cfg = _short(euroc, rest_bias=True, steps=12, val_every=12, swa_start=0, select='final')
@@ -351,7 +374,8 @@ def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc
     wide = dataclasses.replace(rest_bias.RestBiasSettings(),
                                bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S)
     rate = float(np.median([s.rate_hz for s in raw]))  # the model file's rate
-    prior, still = rest_bias.nominal_bias([s.imu for s in raw], rate, wide)
+    prior, still = rest_bias.nominal_bias(
+        [load_imu(euroc / name).imu for name in cfg.sequences], rate, wide)
     assert still >= 1 and settings.prior_rad_s == prior
     # EuRoC's ADIS16448 has a 4.6 deg/s turn-on bias about z: the clip follows it
     assert settings.bias_clip_deg_s == pytest.approx(2 * np.degrees(np.abs(prior).max()))
