@@ -20,7 +20,7 @@ from typing import Any, Callable
 from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
 
-__all__ = ['BiasTracking', 'Fusion', 'FusionSettings', 'InputEnvelope', 'JUDGED',
+__all__ = ['BiasTracking', 'Fusion', 'FusionSettings', 'InputEnvelope', 'JUDGED', 'judged_on',
            'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'parse_meta', 'REST_ONLY', 'RestBiasSettings',
            'Validation', 'Verdict']
 
@@ -28,6 +28,23 @@ REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on
 MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
 DEPLOY_CHOICES = ('network', 'calibration', REST_ONLY, 'none')
 JUDGED = {'aoe_deg': 'AOE', 'tilt_deg': 'tilt error'}  # figures a verdict compares, named
+
+
+def judged_on(heading_weight: float, who: str = 'the verdict') -> tuple[str, str | None]:
+    """
+    Return the figure ``who`` compares (a key of JUDGED) and, if not the AOE, why.
+
+    A recipe that leaves the poses' heading out of its loss or lowers its weight
+    (``heading_weight`` below 1; ``init-recipe`` writes 0 for a VIO's) does not trust
+    their rotation about the vertical: over a whole held-out recording the AOE against
+    them is then mostly their own heading drift, which a model that learnt less of it
+    cannot share. Their tilt, which gravity holds, still judges.
+    """
+    if heading_weight >= 1:
+        return 'aoe_deg', None
+    return 'tilt_deg', (f"the recipe does not trust the poses' heading (heading_weight "
+                        f'{heading_weight:g}), so neither does {who}: the heading is '
+                        'not judged')
 
 
 def _number(v: Any) -> bool:
@@ -249,6 +266,12 @@ class ModelMeta:
     def recipe(self, key: str, default: Any = None) -> Any:
         """Return one entry of the training recipe, ``default`` where it has none."""
         return self.train_config.get(key, default)
+
+    @property
+    def heading_weight(self) -> float:
+        """Return the recipe's ``heading_weight``: 1 (the heading taught) where it has none."""
+        weight = self.recipe('heading_weight', 1.0)
+        return float(weight) if _number(weight) else 1.0
 
 
 def _fail(where: str, key: str, value: Any, what: str) -> ModelFileError:

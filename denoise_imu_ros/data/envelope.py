@@ -11,7 +11,8 @@ norm from gravity). Wherever a sample of the receptive field since the last rese
 outside it, the output is the model's input gyro plus a constant: the model's mean
 correction over its training recordings, or nothing where the turn-on bias is removed
 before the model (its input is then the gyro less that bias, the practitioner's
-baseline). It comes last, after the output's bias tracking, whose tracker is fed the
+baseline). It comes after the output's bias tracking (and before the drop of a
+heading-less model's correction about the vertical), whose tracker is fed the
 model's output throughout; after each stretch where the receptive field turned faster
 than the envelope its estimate and covariance are restored to those from before it: a
 network's output beyond the rates it was trained on is off by more than a bias, and a
@@ -155,13 +156,13 @@ def finished(loaded: Any, output: np.ndarray, fed: np.ndarray, rest: str = 'mode
     """
     Return :func:`finish` with a model file's tracking, envelope and vertical.
 
-    ``rest`` as the node's ``rest_bias`` (tracking off with it), ``guard`` as its
-    ``envelope_guard`` (:func:`resolve`); the vertical as the model file says
-    (:func:`~denoise_imu_ros.data.vertical.drops_vertical`).
+    ``rest`` as the node's ``rest_bias`` (tracking off with it, and the drop of the
+    correction about the vertical: :func:`~denoise_imu_ros.data.vertical.drops_vertical`),
+    ``guard`` as its ``envelope_guard`` (:func:`resolve`).
     """
     return finish(output, fed, sample_rate(loaded), tracking(loaded.meta, rest),
                   resolve(loaded.meta, guard), loaded.config.receptive_field,
-                  drops_vertical(loaded.meta))
+                  drops_vertical(loaded.meta, rest))
 
 
 class Guard:

@@ -11,7 +11,8 @@ output keeps only the part of its correction (output less input gyro: the learnt
 correction and the tracked bias) orthogonal to the vertical, the vertical in the body
 frame from VQF (its defaults, no bias estimation) run on the model's output up to the
 sample before: causal, the tilt any 6-D filter gives. About the vertical the output is
-the model's input, the gyro less its turn-on bias where the model removes one.
+the model's input, the gyro less its turn-on bias (:func:`drops_vertical`: only a model
+fed that).
 
 The poses' heading could not have taught it either: on EuRoC's training recordings
 VINS-Mono's yaw increments are 3 to 8 times further from the motion capture's than those
@@ -29,15 +30,26 @@ from typing import Any
 import numpy as np
 from vqf import VQF
 
+from .rest_bias import resolve
+from ..core.schema import ModelMeta, REST_ONLY
+
 __all__ = ['drops_vertical', 'drop_vertical', 'up_in_body', 'Vertical']
 
 TAU_ACC_S = 3.0  # VQF's own default accelerometer time constant
 
 
-def drops_vertical(meta: Any) -> bool:
-    """Whether a model file's correction about the vertical is dropped (heading weight 0)."""
-    weight = meta.recipe('heading_weight', 1.0)
-    return isinstance(weight, (int, float)) and not isinstance(weight, bool) and weight == 0
+def drops_vertical(meta: ModelMeta, rest: str = 'model') -> bool:
+    """
+    Whether a model's correction about the vertical is dropped, fed as ``rest`` says.
+
+    Where its recipe left the heading out (``heading_weight: 0``) and it is fed the gyro
+    less its turn-on bias (``rest`` as :func:`~denoise_imu_ros.data.rest_bias.resolve`):
+    only then is what it leaves about the vertical the practitioner's baseline. Fed the
+    raw gyro, the output would keep the whole turn-on bias about the vertical, so the
+    model's own correction is kept. A rest-only model corrects nothing to drop.
+    """
+    return (meta.heading_weight == 0 and meta.kind != REST_ONLY
+            and resolve(meta, rest) is not None)
 
 
 def _filter(rate_hz: float) -> VQF:

@@ -18,8 +18,8 @@ for the calibration, is the candidate of lowest mean AOE over every held-out rec
 recordings choose, so that no figure was picked on itself.
 
 Both compare the AOE, or the tilt error alone where the recipe does not trust the poses'
-heading (:func:`judged_on`); then neither deploys nor chooses what ruins the heading
-beyond the poses' drift (:func:`heading_off`).
+heading (:func:`~denoise_imu_ros.core.schema.judged_on`); then neither deploys nor
+chooses what ruins the heading beyond the poses' drift (:func:`heading_off`).
 """
 
 from __future__ import annotations
@@ -37,7 +37,8 @@ from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..core.modelfile import sample_rate
-from ..core.schema import BiasTracking, InputEnvelope, JUDGED, ModelMeta, parse_meta
+from ..core.schema import (BiasTracking, InputEnvelope, JUDGED, judged_on, ModelMeta,
+                           parse_meta)
 from ..data import envelope, rest_bias, vertical
 from ..data.load import load_sequence
 from ..learn import parallel
@@ -63,23 +64,6 @@ def tracking_label(settings: BiasTracking | None) -> str:
 
 CANDIDATES = {tracking_label(t): t for t in (None, *TRACKING_GRID)}  # label -> settings
 HEADING_GUARD = 2.0  # judged on the tilt: a heading this many times the rest bias's is off
-
-
-def judged_on(heading_weight: float, who: str = 'the verdict') -> tuple[str, str | None]:
-    """
-    Return the figure ``who`` compares (a key of JUDGED) and, if not the AOE, why.
-
-    A recipe that leaves the poses' heading out of its loss or lowers its weight
-    (``heading_weight`` below 1; ``init-recipe`` writes 0 for a VIO's) does not trust
-    their rotation about the vertical: over a whole held-out recording the AOE against
-    them is then mostly their own heading drift, which a model that learnt less of it
-    cannot share. Their tilt, which gravity holds, still judges.
-    """
-    if heading_weight >= 1:
-        return 'aoe_deg', None
-    return 'tilt_deg', (f"the recipe does not trust the poses' heading (heading_weight "
-                        f'{heading_weight:g}), so neither does {who}: the heading is '
-                        'not judged')
 
 
 def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:

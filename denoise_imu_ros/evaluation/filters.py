@@ -25,7 +25,6 @@ import imufusion
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .crossval import judged_on
 from ..core.compat import check_baseline
 from ..core.errors import DatasetError, ModelFileError
 from ..core.limits import check_rate, GRAVITY_M_S2
@@ -33,7 +32,7 @@ from ..core.metrics import fused_errors, FusedErrors
 from ..core.modelfile import read_model_file, sample_rate
 from ..core.records import Sequence
 from ..core.rotation import from_gravity
-from ..core.schema import JUDGED, MAX_ACCEL_BIAS_M_S2, ModelMeta
+from ..core.schema import JUDGED, judged_on, MAX_ACCEL_BIAS_M_S2, ModelMeta
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
 from ..runtime.fusion import fuse, FusionSettings, step_periods
@@ -42,6 +41,7 @@ TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerom
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
 MADGWICK_GAINS = (0.001, 0.003, 0.01, 0.033, 0.1, 0.3)     # ahrs's default: 0.033
 NO_BIAS = (0.0, 0.0, 0.0)
+FUSED = {'aoe_deg': 'aoe', 'tilt_deg': 'tilt'}  # a judged figure's FusedErrors field
 
 
 @dataclass(frozen=True)
@@ -194,9 +194,6 @@ def fit_accel_bias(seqs: list[Sequence], end: int) -> tuple[np.ndarray, int] | N
     return bias, len(read)
 
 
-FUSED = {'aoe_deg': 'aoe', 'tilt_deg': 'tilt'}  # a judged figure's FusedErrors field
-
-
 def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: float,
          kinds: dict[str, tuple[str, ...]],
          accel_bias: tuple[float, float, float] | None = None,
@@ -207,7 +204,7 @@ def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: flo
     ``gyros`` maps a source (raw, calibrated, network) to its gyro on each tail;
     ``kinds`` the filters to tune for it; with ``accel_bias`` every setting is tried with
     it removed from the accelerometer too; ``key`` the figure compared (``aoe_deg``, the
-    3-D AOE, or ``tilt_deg``, as :func:`~denoise_imu_ros.evaluation.crossval.judged_on`
+    3-D AOE, or ``tilt_deg``, as :func:`~denoise_imu_ros.core.schema.judged_on`
     says). Returns, per source and filter, the chosen filter, its figures (3-D, tilt,
     yaw; the per-axis error std) and every candidate's (the compared figure).
     """
@@ -285,7 +282,7 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
         print('accelerometer bias from the poses before the tails: ' + (
             'none usable' if fitted is None else
             f'{np.round(fitted[0], 4).tolist()} m/s^2 ({fitted[1]} samples)'), flush=True)
-    key, why = judged_on(meta.recipe('heading_weight', 1.0), 'the choice')
+    key, why = judged_on(meta.heading_weight, 'the choice')
     report = tune(tails, gyros, sample_rate(net), KINDS, bias, key)
     return {'chosen_on': f'validation tails of {", ".join(names)} (from sample {start} on), '
                          f'the lowest mean {JUDGED[key]}' + ('' if why is None else f' ({why})'),

@@ -48,7 +48,7 @@ class LoadedModel(NamedTuple):
         return envelope.finished(self, correct_gyro(self.model, fed), fed)
 
     def untracked(self, imu: np.ndarray) -> np.ndarray:
-        """Return the model's output (N, 3) before its bias tracking and envelope."""
+        """Return the model's output (N, 3) before its tracking, envelope and vertical drop."""
         return correct_gyro(self.model, rest_bias.model_input(self, imu))
 
 

@@ -45,6 +45,7 @@ from ..core.modelfile import code_version
 from ..core.records import Sequence
 from ..data import envelope, rest_bias
 from ..data.load import load_imu, load_sequence
+from ..data.vertical import drop_vertical
 
 RANK_SEED_STRIDE = 7919  # data-parallel process r draws its dropout masks from seed + r * this
 
@@ -117,8 +118,8 @@ def without_turn_on_bias(cfg: TrainConfig, seqs: list[Sequence]
     are ever still: a recording that starts moving (and a robot that does) is corrected
     with it until its first stillness, in training as online. The prior is measured on
     each recording's whole IMU stream, not only where it has poses: a VIO's or a SLAM's
-    trajectory starts after its initialisation, and the stillness before (the same
-    power-on) measures the bias best. The bias clip (the largest bias, and the slowest
+    trajectory starts after its initialisation, and stillness outside the poses is
+    still the same power-on's. The bias clip (the largest bias, and the slowest
     steady turn taken for motion) is VQF's 2 deg/s, or twice the largest training rest
     bias where that is more (found with a wide clip). Returns the settings the model file
     records, None without ``cfg.rest_bias``.
@@ -261,12 +262,15 @@ def build_optimiser(cfg: TrainConfig, model: GyroNet,
 
 @torch.no_grad()
 def validate(model: GyroNet, seqs: list[Sequence], start: int,
-             loss_cfg: LossConfig) -> dict[str, Any]:
+             loss_cfg: LossConfig, drop: bool = False) -> dict[str, Any]:
     """
     Loss, AOE and gyro residual on samples >= start; the network sees the whole past.
 
     Feeding the full sequence (not the tail alone) gives the tail's outputs their real
-    causal context, as the online node has.
+    causal context, as the online node has. With ``drop`` (a heading-less model fed the
+    gyro less its turn-on bias) the AOE and the residual are of its output as every path
+    ends it, less its correction about the vertical
+    (:func:`~denoise_imu_ros.data.vertical.drop_vertical`); the loss never sees that.
     """
     was_training = model.training
     model.eval()
@@ -286,7 +290,7 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
             omega[None, sl], torch.tensor(s.dt[sl])[None],
             torch.tensor(s.gt_quat[start:start + n + 1])[None],
             torch.tensor(s.gt_valid[start:start + n + 1])[None], tail_cfg)))
-        w = omega.numpy()[start:]
+        w = (drop_vertical(omega.numpy(), s.imu, s.rate_hz) if drop else omega.numpy())[start:]
         aoes[s.name] = sequence_errors(s.tail(start), w, distances=())[1].aoe
         res, duration = increment_residuals(s.gt_quat[start:], s.gt_valid[start:], w,
                                             s.dt[start:], RESIDUAL_BLOCK)
@@ -456,6 +460,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     t_start = time.monotonic()
     _setup_process(cfg, rank)
     seqs, rest = without_turn_on_bias(cfg, seqs)
+    drop = cfg.heading_weight == 0 and rest is not None  # as the model file will say
     model, split, gen = build_model(cfg, seqs, rank)
     # each recording's own constant bias, in units of gyro_std (recording_bias)
     offsets = (torch.zeros(len(seqs), 3, device=cfg.device, requires_grad=True)
@@ -492,7 +497,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
             if swa is not None and step >= cfg.swa_start:
                 swa.update_parameters(model)
         if rank == 0 and (step % cfg.val_every == 0 or step == cfg.steps):
-            val = validate(model, seqs, val_start, loss_cfg)
+            val = validate(model, seqs, val_start, loss_cfg, drop)
             history.append({'step': step, 'train_loss': loss.item() if step else None,
                             'val_loss': val['loss'],
                             'val_aoe_mean_deg': val['aoe_mean_deg']})
@@ -513,7 +518,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     candidates = {'best_checkpoint': best,
                   'final': dict(val, step=cfg.steps, state=copy.deepcopy(model.state_dict()))}
     if swa is not None:
-        val = validate(swa.module, seqs, val_start, loss_cfg)
+        val = validate(swa.module, seqs, val_start, loss_cfg, drop)
         candidates['swa'] = dict(val, step=cfg.steps, state=swa.module.state_dict())
         bar.write(f'SWA from step {cfg.swa_start}: val {val["loss"]:.4g}  '
                   f'val AOE {val["aoe_mean_deg"]:.3f} deg')

@@ -146,8 +146,8 @@ class OnlineDenoiser:
         (:func:`denoise_imu_ros.data.rest_bias.resolve`) and the output's bias tracked
         (:func:`denoise_imu_ros.data.rest_bias.tracking`); ``guard_choice`` (``model``,
         ``off``) whether the output is guarded (:func:`denoise_imu_ros.data.envelope.resolve`).
-        The correction about the vertical is dropped where the model file says so
-        (:func:`denoise_imu_ros.data.vertical.drops_vertical`).
+        The correction about the vertical is dropped where the model file and
+        ``rest_choice`` say so (:func:`denoise_imu_ros.data.vertical.drops_vertical`).
         """
         rate = sample_rate(model)
         if fusion is not None:
@@ -161,7 +161,7 @@ class OnlineDenoiser:
                    fusion=None if fusion is None else GravityFilter(rate, fusion),
                    rest=None if settings is None else rest_bias.RestBias(settings, rate),
                    track=None if track is None else rest_bias.BiasTracker(track, rate),
-                   vertical=Vertical(rate) if drops_vertical(model.meta) else None,
+                   vertical=Vertical(rate) if drops_vertical(model.meta, rest_choice) else None,
                    **options)
 
     def _count_input_periods(self, interval_ns: int) -> None:

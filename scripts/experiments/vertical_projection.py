@@ -3,15 +3,15 @@
 """
 A model taught without its poses' heading, with and without its correction about the vertical.
 
-The choice :mod:`denoise_imu_ros.data.vertical` makes for every model trained with
-``heading_weight: 0``, measured: the model's gyro as every path ends it (tracked, guarded,
-its correction about the vertical dropped) against the same with that correction kept,
-and the gyro less its turn-on bias. Open loop AOE 3-D / yaw / tilt and VQF's (defaults)
-AOE 3-D / tilt, degrees, per recording and their mean, from ``--start`` on (the training
-recordings' validation tails: ``tail``, the model's ``training_span``; a test sequence:
-0, the default), against the
-recordings' own poses or, with ``--poses``, a VIO's or a SLAM's trajectory files (aligned
-as the recipe aligns them).
+The choice :mod:`denoise_imu_ros.data.vertical` makes for a model trained with
+``heading_weight: 0`` and fed the gyro less its turn-on bias, measured: the model's gyro
+as every path ends it (tracked, guarded, its correction about the vertical dropped)
+against the same with that correction kept, and the gyro less its turn-on bias. Open loop
+AOE 3-D / yaw / tilt and VQF's (defaults) AOE 3-D / tilt, degrees, per recording and
+their mean, from ``--start`` on (the training recordings' validation tails: ``tail``, the
+model's ``training_span``; a test sequence: 0, the default), against the recordings' own
+poses or, with ``--poses``, a VIO's or a SLAM's trajectory files (aligned as the model's
+recipe aligns them).
 Usage: .venv/bin/python scripts/experiments/vertical_projection.py MODEL DATA REC...
 [--start N|tail] [--poses DIR]
 """
@@ -43,8 +43,9 @@ def main() -> None:
     start = loaded.meta.training_span if args.start == 'tail' else int(args.start)
     figures: dict[str, list[tuple[float, ...]]] = {}
     for name in args.recordings:
+        align = loaded.meta.recipe('align', 'auto') if args.poses else 'none'
         seq = load_sequence(Path(args.data) / name, min_samples=field, rate_hz=rate,
-                            poses=args.poses, align_poses='auto' if args.poses else 'none')
+                            poses=args.poses, align_poses=align)
         fed = rest_bias.model_input(loaded, seq.imu)
         output = loaded.untracked(seq.imu)
         rows = {'rest bias': rest_bias.baseline_gyro(loaded, seq.imu)}

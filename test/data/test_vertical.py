@@ -3,12 +3,13 @@
 """A model taught without its poses' heading: its correction about the vertical dropped."""
 
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
-from denoise_imu_ros.core.schema import parse_meta
+from denoise_imu_ros.core.schema import parse_meta, REST_ONLY, RestBiasSettings
 from denoise_imu_ros.data.envelope import finish
 from denoise_imu_ros.data.vertical import drop_vertical, drops_vertical, up_in_body, Vertical
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from vqf import VQF
 
 RATE = 200.0
 
@@ -67,6 +68,20 @@ def test_it_is_causal_and_leaves_the_input_gyro_alone():
     assert np.abs(out - output).max() > 1e-3  # the correction had a vertical part
 
 
+def test_sample_k_is_projected_on_the_vertical_of_the_outputs_before_it():
+    fed, output = _recording(600, 4)
+    out = drop_vertical(output, fed, RATE)
+    moved = output.copy()
+    delta = np.array([0.03, -0.02, 0.05])
+    moved[400] += delta  # the vertical at 400 comes from the outputs up to 399
+    shifted = np.vstack([np.zeros(3), output[:-1]])
+    wxyz = VQF(1.0 / RATE, motionBiasEstEnabled=False, restBiasEstEnabled=False).updateBatch(
+        shifted, np.ascontiguousarray(fed[:, 3:]))['quat6D'][400]
+    up = Rotation.from_quat(np.roll(wxyz, -1)).inv().apply([0.0, 0.0, 1.0])
+    expected = out[400] + delta - (delta @ up) * up
+    np.testing.assert_allclose(drop_vertical(moved, fed, RATE)[400], expected, atol=1e-12)
+
+
 def test_finish_drops_the_vertical_last_and_only_when_asked():
     fed, output = _recording(800, 3)
     kept = finish(output, fed, RATE, None, None, 1)
@@ -80,4 +95,15 @@ def test_finish_drops_the_vertical_last_and_only_when_asked():
                                              ('0', False)])
 def test_a_model_drops_it_where_its_recipe_left_the_heading_out(weight, dropped):
     config = {} if weight is None else {'heading_weight': weight}
-    assert drops_vertical(parse_meta({'train_config': config}, 'm')) is dropped
+    meta = parse_meta({'train_config': config, 'rest_bias': RestBiasSettings().to_dict()}, 'm')
+    assert drops_vertical(meta) is dropped
+
+
+def test_only_a_model_fed_the_gyro_less_its_turn_on_bias_drops_it():
+    """Fed the raw gyro, the output would keep the whole turn-on bias about the vertical."""
+    heading_0 = {'train_config': {'heading_weight': 0.0}}
+    rest = {'rest_bias': RestBiasSettings().to_dict()}
+    assert not drops_vertical(parse_meta(heading_0, 'm'))
+    assert drops_vertical(parse_meta(heading_0, 'm'), 'on')
+    assert not drops_vertical(parse_meta(dict(heading_0, **rest), 'm'), 'off')
+    assert not drops_vertical(parse_meta(dict(heading_0, **rest, kind=REST_ONLY), 'm'))

@@ -6,9 +6,8 @@ import json
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import TrainingError
-from denoise_imu_ros.core.schema import parse_meta
-from denoise_imu_ros.evaluation.crossval import (
-    attach_mismatches, crossval, folds, judged_on, summarize)
+from denoise_imu_ros.core.schema import judged_on, parse_meta
+from denoise_imu_ros.evaluation.crossval import attach_mismatches, crossval, folds, summarize
 from denoise_imu_ros.evaluation.reports import crossval_table
 from denoise_imu_ros.learn.checkpoint import load_model
 from helpers import write_asl

@@ -105,6 +105,25 @@ def test_a_network_that_diverged_on_its_validation_tails_is_one_line(tmp_path):
         train_module.validate(model, [seq], 1000, LossConfig())
 
 
+def test_a_heading_less_model_is_validated_as_every_path_ends_it():
+    """Its AOE on the tails is of its output less its correction about the vertical."""
+    from denoise_imu_ros.core.metrics import sequence_errors
+    from denoise_imu_ros.data.vertical import drop_vertical
+    from denoise_imu_ros.learn.loss import LossConfig
+    from denoise_imu_ros.learn.model import correct_gyro
+    from helpers import SAMPLE, untrained_model
+    seq = load_sequence(SAMPLE)
+    model = untrained_model()
+    kept = train_module.validate(model, [seq], 9000, LossConfig())
+    dropped = train_module.validate(model, [seq], 9000, LossConfig(), drop=True)
+    assert dropped['loss'] == kept['loss']  # the loss never sees the vertical
+    omega = correct_gyro(model, seq.imu).astype(np.float64)
+    expected = sequence_errors(seq.tail(9000), drop_vertical(omega, seq.imu, seq.rate_hz)[9000:],
+                               distances=())[1].aoe
+    assert dropped['aoe_mean_deg'] == pytest.approx(expected, abs=1e-6)
+    assert abs(dropped['aoe_mean_deg'] - kept['aoe_mean_deg']) > 1e-3
+
+
 def test_calibration_baseline_trains_from_the_same_command(euroc, tmp_path):
     cfg = yaml.safe_load(CONFIG.read_text())
     cfg.update(sequences=['MH_01_easy'], window=1024, steps=6, val_every=6, swa_start=3)

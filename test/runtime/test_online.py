@@ -85,14 +85,18 @@ def test_with_bias_tracking_online_equals_both_offline_engines(seq, tmp_path):
 
 
 def test_taught_without_the_heading_online_equals_both_offline_engines(seq, tmp_path):
-    """The correction about the vertical dropped per sample as offline, again after a reset."""
+    """The correction about the vertical dropped (after tracking and guard) as offline."""
     from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.data.envelope import excursion
     from denoise_imu_ros.data.rest_bias import RestBiasSettings
     from denoise_imu_ros.evaluation.correct import corrected_gyro
     from helpers import write_untrained_model
     n, cut = 2000, 1200
+    gyro_norm, accel_offset = excursion(seq.imu[:n])
     meta = {'sample_rate_hz': 200.0, 'rest_bias': RestBiasSettings().to_dict(),
-            'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0}}
+            'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0},
+            'input_envelope': {'gyro_rad_s': float(np.percentile(gyro_norm, 95)),
+                               'accel_offset_m_s2': float(accel_offset.max()) + 1.0}}
     files = {w: read_model_file(write_untrained_model(tmp_path / f'm{w}.safetensors', dict(
         meta, train_config={'heading_weight': w}))) for w in (0.0, 1.0)}
     denoiser = OnlineDenoiser.from_model_file(files[0.0])
@@ -110,6 +114,7 @@ def test_taught_without_the_heading_online_equals_both_offline_engines(seq, tmp_
         np.testing.assert_allclose(online, offline, atol=1e-6)
     kept = corrected_gyro(files[1.0], imu[:cut], 'streaming')
     assert np.abs(online[:cut] - kept).max() > 1e-4  # the same network, its vertical kept
+    assert 0 < denoiser.guard.guarded < n  # the guard acted on some samples too
 
 
 def test_the_start_attitude_levels_the_accelerometer():
