@@ -166,6 +166,26 @@ def test_tune_fusion_says_what_the_model_file_lacks_and_asks_for_data_only_when_
         assert 'pass --data' not in err or not data
 
 
+@pytest.mark.parametrize('weight, key', [(1.0, 'aoe_deg'), (0.0, 'tilt_deg')])
+def test_tune_fusion_judges_as_the_recipe_trusts_the_heading(tmp_path, monkeypatch, weight,
+                                                             key):
+    from denoise_imu_ros.learn.checkpoint import save_model
+    from helpers import SAMPLE, untrained_model
+    calib = tmp_path / 'calib.safetensors'
+    save_model(calib, untrained_model(calibration_only=True), {'sample_rate_hz': 200.0})
+    model = tmp_path / 'm.safetensors'
+    save_model(model, untrained_model(), {
+        'sample_rate_hz': 200.0, 'train_sequences': [SAMPLE.name],
+        'run': {'data': str(SAMPLE.parent)},
+        'train_config': {'window': 16000, 'heading_weight': weight}})
+    judged = []
+    monkeypatch.setattr(filters, 'tune', lambda *args, **kw: judged.append(args[-1]) or {})
+    report = filters.tune_model(str(model), str(calib), progress=False)
+    assert judged == [key] and report['judged_on'] == key
+    assert report['chosen_on'].endswith(
+        'the lowest mean AOE' if key == 'aoe_deg' else "the heading is not judged)")
+
+
 def test_a_bad_stored_filter_is_one_short_line_naming_the_file():
     from denoise_imu_ros.core.errors import ModelFileError
     bad = {'filter': 'vqf', 'settings': {'tau_acc_s': 'long'},
