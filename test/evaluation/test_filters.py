@@ -183,7 +183,7 @@ def test_tune_fusion_judges_as_the_recipe_trusts_the_heading(tmp_path, monkeypat
     report = filters.tune_model(str(model), str(calib), progress=False)
     assert judged == [key] and report['judged_on'] == key
     assert report['chosen_on'].endswith(
-        'the lowest mean AOE' if key == 'aoe_deg' else "the heading is not judged)")
+        'the lowest mean AOE' if key == 'aoe_deg' else 'the heading is not judged)')
 
 
 def test_a_bad_stored_filter_is_one_short_line_naming_the_file():
