@@ -263,9 +263,13 @@ def test_align_auto_trains_on_poses_of_a_rotated_marker_on_a_late_clock(euroc, t
            * Rotation.from_quat(fixed.gt_quat[j])).magnitude()
     assert len(common) > 0.9 * len(original) and np.degrees(err[fixed.gt_valid[j]]).max() < 0.2
     cfg = _short(euroc, data=str(tmp_path), sequences=['moved'], steps=6, val_every=6,
-                 swa_start=3, align='auto')
+                 swa_start=3, align='auto', rest_bias=True)
     meta = train(cfg, progress=False).meta
     assert meta['train_config']['align'] == 'auto'
+    # the turn-on bias prior from the bag's whole IMU stream, as from the ASL folder's
+    prior = train_module.without_turn_on_bias(
+        _short(euroc, sequences=['V1_02_medium'], rest_bias=True), [original])[1].prior_rad_s
+    assert meta['rest_bias']['prior_rad_s'] == pytest.approx(prior, abs=1e-12)
     used = meta['pose_alignment']['moved']
     assert abs(used['time_offset_s'] - 0.023) < 1e-3
     assert len(used['imu_from_pose_rotation_xyzw']) == 4
