@@ -33,15 +33,21 @@ INPUT_STD = [0.3, 0.3, 0.3, 1.0, 1.0, 1.0]
 
 
 def write_asl(root: Path, n_imu=1000, imu_rate=200.0, gt_rate=200.0, gt_offset_s=0.0,
-              gt_dir='state_groundtruth_estimate0', yaw_rate=0.3, gt_hole=None, gyro_bias=0.0):
-    """Write a synthetic ASL folder: constant yaw rate (+ z bias), ground truth w,x,y,z."""
+              gt_dir='state_groundtruth_estimate0', yaw_rate=0.3, gt_hole=None, gyro_bias=0.0,
+              still_s=0.0):
+    """
+    Write a synthetic ASL folder: constant yaw rate (+ z bias), ground truth w,x,y,z.
+
+    ``still_s``: the IMU is still (its gyro the bias alone) for that long first.
+    """
     (root / 'mav0' / 'imu0').mkdir(parents=True)
     (root / 'mav0' / gt_dir).mkdir(parents=True)
     t_imu = T0 + np.round(np.arange(n_imu) / imu_rate * 1e9).astype(np.int64)
     with open(root / 'mav0' / 'imu0' / 'data.csv', 'w') as f:
         f.write('#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n')
         for t in t_imu:
-            f.write(f'{t},0.0,0.0,{yaw_rate + gyro_bias},0.0,0.0,9.81\n')
+            turn = yaw_rate if (t - T0) * 1e-9 >= still_s else 0.0
+            f.write(f'{t},0.0,0.0,{turn + gyro_bias},0.0,0.0,9.81\n')
     duration = n_imu / imu_rate
     t_gt = T0 + np.round((gt_offset_s + np.arange(int(duration * gt_rate)) / gt_rate)
                          * 1e9).astype(np.int64)
@@ -51,9 +57,25 @@ def write_asl(root: Path, n_imu=1000, imu_rate=200.0, gt_rate=200.0, gt_offset_s
     with open(root / 'mav0' / gt_dir / 'data.csv', 'w') as f:
         f.write('#timestamp, p_x, p_y, p_z, q_w, q_x, q_y, q_z\n')
         for t in t_gt:
-            yaw = yaw_rate * (t - T0) * 1e-9
+            yaw = yaw_rate * max((t - T0) * 1e-9 - still_s, 0.0)
             f.write(f'{t},0.1,0.2,0.3,{math.cos(yaw / 2)},0.0,0.0,{math.sin(yaw / 2)}\n')
     return root
+
+
+def write_late_trajectory(folder: Path, asl: Path, after_s: float) -> Path:
+    """
+    Write an ASL folder's poses as a VIO writes them (TUM), from ``after_s`` on.
+
+    A VIO's or a SLAM's trajectory starts after its initialisation, often after the still
+    start of the IMU stream.
+    """
+    from denoise_imu_ros.data.asl import read_asl
+    rec = read_asl(asl)
+    keep = rec.gt_stamp_ns >= rec.imu_stamp_ns[0] + int(after_s * 1e9)
+    folder.mkdir(parents=True, exist_ok=True)
+    np.savetxt(folder / f'{asl.name}.txt', np.column_stack(
+        [rec.gt_stamp_ns[keep] * 1e-9, rec.gt_pos[keep], rec.gt_quat[keep]]), fmt='%.9f')
+    return folder
 
 
 def break_line(path: Path, line: int, text: str) -> None:

@@ -14,7 +14,7 @@ scalar-last ``(x, y, z, w)`` and rotate body (IMU) vectors into the world frame.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -46,10 +46,28 @@ class Sequence:
     gt_pos: np.ndarray          # (N, 3) float64, linearly interpolated
     gt_valid: np.ndarray        # (N,) bool: False inside ground-truth holes
     pose_alignment: dict | None = None  # clock offset and frame rotation applied to poses
+    # (M, 6): the recording's IMU samples before the first here (before its poses start)
+    lead_in: np.ndarray = field(default_factory=lambda: np.empty((0, 6)))
 
     def __len__(self) -> int:
         """Return the number of IMU samples."""
         return len(self.stamp_ns)
+
+    @property
+    def stream(self) -> np.ndarray:
+        """
+        Return every IMU sample (M + N, 6) from the recording's first: what a node has seen.
+
+        A VIO's or a SLAM's trajectory starts after its initialisation, often after the
+        stillness a run starts with: the turn-on bias, and everything after it that holds
+        a state, must run from the stream's start, as online (:meth:`on_poses` keeps the
+        samples scored).
+        """
+        return np.vstack([self.lead_in, self.imu]) if len(self.lead_in) else self.imu
+
+    def on_poses(self, values: np.ndarray) -> np.ndarray:
+        """Return the rows of ``values`` (one per sample of :attr:`stream`) that are these."""
+        return values[len(self.lead_in):]
 
     @property
     def dt(self) -> np.ndarray:
@@ -57,10 +75,11 @@ class Sequence:
         return np.diff(self.stamp_ns).astype(np.float64) * 1e-9
 
     def tail(self, start: int, length: int | None = None) -> Sequence:
-        """Return the samples from index ``start`` on (``length`` of them when given)."""
+        """Return the samples from index ``start`` on (``length`` of them), those before led in."""
         part = slice(start, None if length is None else start + length)
         return Sequence(self.name, self.stamp_ns[part], self.imu[part], self.gt_quat[part],
-                        self.gt_pos[part], self.gt_valid[part], self.pose_alignment)
+                        self.gt_pos[part], self.gt_valid[part], self.pose_alignment,
+                        np.vstack([self.lead_in, self.imu[:start]]))
 
     @property
     def rate_hz(self) -> float:

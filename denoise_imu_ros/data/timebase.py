@@ -100,7 +100,11 @@ def poses_at(rec: Recording, stamps_ns: np.ndarray,
 
 def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
                     min_samples: int = 1) -> Sequence:
-    """Crop to the IMU/ground-truth overlap and put the ground truth onto the IMU stamps."""
+    """
+    Crop to the IMU/ground-truth overlap and put the ground truth onto the IMU stamps.
+
+    The IMU samples before the poses start are kept as the sequence's ``lead_in``.
+    """
     t_imu, t_gt = rec.imu_stamp_ns, rec.gt_stamp_ns
     if len(t_gt) < 2:
         raise DatasetError(f'{rec.source}: {len(t_gt)} ground-truth samples, need at least 2')
@@ -118,4 +122,4 @@ def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
                            f'truth, need at least {max(min_samples, 2)}')
     quat, pos, valid = poses_at(rec, t_imu[keep], max_gt_gap_s)
     return Sequence(name=rec.name, stamp_ns=t_imu[keep], imu=rec.imu[keep], gt_quat=quat,
-                    gt_pos=pos, gt_valid=valid)
+                    gt_pos=pos, gt_valid=valid, lead_in=rec.imu[t_imu < start])

@@ -170,8 +170,8 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                 min_samples=models[0][0].model.receptive_field,
                                 align_poses=recipe.align, poses=recipe.poses)
             raw_rows[name] = {'raw': score(seq, seq.imu[:, :3]), 'rest bias': score(
-                seq, rest_bias.baseline_gyro(models[0][0], seq.imu))}
-            fed = rest_bias.model_input(models[0][0], seq.imu)  # one recipe, one input
+                seq, seq.on_poses(rest_bias.baseline_gyro(models[0][0], seq.stream)))}
+            fed = rest_bias.model_input(models[0][0], seq.stream)  # one recipe, one input
             gyros = [{'calibrated': correct_gyro(calib.model, fed),
                       'network': correct_gyro(net.model, fed)} for net, calib in models]
             rate, drop = sample_rate(models[0][0]), vertical.drops_vertical(models[0][0].meta)
@@ -256,12 +256,12 @@ def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float, fed: np.
     """
     Return each tracking candidate's figures (label -> row -> score) of untracked gyros.
 
-    Each gyro tracked and guarded by its row's input envelope, and its correction about
-    the vertical dropped where the recipe's is (``drop``), as every path ends it
-    (:func:`~denoise_imu_ros.data.envelope.finish`).
+    Each gyro (over the recording's whole stream, as ``fed``) tracked and guarded by its
+    row's input envelope, and its correction about the vertical dropped where the recipe's
+    is (``drop``), as every path ends it (:func:`~denoise_imu_ros.data.envelope.finish`).
     """
-    return {label: {m: score(seq, envelope.finish(g, fed, rate_hz, t, bounds[m], fields[m],
-                                                  drop))
+    return {label: {m: score(seq, seq.on_poses(envelope.finish(g, fed, rate_hz, t, bounds[m],
+                                                               fields[m], drop)))
                     for m, g in gyros.items()} for label, t in CANDIDATES.items()}
 
 

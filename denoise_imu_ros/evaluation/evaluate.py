@@ -58,13 +58,14 @@ def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndar
     """
     Return the gyro of every method: raw, rest bias (less the turn-on bias), each model's.
 
-    Each model is fed as it runs online (its rest-bias settings, if it has them). The
-    rest-bias row: :func:`~denoise_imu_ros.data.rest_bias.baseline_gyro`.
+    Each model is fed as it runs online (its rest-bias settings, if it has them), from the
+    recording's first IMU sample (:attr:`~denoise_imu_ros.core.records.Sequence.stream`).
+    The rest-bias row: :func:`~denoise_imu_ros.data.rest_bias.baseline_gyro`.
     """
-    net = models['network']
+    net, stream = models['network'], seq.stream
     gyros = {'raw': seq.imu[:, :3],
-             'rest bias': rest_bias.baseline_gyro(net, seq.imu)}
-    gyros.update({m: lm.correct(seq.imu) for m, lm in models.items()})
+             'rest bias': seq.on_poses(rest_bias.baseline_gyro(net, stream))}
+    gyros.update({m: seq.on_poses(lm.correct(stream)) for m, lm in models.items()})
     return gyros
 
 

@@ -266,8 +266,8 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
         check_rate(seq.stamp_ns, sample_rate(net), f'{folder}/{name}')  # --data: its own?
         if len(seq) - start < 2:
             continue
-        whole = {'raw': seq.imu[:, :3], 'calibrated': calib.correct(seq.imu),
-                 'network': net.correct(seq.imu)}  # the tail's causal context
+        whole = {'raw': seq.imu[:, :3], 'calibrated': seq.on_poses(calib.correct(seq.stream)),
+                 'network': seq.on_poses(net.correct(seq.stream))}  # the tail's context
         tails.append(seq.tail(start))
         seqs.append(seq)
         for source, gyro in whole.items():

@@ -303,8 +303,8 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
         seqs.append(seq)
         gyros['raw'].append(seq.imu[:, :3])
         if calib is not None:
-            gyros['calibrated'].append(calib.correct(seq.imu))
-        gyros['corrected'].append(net.correct(seq.imu))
+            gyros['calibrated'].append(seq.on_poses(calib.correct(seq.stream)))
+        gyros['corrected'].append(seq.on_poses(net.correct(seq.stream)))
     gyros = {g: v for g, v in gyros.items() if v}
     std = np.sqrt(np.diag(np.reshape(gyro_covariance(net), (3, 3))))
     report = noise_report(seqs, gyros, std if std.any() else None)

@@ -119,7 +119,8 @@ def without_turn_on_bias(cfg: TrainConfig, seqs: list[Sequence]
     with it until its first stillness, in training as online. The prior is measured on
     each recording's whole IMU stream, not only where it has poses: a VIO's or a SLAM's
     trajectory starts after its initialisation, and stillness outside the poses is
-    still the same power-on's. The bias clip (the largest bias, and the slowest
+    still the same power-on's; and each recording's estimate runs from its first IMU
+    sample (its ``lead_in`` included), as online. The bias clip (the largest bias, and the slowest
     steady turn taken for motion) is VQF's 2 deg/s, or twice the largest training rest
     bias where that is more (found with a wide clip). Returns the settings the model file
     records, None without ``cfg.rest_bias``.
@@ -134,9 +135,13 @@ def without_turn_on_bias(cfg: TrainConfig, seqs: list[Sequence]
     if prior is not None:
         clip = max(settings.bias_clip_deg_s, 2 * math.degrees(max(map(abs, prior))))
         settings = dataclasses.replace(settings, prior_rad_s=prior, bias_clip_deg_s=clip)
-    seqs = [dataclasses.replace(s, imu=rest_bias.remove_rest_bias(s.imu, rate, settings))
-            for s in seqs]
-    return seqs, settings
+    return [_less(s, rest_bias.remove_rest_bias(s.stream, rate, settings)) for s in seqs], settings
+
+
+def _less(seq: Sequence, stream: np.ndarray) -> Sequence:
+    """Return ``seq`` with its IMU samples, lead-in included, replaced by ``stream``'s."""
+    lead = len(seq.lead_in)
+    return dataclasses.replace(seq, lead_in=stream[:lead], imu=stream[lead:])
 
 
 @dataclass
@@ -266,11 +271,12 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
     """
     Loss, AOE and gyro residual on samples >= start; the network sees the whole past.
 
-    Feeding the full sequence (not the tail alone) gives the tail's outputs their real
-    causal context, as the online node has. With ``drop`` (a heading-less model fed the
-    gyro less its turn-on bias) the AOE and the residual are of its output as every path
-    ends it, less its correction about the vertical
-    (:func:`~denoise_imu_ros.data.vertical.drop_vertical`); the loss never sees that.
+    Feeding the whole IMU stream (not the tail alone, and the samples before the poses
+    start too) gives the tail's outputs their real causal context, as the online node
+    has. With ``drop`` (a heading-less model fed the gyro less its turn-on bias) the AOE
+    and the residual are of its output as every path ends it, less its correction about
+    the vertical (:func:`~denoise_imu_ros.data.vertical.drop_vertical`); the loss never
+    sees that.
     """
     was_training = model.training
     model.eval()
@@ -278,7 +284,7 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
     tail_cfg = dataclasses.replace(loss_cfg, skip_blocks=0)
     device = next(model.parameters()).device
     for s in seqs:
-        imu = torch.tensor(s.imu, dtype=torch.float32, device=device)
+        imu = torch.tensor(s.stream, dtype=torch.float32, device=device)
         omega = model(imu[None])[0].double().cpu()
         if not torch.isfinite(omega).all():
             raise TrainingError(f'{s.name}: the network gives non-finite rates on its '
@@ -287,10 +293,11 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
         n = (len(s) - 1 - start) // loss_cfg.span * loss_cfg.span
         sl = slice(start, start + n)
         losses.append(float(increment_loss(
-            omega[None, sl], torch.tensor(s.dt[sl])[None],
+            s.on_poses(omega)[None, sl], torch.tensor(s.dt[sl])[None],
             torch.tensor(s.gt_quat[start:start + n + 1])[None],
             torch.tensor(s.gt_valid[start:start + n + 1])[None], tail_cfg)))
-        w = (drop_vertical(omega.numpy(), s.imu, s.rate_hz) if drop else omega.numpy())[start:]
+        w = s.on_poses(drop_vertical(omega.numpy(), s.stream, s.rate_hz) if drop
+                       else omega.numpy())[start:]
         aoes[s.name] = sequence_errors(s.tail(start), w, distances=())[1].aoe
         res, duration = increment_residuals(s.gt_quat[start:], s.gt_valid[start:], w,
                                             s.dt[start:], RESIDUAL_BLOCK)

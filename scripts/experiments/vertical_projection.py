@@ -46,13 +46,13 @@ def main() -> None:
         align = loaded.meta.recipe('align', 'auto') if args.poses else 'none'
         seq = load_sequence(Path(args.data) / name, min_samples=field, rate_hz=rate,
                             poses=args.poses, align_poses=align)
-        fed = rest_bias.model_input(loaded, seq.imu)
-        output = loaded.untracked(seq.imu)
-        rows = {'rest bias': rest_bias.baseline_gyro(loaded, seq.imu)}
+        fed = rest_bias.model_input(loaded, seq.stream)
+        output = loaded.untracked(seq.stream)
+        rows = {'rest bias': seq.on_poses(rest_bias.baseline_gyro(loaded, seq.stream))}
         for label, drop in (('vertical kept', False), ('as shipped', True)):
-            rows[label] = envelope.finish(
+            rows[label] = seq.on_poses(envelope.finish(
                 output, fed, rate, rest_bias.tracking(loaded.meta, 'model'),
-                loaded.meta.input_envelope, field, drop)
+                loaded.meta.input_envelope, field, drop))
         tail = seq.tail(start)
         for method, gyro in rows.items():
             open_loop = score(tail, gyro[start:])

@@ -47,7 +47,7 @@ def main(model: str, data: str, poses: str, names: list[str]) -> None:
         valid = np.zeros(len(mocap.stamp_ns), bool)
         valid[im] = vio.gt_valid[iv]
         valid &= mocap.gt_valid
-        gyro = baseline_gyro(loaded, mocap.imu)
+        gyro = mocap.on_poses(baseline_gyro(loaded, mocap.stream))
         rows = {'poses': Rotation.from_quat(quat),
                 'gyro': integrate(mocap.gt_quat[0], gyro[:len(mocap.dt)], mocap.dt)}
         truth = Rotation.from_quat(mocap.gt_quat)

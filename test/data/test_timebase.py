@@ -1,10 +1,11 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
-"""Poses onto the IMU's stamps: too sparse a pose stream is refused, not interpolated."""
+"""Poses onto the IMU's stamps: too sparse a stream refused, the IMU before them kept."""
 
 from denoise_imu_ros.core.errors import DatasetError
 from denoise_imu_ros.data.load import load_sequence
 from helpers import write_asl
+import numpy as np
 import pytest
 
 
@@ -15,3 +16,18 @@ def test_two_poses_45_s_apart_are_refused_and_one_a_second_is_taken(tmp_path):
         load_sequence(sparse)
     seq = load_sequence(write_asl(tmp_path / 'slow', n_imu=2000, gt_rate=1.0))
     assert seq.gt_valid.all()
+
+
+def test_the_imu_samples_before_the_poses_start_lead_into_the_sequence(tmp_path):
+    """A trajectory that starts late: the stream a node saw is kept, the scored part apart."""
+    from denoise_imu_ros.data.load import load_imu
+    from helpers import write_late_trajectory
+    asl = write_asl(tmp_path / 'rec', n_imu=2000, still_s=3.0)
+    late = load_sequence(asl, poses=write_late_trajectory(tmp_path / 'vio', asl, 4.0))
+    whole = load_imu(asl).imu
+    assert len(late.lead_in) == 800 and len(late) == 1200
+    assert np.array_equal(late.stream, whole) and np.array_equal(late.on_poses(whole), late.imu)
+    tail = late.tail(100, 50)  # what comes before a tail leads into it too
+    assert np.array_equal(tail.stream, whole[:950]) and np.array_equal(tail.imu, whole[900:950])
+    own = load_sequence(asl)  # its own poses, from the first sample: nothing before
+    assert len(own.lead_in) == 0 and own.stream is own.imu

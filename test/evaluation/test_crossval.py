@@ -371,3 +371,30 @@ def test_a_verdict_of_another_recipe_or_of_one_fold_is_not_attached(tmp_path, ca
                                          'train_config': {'steps': 1800, 'window': 2048,
                                                           'increments': [8, 16], 'seed': 3}},
                                         'm')) == []
+
+
+def test_held_out_poses_that_start_after_the_stillness_are_scored_from_the_first_sample(
+        tmp_path):
+    """A VIO's trajectories, each starting after its still start: the node's turn-on bias."""
+    from denoise_imu_ros.core.metrics import score
+    from denoise_imu_ros.data.load import load_sequence
+    from denoise_imu_ros.data.rest_bias import baseline_gyro
+    from helpers import write_late_trajectory
+    data, late = tmp_path / 'data', tmp_path / 'vio'
+    for i, bias in enumerate((0.010, 0.016)):
+        write_late_trajectory(late, write_asl(data / f'rec{i}', n_imu=3000, gyro_bias=bias,
+                                              yaw_rate=0.2 + 0.1 * i, still_s=3.0), 4.0)
+    recipe = {'dataset': 'synthetic', 'data': str(data), 'sequences': ['rec0', 'rec1'],
+              'window': 1024, 'steps': 10, 'val_every': 10, 'restart_period': 10,
+              'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1, 'rest_bias': True,
+              'poses': str(late)}
+    (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
+    report = crossval(tmp_path / 'r.yaml', out=tmp_path / 'cv', progress=False)
+    net = load_model(tmp_path / 'cv' / 'fold0' / 'network.safetensors')  # rec0 held out
+    seq = load_sequence(data / 'rec0', poses=late)
+    assert len(seq.lead_in) == 800
+    from_stream = score(seq, seq.on_poses(baseline_gyro(net, seq.stream)))['aoe_deg']
+    assert report['recordings']['rec0']['rest bias']['aoe_deg'] == pytest.approx(
+        from_stream, rel=1e-9)
+    # from the poses' start alone, the turn-on bias would be rec1's (the prior)
+    assert from_stream < 0.05 < score(seq, baseline_gyro(net, seq.imu))['aoe_deg']

@@ -164,3 +164,30 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
                  '--out', str(tmp_path / 'e_mocap'), '--no-plots']) == 0  # its own poses
     assert json.loads((tmp_path / 'e_mocap' / 'results.json').read_text())[
         'reference_noise_deg'] is None
+
+
+def test_poses_that_start_after_the_stillness_score_the_gyro_the_node_corrects(tmp_path):
+    """
+    A VIO's trajectory starts after its initialisation, the still start before it.
+
+    Every row is the gyro as it runs from the recording's first IMU sample (the turn-on
+    bias from the stillness, the tracker's state), scored where the poses are.
+    """
+    from denoise_imu_ros.core.schema import BiasTracking, RestBiasSettings
+    from denoise_imu_ros.data.load import load_sequence
+    from denoise_imu_ros.data.rest_bias import baseline_gyro
+    from denoise_imu_ros.evaluation.evaluate import gyros_of
+    from helpers import write_asl, write_late_trajectory, write_untrained_model
+    asl = write_asl(tmp_path / 'rec', n_imu=3000, yaw_rate=0.2, gyro_bias=0.01, still_s=3.0)
+    net = load_model(write_untrained_model(tmp_path / 'net.safetensors', {
+        'sample_rate_hz': 200.0, 'rest_bias': RestBiasSettings().to_dict(),
+        'bias_tracking': BiasTracking(0.05, 30.0).as_dict()}))
+    own = load_sequence(asl)
+    late = load_sequence(asl, poses=write_late_trajectory(tmp_path / 'vio', asl, 4.0))
+    k = len(late.lead_in)
+    whole, scored = gyros_of(own, {'network': net}), gyros_of(late, {'network': net})
+    for method, gyro in scored.items():
+        assert np.array_equal(gyro, whole[method][k:]), method
+    # the turn-on bias was found in the stillness before the poses: the still-start bias
+    assert np.abs(scored['rest bias'][:, 2] - 0.2).max() < 1e-3
+    assert np.abs(baseline_gyro(net, late.imu)[:, 2] - 0.2).max() > 5e-3  # from the poses on

@@ -366,8 +366,9 @@ def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path, capsys, monkeypa
     assert capsys.readouterr().err.strip() == 'denoise-imu train: interrupted'
 
 
-def test_the_prior_is_measured_before_the_poses_start_too(euroc, tmp_path):
-    """A trajectory that starts after the still start (a VIO's initialisation): same prior."""
+def test_the_prior_and_the_turn_on_bias_are_measured_before_the_poses_start_too(
+        euroc, tmp_path):
+    """A trajectory that starts after the still start (a VIO's initialisation): same input."""
     from denoise_imu_ros.data import rest_bias
     mav = tmp_path / 'MH_01_easy' / 'mav0'
     (mav / 'state_groundtruth_estimate0').mkdir(parents=True)
@@ -382,7 +383,10 @@ def test_the_prior_is_measured_before_the_poses_start_too(euroc, tmp_path):
     cut = dataclasses.replace(cfg, data=str(tmp_path))
     seqs = train_module.load_sequences(cut)
     assert len(seqs[0].imu) < len(load_imu(euroc / 'MH_01_easy').imu) - 40 * 190
-    assert train_module.without_turn_on_bias(cut, seqs)[1] == whole
+    fed, settings = train_module.without_turn_on_bias(cut, seqs)
+    assert settings == whole
+    own = train_module.without_turn_on_bias(cfg, train_module.load_sequences(cfg))[0][0]
+    assert np.array_equal(fed[0].stream, own.stream)  # the model's input from sample 0 on
     wide = dataclasses.replace(rest_bias.RestBiasSettings(),
                                bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S)
     # from the samples with poses alone it would differ
@@ -402,8 +406,10 @@ def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc
     assert still >= 1 and settings.prior_rad_s == prior
     # EuRoC's ADIS16448 has a 4.6 deg/s turn-on bias about z: the clip follows it
     assert settings.bias_clip_deg_s == pytest.approx(2 * np.degrees(np.abs(prior).max()))
-    for s, r in zip(seqs, raw):
-        assert np.array_equal(s.imu, rest_bias.remove_rest_bias(r.imu, rate, settings))
+    for s, r in zip(seqs, raw):  # the estimate runs from the first IMU sample, as online
+        stream = rest_bias.remove_rest_bias(r.stream, rate, settings)
+        assert len(r.lead_in) and np.array_equal(s.stream, stream)
+        assert np.array_equal(s.imu, r.on_poses(stream))
     assert train_module.without_turn_on_bias(dataclasses.replace(cfg, rest_bias=False), raw) == (
         raw, None)
     result = train(cfg, progress=False)
