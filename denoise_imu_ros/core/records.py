@@ -46,8 +46,9 @@ class Sequence:
     gt_pos: np.ndarray          # (N, 3) float64, linearly interpolated
     gt_valid: np.ndarray        # (N,) bool: False inside ground-truth holes
     pose_alignment: dict | None = None  # clock offset and frame rotation applied to poses
-    # (M, 6): the recording's IMU samples before the first here (before its poses start)
+    # (M, 6) and (M,): the recording's IMU samples before the first here (before its poses)
     lead_in: np.ndarray = field(default_factory=lambda: np.empty((0, 6)))
+    lead_in_stamp_ns: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))
 
     def __len__(self) -> int:
         """Return the number of IMU samples."""
@@ -65,6 +66,11 @@ class Sequence:
         """
         return np.vstack([self.lead_in, self.imu]) if len(self.lead_in) else self.imu
 
+    @property
+    def stream_stamp_ns(self) -> np.ndarray:
+        """Return the stamps (M + N,) of :attr:`stream`."""
+        return np.concatenate([self.lead_in_stamp_ns, self.stamp_ns])
+
     def on_poses(self, values: np.ndarray) -> np.ndarray:
         """Return the rows of ``values`` (one per sample of :attr:`stream`) that are these."""
         return values[len(self.lead_in):]
@@ -79,7 +85,8 @@ class Sequence:
         part = slice(start, None if length is None else start + length)
         return Sequence(self.name, self.stamp_ns[part], self.imu[part], self.gt_quat[part],
                         self.gt_pos[part], self.gt_valid[part], self.pose_alignment,
-                        np.vstack([self.lead_in, self.imu[:start]]))
+                        np.vstack([self.lead_in, self.imu[:start]]),
+                        np.concatenate([self.lead_in_stamp_ns, self.stamp_ns[:start]]))
 
     @property
     def rate_hz(self) -> float:

@@ -122,4 +122,5 @@ def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
                            f'truth, need at least {max(min_samples, 2)}')
     quat, pos, valid = poses_at(rec, t_imu[keep], max_gt_gap_s)
     return Sequence(name=rec.name, stamp_ns=t_imu[keep], imu=rec.imu[keep], gt_quat=quat,
-                    gt_pos=pos, gt_valid=valid, lead_in=rec.imu[t_imu < start])
+                    gt_pos=pos, gt_valid=valid, lead_in=rec.imu[t_imu < start],
+                    lead_in_stamp_ns=t_imu[t_imu < start])

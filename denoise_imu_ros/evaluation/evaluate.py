@@ -58,14 +58,14 @@ def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndar
     """
     Return the gyro of every method: raw, rest bias (less the turn-on bias), each model's.
 
-    Each model is fed as it runs online (its rest-bias settings, if it has them), from the
-    recording's first IMU sample (:attr:`~denoise_imu_ros.core.records.Sequence.stream`).
+    Over the recording's whole IMU stream
+    (:attr:`~denoise_imu_ros.core.records.Sequence.stream`, the samples before its poses
+    included), each model fed as it runs online (its rest-bias settings, if it has them).
     The rest-bias row: :func:`~denoise_imu_ros.data.rest_bias.baseline_gyro`.
     """
     net, stream = models['network'], seq.stream
-    gyros = {'raw': seq.imu[:, :3],
-             'rest bias': seq.on_poses(rest_bias.baseline_gyro(net, stream))}
-    gyros.update({m: seq.on_poses(lm.correct(stream)) for m, lm in models.items()})
+    gyros = {'raw': stream[:, :3], 'rest bias': rest_bias.baseline_gyro(net, stream)}
+    gyros.update({m: lm.correct(stream) for m, lm in models.items()})
     return gyros
 
 
@@ -160,7 +160,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
             raise OptionError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')
         if poses is not None:
             noise[name] = reference_noise_deg(seq)
-        gyros = {m: g[start_sample:] for m, g in gyros_of(seq, models).items()}
+        gyros = gyros_of(seq, models)
         seq = seq.tail(start_sample)
         results[name], fused[name], estimates, roe = _score(seq, gyros, rows)
         for method, errors in roe.items():
@@ -192,13 +192,15 @@ def _score(seq: Sequence, gyros: dict[str, np.ndarray],
     """
     Score one recording: open-loop figures per gyro, fused figures per filter row.
 
-    Return them, every method's orientation estimate (for its plot) and the open-loop
-    relative errors (for the ROE plot).
+    ``gyros`` over the whole stream; the filters run over it as the node's, from its first
+    sample, and both are scored where ``seq`` has poses. Return the figures, every
+    method's orientation estimate (for its plot) and the open-loop relative errors (for
+    the ROE plot).
     """
     results, fused, estimates, roe = {}, {}, {}, {}
     t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
     for method, gyro in gyros.items():
-        estimates[method], err = sequence_errors(seq, gyro)
+        estimates[method], err = sequence_errors(seq, seq.on_poses(gyro))
         tilt = error_components(estimates[method], Rotation.from_quat(seq.gt_quat))[1]
         results[method] = {
             'aoe_deg': err.aoe, 'aoe_yaw_deg': err.aoe_yaw, 'tilt_deg': err.tilt,
@@ -206,7 +208,8 @@ def _score(seq: Sequence, gyros: dict[str, np.ndarray],
             'roe_median_deg': {str(int(d)): v for d, v in err.roe_median().items()}}
         roe[method] = err.roe
     for method, (source, flt) in rows.items():
-        quat = run(flt, gyros[source], seq.imu[:, 3:], seq.rate_hz, seq.stamp_ns)
+        quat = seq.on_poses(run(flt, gyros[source], seq.stream[:, 3:], seq.rate_hz,
+                                seq.stream_stamp_ns))
         err = score(seq, quat)
         fused[method] = {
             'filter': flt.label, 'aoe_deg': err.aoe, 'tilt_deg': err.tilt,

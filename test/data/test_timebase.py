@@ -27,7 +27,9 @@ def test_the_imu_samples_before_the_poses_start_lead_into_the_sequence(tmp_path)
     whole = load_imu(asl).imu
     assert len(late.lead_in) == 800 and len(late) == 1200
     assert np.array_equal(late.stream, whole) and np.array_equal(late.on_poses(whole), late.imu)
+    assert np.array_equal(late.stream_stamp_ns, load_imu(asl).imu_stamp_ns)
     tail = late.tail(100, 50)  # what comes before a tail leads into it too
     assert np.array_equal(tail.stream, whole[:950]) and np.array_equal(tail.imu, whole[900:950])
+    assert np.array_equal(tail.stream_stamp_ns, late.stream_stamp_ns[:950])
     own = load_sequence(asl)  # its own poses, from the first sample: nothing before
     assert len(own.lead_in) == 0 and own.stream is own.imu

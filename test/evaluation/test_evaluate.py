@@ -11,6 +11,7 @@ from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
 from helpers import SAMPLE
 import numpy as np
+import pytest
 import torch
 
 SAMPLE_DIR = SAMPLE.parent
@@ -166,28 +167,33 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
         'reference_noise_deg'] is None
 
 
-def test_poses_that_start_after_the_stillness_score_the_gyro_the_node_corrects(tmp_path):
+def test_poses_that_start_after_the_stillness_score_what_the_node_publishes(tmp_path):
     """
     A VIO's trajectory starts after its initialisation, the still start before it.
 
-    Every row is the gyro as it runs from the recording's first IMU sample (the turn-on
-    bias from the stillness, the tracker's state), scored where the poses are.
+    Every row runs from the recording's first IMU sample (the turn-on bias from the
+    stillness, the tracker's state, the filters'), scored where the poses are: the figures
+    of its own poses from the same sample on.
     """
     from denoise_imu_ros.core.schema import BiasTracking, RestBiasSettings
     from denoise_imu_ros.data.load import load_sequence
-    from denoise_imu_ros.data.rest_bias import baseline_gyro
-    from denoise_imu_ros.evaluation.evaluate import gyros_of
     from helpers import write_asl, write_late_trajectory, write_untrained_model
     asl = write_asl(tmp_path / 'rec', n_imu=3000, yaw_rate=0.2, gyro_bias=0.01, still_s=3.0)
-    net = load_model(write_untrained_model(tmp_path / 'net.safetensors', {
+    net = write_untrained_model(tmp_path / 'net.safetensors', {
         'sample_rate_hz': 200.0, 'rest_bias': RestBiasSettings().to_dict(),
-        'bias_tracking': BiasTracking(0.05, 30.0).as_dict()}))
-    own = load_sequence(asl)
-    late = load_sequence(asl, poses=write_late_trajectory(tmp_path / 'vio', asl, 4.0))
-    k = len(late.lead_in)
-    whole, scored = gyros_of(own, {'network': net}), gyros_of(late, {'network': net})
-    for method, gyro in scored.items():
-        assert np.array_equal(gyro, whole[method][k:]), method
-    # the turn-on bias was found in the stillness before the poses: the still-start bias
-    assert np.abs(scored['rest bias'][:, 2] - 0.2).max() < 1e-3
-    assert np.abs(baseline_gyro(net, late.imu)[:, 2] - 0.2).max() > 5e-3  # from the poses on
+        'bias_tracking': BiasTracking(0.05, 30.0).as_dict()})
+    vio = write_late_trajectory(tmp_path / 'vio', asl, 4.0)
+    k = len(load_sequence(asl, poses=vio).lead_in)
+    assert k == 800
+    for name, extra in (('late', ['--poses', str(vio)]), ('own', ['--start-sample', str(k)])):
+        assert main(['eval', '--model', str(net), '--data', str(tmp_path), '--sequences', 'rec',
+                     '--out', str(tmp_path / name), '--no-plots', '--align', 'none', *extra]) == 0
+    late, own = (json.loads((tmp_path / n / 'results.json').read_text()) for n in ('late', 'own'))
+    for part in ('sequences', 'fused'):
+        for method, figures in own[part]['rec'].items():
+            for key in ('aoe_deg', 'tilt_deg'):
+                assert late[part]['rec'][method][key] == pytest.approx(
+                    figures[key], rel=1e-4, abs=1e-6), (part, method, key)
+    # the turn-on bias was found in the stillness before the poses: none left to drift
+    assert late['sequences']['rec']['rest bias']['aoe_deg'] < 0.05
+    assert late['sequences']['rec']['raw']['aoe_deg'] > 1.0
