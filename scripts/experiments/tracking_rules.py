@@ -16,10 +16,9 @@ Usage: .venv/bin/python scripts/experiments/tracking_rules.py REPORT...
 
 import json
 import sys
-from typing import Callable
 
 from denoise_imu_ros.core.modelfile import read_model_file
-from denoise_imu_ros.evaluation.crossval import tracking_label, TRACKING_GRID
+from denoise_imu_ros.evaluation.crossval import TRACKING_GRID, tracking_label
 import numpy as np
 
 Figures = dict[str, dict[str, float]]  # recording -> candidate label -> figure
@@ -43,9 +42,11 @@ def _rules(fig: Figures, names: list[str]) -> dict[str, str]:
     near = _neighbours()
     beat = [c for c in labels if c == 'none' or 2 * sum(
         fig[n][c] < fig[n]['none'] for n in names) > len(names)]
-    pick: Callable[[dict[str, float] | Callable], str] = lambda f: min(
-        labels, key=f if callable(f) else f.get)
-    return {'mean (crossval)': pick(mean),
+
+    def pick(figure) -> str:
+        return min(labels, key=figure)
+
+    return {'mean (crossval)': pick(mean.get),
             'median': pick(lambda c: np.median([fig[n][c] for n in names])),
             'grid neighbours': pick(lambda c: np.mean([mean[b] for b in near[c]])),
             'worst recording': pick(lambda c: max(fig[n][c] for n in names)),
