@@ -111,15 +111,18 @@ class BiasTracking:
     off its bias at rest, a network's constant error on an unseen recording) VQF
     estimates from the accelerometer's tilt corrections while moving and from the gyro
     while still; ``crossval`` chooses its two settings, or none, on recordings its folds
-    never trained on.
+    never trained on, each started at its ``sigma_motion_deg_s``.
     """
 
     sigma_motion_deg_s: float  # VQF's biasSigmaMotion: smaller trusts motion updates more
     forgetting_s: float        # VQF's biasForgettingTime: how long an estimate is kept
+    # VQF's biasSigmaInit, its certainty of the 0 it starts from; files without the key
+    # were chosen with VQF's default, 0.5 deg/s, and run with it
+    sigma_init_deg_s: float = 0.5
 
     def __post_init__(self) -> None:
         """Refuse settings VQF cannot run with (model files are user input)."""
-        for name in ('sigma_motion_deg_s', 'forgetting_s'):
+        for name in ('sigma_motion_deg_s', 'forgetting_s', 'sigma_init_deg_s'):
             value = getattr(self, name)
             if not (_number(value) and 0 < value < 1e6):
                 raise ValueError(f'{name} must be a positive number, not {value!r}')
@@ -402,7 +405,8 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         crossval=_verdict(raw, where),
         rest_bias=None if rest is None else RestBiasSettings.from_dict(rest, where),
         bias_tracking=_settings(raw, 'bias_tracking', where, lambda v: BiasTracking(
-            v.get('sigma_motion_deg_s'), v.get('forgetting_s'))),
+            v.get('sigma_motion_deg_s'), v.get('forgetting_s'),
+            v.get('sigma_init_deg_s', 0.5))),
         input_envelope=_settings(raw, 'input_envelope', where, lambda v: InputEnvelope(
             v.get('gyro_rad_s'), v.get('accel_offset_m_s2'),
             v.get('fallback_rad_s', (0.0, 0.0, 0.0)))),

@@ -85,7 +85,8 @@ def tracker(settings: BiasTracking, rate_hz: float) -> VQF:
     """Return a VQF that tracks a model output's bias at rest and in motion, from 0."""
     return VQF(1.0 / rate_hz, motionBiasEstEnabled=True, restBiasEstEnabled=True,
                biasSigmaMotion=settings.sigma_motion_deg_s,
-               biasForgettingTime=settings.forgetting_s)
+               biasForgettingTime=settings.forgetting_s,
+               biasSigmaInit=settings.sigma_init_deg_s)
 
 
 def tracking(meta: ModelMeta, choice: str) -> BiasTracking | None:
