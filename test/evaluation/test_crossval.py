@@ -195,7 +195,9 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     stored = load_model(model_file).meta.bias_tracking
     assert (stored is None) == (chosen is None)
     if chosen is not None:
-        assert stored.as_dict() == {k: chosen[k] for k in ('sigma_motion_deg_s', 'forgetting_s')}
+        assert stored.as_dict() == {k: chosen[k] for k in (
+            'sigma_motion_deg_s', 'forgetting_s', 'sigma_init_deg_s')}
+        assert stored.sigma_init_deg_s == stored.sigma_motion_deg_s  # started at its sigma
     assert set(report['tracking']['per_fold']) == {'0', '1', '2'}
     assert main(['eval', '--model', str(model_file), '--data', str(data), '--sequences',
                  'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0
