@@ -120,10 +120,10 @@ def without_turn_on_bias(cfg: TrainConfig, seqs: list[Sequence]
     each recording's whole IMU stream, not only where it has poses: a VIO's or a SLAM's
     trajectory starts after its initialisation, and stillness outside the poses is
     still the same power-on's; and each recording's estimate runs from its first IMU
-    sample (its ``lead_in`` included), as online. The bias clip (the largest bias, and the slowest
-    steady turn taken for motion) is VQF's 2 deg/s, or twice the largest training rest
-    bias where that is more (found with a wide clip). Returns the settings the model file
-    records, None without ``cfg.rest_bias``.
+    sample (its ``lead_in`` included), as online. The bias clip (the largest bias, and
+    the slowest steady turn taken for motion) is VQF's 2 deg/s, or twice the largest
+    training rest bias where that is more (found with a wide clip). Returns the settings
+    the model file records, None without ``cfg.rest_bias``.
     """
     if not cfg.rest_bias:
         return seqs, None
@@ -135,7 +135,8 @@ def without_turn_on_bias(cfg: TrainConfig, seqs: list[Sequence]
     if prior is not None:
         clip = max(settings.bias_clip_deg_s, 2 * math.degrees(max(map(abs, prior))))
         settings = dataclasses.replace(settings, prior_rad_s=prior, bias_clip_deg_s=clip)
-    return [_less(s, rest_bias.remove_rest_bias(s.stream, rate, settings)) for s in seqs], settings
+    fed = [_less(s, rest_bias.remove_rest_bias(s.stream, rate, settings)) for s in seqs]
+    return fed, settings
 
 
 def _less(seq: Sequence, stream: np.ndarray) -> Sequence:
