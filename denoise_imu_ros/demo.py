@@ -66,16 +66,20 @@ class Baselines:
 
 
 def _baselines(model: str, seq: Sequence) -> Baselines:
-    """Return the baselines of ``<dataset>_calibrated``, the model's calibrated IMU."""
+    """
+    Return the baselines of ``<dataset>_calibrated``, the model's calibrated IMU.
+
+    Run from the bag's first IMU sample, as the node is, and kept where it has poses.
+    """
     name = f'{read_model_file(model).meta.dataset}_calibrated'
     if name not in shipped_models():
         return Baselines(seq.imu[:, :3])
     calib = read_model_file(name)
-    gyro = StreamingCorrector(calib.config, calib.arrays).process(seq.imu)
+    gyro = StreamingCorrector(calib.config, calib.arrays).process(seq.stream)
     rate = sample_rate(calib)
-    return Baselines(seq.imu[:, :3], gyro, fuse(gyro, seq.imu[:, 3:], rate,
-                                                calib.meta.fusion.chosen,
-                                                step_periods(seq.stamp_ns, rate)))
+    fused = fuse(gyro, seq.stream[:, 3:], rate, calib.meta.fusion.chosen,
+                 step_periods(seq.stream_stamp_ns, rate))
+    return Baselines(seq.imu[:, :3], seq.on_poses(gyro), seq.on_poses(fused))
 
 
 @dataclass

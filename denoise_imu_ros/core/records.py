@@ -37,7 +37,11 @@ class Recording:
 
 @dataclass(frozen=True)
 class Sequence:
-    """A recording on the IMU time base, cropped to where ground truth exists."""
+    """
+    A recording on the IMU time base, cropped to where ground truth exists.
+
+    The IMU samples before that are its ``lead_in``: what a node has run on before.
+    """
 
     name: str
     stamp_ns: np.ndarray        # (N,) int64
@@ -51,7 +55,7 @@ class Sequence:
     lead_in_stamp_ns: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))
 
     def __len__(self) -> int:
-        """Return the number of IMU samples."""
+        """Return the number of IMU samples with poses (the lead-in not counted)."""
         return len(self.stamp_ns)
 
     @property
@@ -73,6 +77,9 @@ class Sequence:
 
     def on_poses(self, values: np.ndarray) -> np.ndarray:
         """Return the rows of ``values`` (one per sample of :attr:`stream`) that are these."""
+        if len(values) != len(self.lead_in) + len(self):
+            raise ValueError(f'{len(values)} rows, not one per sample of the stream '
+                             f'({len(self.lead_in)} + {len(self)})')
         return values[len(self.lead_in):]
 
     @property
@@ -81,7 +88,7 @@ class Sequence:
         return np.diff(self.stamp_ns).astype(np.float64) * 1e-9
 
     def tail(self, start: int, length: int | None = None) -> Sequence:
-        """Return the samples from index ``start`` on (``length`` of them), those before led in."""
+        """Return the samples from ``start`` on (``length`` of them when given), led in."""
         part = slice(start, None if length is None else start + length)
         return Sequence(self.name, self.stamp_ns[part], self.imu[part], self.gt_quat[part],
                         self.gt_pos[part], self.gt_valid[part], self.pose_alignment,

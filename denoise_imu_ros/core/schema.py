@@ -102,6 +102,9 @@ class RestBiasSettings:
         return settings
 
 
+VQF_BIAS_SIGMA_INIT_DEG_S = 0.5  # VQF's biasSigmaInit default, for a raw gyro
+
+
 @dataclass(frozen=True)
 class BiasTracking:
     """
@@ -116,9 +119,9 @@ class BiasTracking:
 
     sigma_motion_deg_s: float  # VQF's biasSigmaMotion: smaller trusts motion updates more
     forgetting_s: float        # VQF's biasForgettingTime: how long an estimate is kept
-    # VQF's biasSigmaInit, its certainty of the 0 it starts from; files without the key
-    # were chosen with VQF's default, 0.5 deg/s, and run with it
-    sigma_init_deg_s: float = 0.5
+    # VQF's biasSigmaInit, its certainty of the 0 it starts from; a file without the key
+    # runs with VQF's default, as its tracking was chosen
+    sigma_init_deg_s: float = VQF_BIAS_SIGMA_INIT_DEG_S
 
     def __post_init__(self) -> None:
         """Refuse settings VQF cannot run with (model files are user input)."""
@@ -406,7 +409,7 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         rest_bias=None if rest is None else RestBiasSettings.from_dict(rest, where),
         bias_tracking=_settings(raw, 'bias_tracking', where, lambda v: BiasTracking(
             v.get('sigma_motion_deg_s'), v.get('forgetting_s'),
-            v.get('sigma_init_deg_s', 0.5))),
+            v.get('sigma_init_deg_s', VQF_BIAS_SIGMA_INIT_DEG_S))),
         input_envelope=_settings(raw, 'input_envelope', where, lambda v: InputEnvelope(
             v.get('gyro_rad_s'), v.get('accel_offset_m_s2'),
             v.get('fallback_rad_s', (0.0, 0.0, 0.0)))),

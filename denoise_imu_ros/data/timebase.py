@@ -15,6 +15,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation, RotationSpline, Slerp
 
 from ..core.errors import DatasetError
+from ..core.limits import imu_holes, stream_rate_hz
 from ..core.records import Recording, Sequence
 
 # Ground truth at an IMU instant is trusted only if the ground-truth samples around it
@@ -103,7 +104,9 @@ def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
     """
     Crop to the IMU/ground-truth overlap and put the ground truth onto the IMU stamps.
 
-    The IMU samples before the poses start are kept as the sequence's ``lead_in``.
+    The IMU samples before the poses start are kept as the sequence's ``lead_in``, from
+    the last hole in the IMU stream before them on (the node restarts at a hole; a hole
+    after they start is the recording's, refused where it is checked).
     """
     t_imu, t_gt = rec.imu_stamp_ns, rec.gt_stamp_ns
     if len(t_gt) < 2:
@@ -121,6 +124,9 @@ def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
         raise DatasetError(f'{rec.source}: {keep.sum()} IMU samples overlap the ground '
                            f'truth, need at least {max(min_samples, 2)}')
     quat, pos, valid = poses_at(rec, t_imu[keep], max_gt_gap_s)
+    first = int(np.argmax(keep))
+    holes = imu_holes(t_imu[:first + 1], stream_rate_hz(t_imu)) if first else []
+    lead = slice(int(holes[-1]) + 1 if len(holes) else 0, first)
     return Sequence(name=rec.name, stamp_ns=t_imu[keep], imu=rec.imu[keep], gt_quat=quat,
-                    gt_pos=pos, gt_valid=valid, lead_in=rec.imu[t_imu < start],
-                    lead_in_stamp_ns=t_imu[t_imu < start])
+                    gt_pos=pos, gt_valid=valid, lead_in=rec.imu[lead],
+                    lead_in_stamp_ns=t_imu[lead])

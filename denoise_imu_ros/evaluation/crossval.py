@@ -52,8 +52,8 @@ TRACKED = ('calibrated', 'network')  # the rows whose output bias may be tracked
 # the candidates: VQF's biasSigmaMotion (its default 0.1 deg/s) and biasForgettingTime
 # (its default 100 s), beside none; each starts as certain of its 0 as its motion updates
 # ever make it, not at VQF's 0.5 deg/s for a raw gyro: what is left after the model is
-# small, and a start whose accelerations are not gravity (a drone carried) taught that
-# one up to 0.6 deg/s, which an open-loop attitude never forgets (docs/method.md)
+# small, and from 0.5 deg/s a start whose accelerations are not gravity (a drone carried)
+# teaches it a bias an open-loop attitude never forgets (docs/method.md)
 TRACKING_GRID = tuple(BiasTracking(sigma, forget, sigma)
                       for sigma in (0.03, 0.05, 0.07, 0.1, 0.2) for forget in (30.0, 100.0, 300.0))
 

@@ -3,8 +3,10 @@
 """
 Offline evaluation (``denoise-imu eval``): raw, calibrated and corrected gyro integrated.
 
-Every method is integrated from the ground-truth attitude at the first stamp with the
-convention of :mod:`denoise_imu_ros.core.metrics`; AOE and ROE skip ground-truth holes.
+Every method is integrated from the ground-truth attitude at the first scored stamp with
+the convention of :mod:`denoise_imu_ros.core.metrics`; AOE and ROE skip ground-truth
+holes. The models, their trackers and the gravity-aided filters run from the recording's
+first IMU sample, as the node does, also before its poses or ``--start-sample``.
 """
 
 from __future__ import annotations
@@ -245,8 +247,9 @@ def _report(models: dict[str, LoadedModel], baseline: str | None, data: str,
                              'stamp; AOE = RMS error angle; yaw = rotation about world z of '
                              'R_est R_gt^T; tilt = angle between the estimated and the true '
                              'vertical; ROE = median over start stamps; GT holes skipped. '
-                             'Fused (gravity-aided) rows: the filter starts at the first '
-                             'stamp, its yaw is aligned to the ground truth once 1.5 s in, '
+                             'Fused (gravity-aided) rows: the filter starts at the first IMU '
+                             'sample (before the poses and the start sample too), its yaw is '
+                             'aligned to the ground truth once 1.5 s into the scored part, '
                              'its tilt never; scored from there on.'}
     if loaded.meta.crossval is not None and loaded.meta.crossval.verdict:
         report['crossval'] = loaded.meta.crossval.report
@@ -263,6 +266,7 @@ def _write(out_dir: Path, report: dict[str, Any], rest_only: bool) -> None:
     for m, t in report['bias_tracking'].items():
         table += (f"The {m} row tracks its output's bias at rest and in motion (VQF, sigma "
                   f'{t["sigma_motion_deg_s"]:g} deg/s, forgetting {t["forgetting_s"]:g} s, '
+                  f'started at {t["sigma_init_deg_s"]:g} deg/s, '
                   'chosen by crossval on recordings its folds never trained on) and removes '
                   'it, as online.\n')
     if report['start_sample']:

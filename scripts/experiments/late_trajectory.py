@@ -13,6 +13,7 @@ Usage: .venv/bin/python scripts/experiments/late_trajectory.py DATA OUT [--after
 
 import argparse
 from pathlib import Path
+import sys
 
 from denoise_imu_ros.data.asl import read_asl
 import numpy as np
@@ -31,8 +32,11 @@ def main() -> None:
     for folder in sorted(p for p in args.data.iterdir() if (p / 'mav0').is_dir()):
         rec = read_asl(folder)
         gyro = rec.imu[:, :3]
-        away = np.linalg.norm(gyro - np.median(gyro[:1000], axis=0), axis=1)
-        moving = int(np.flatnonzero(away > MOVING_RAD_S)[0])
+        away = np.flatnonzero(np.linalg.norm(gyro - np.median(gyro[:1000], axis=0), axis=1)
+                              > MOVING_RAD_S)
+        if not len(away):
+            sys.exit(f'{folder}: never turns faster than 10 deg/s: no motion to start after')
+        moving = int(away[0])
         start = rec.imu_stamp_ns[moving] + int(args.after * 1e9)
         keep = rec.gt_stamp_ns >= start
         np.savetxt(args.out / f'{folder.name}.txt', np.column_stack(

@@ -9,13 +9,16 @@ nested scoring, from the per-recording figures a crossval report stores, for oth
 the median over recordings, the mean over a candidate and its neighbours on the grid (a
 flat minimum rather than a lone dip), the lowest worst recording, the lowest mean among
 candidates that beat none on most recordings, and never tracking. Training recordings
-only (a crossval's folds); the heading guard is left out.
+only (a crossval's folds); the heading guard is left out, so a tilt-judged report's
+lowest-mean figure may differ from its own.
 Usage: .venv/bin/python scripts/experiments/tracking_rules.py REPORT...
 (a crossval.json, or a model file carrying one)
 """
 
 import json
+from pathlib import Path
 import sys
+from typing import Callable
 
 from denoise_imu_ros.core.modelfile import read_model_file
 from denoise_imu_ros.evaluation.crossval import TRACKING_GRID, tracking_label
@@ -43,7 +46,7 @@ def _rules(fig: Figures, names: list[str]) -> dict[str, str]:
     beat = [c for c in labels if c == 'none' or 2 * sum(
         fig[n][c] < fig[n]['none'] for n in names) > len(names)]
 
-    def pick(figure) -> str:
+    def pick(figure: Callable[[str], float]) -> str:
         return min(labels, key=figure)
 
     return {'mean (crossval)': pick(mean.get),
@@ -56,7 +59,7 @@ def _rules(fig: Figures, names: list[str]) -> dict[str, str]:
 def main(sources: list[str]) -> None:
     """Print, per report and row, each rule's nested mean figure and its choice on all."""
     for source in sources:
-        report = (json.loads(open(source).read()) if source.endswith('.json')
+        report = (json.loads(Path(source).read_text()) if source.endswith('.json')
                   else read_model_file(source).meta.crossval.report)
         fold_of = {n: i for i, fold in enumerate(report['folds']) for n in fold}
         recordings = report['tracking']['recordings']
@@ -74,4 +77,6 @@ def main(sources: list[str]) -> None:
 
 
 if __name__ == '__main__':
+    if len(sys.argv) < 2:
+        sys.exit(__doc__.strip().splitlines()[-2])
     main(sys.argv[1:])

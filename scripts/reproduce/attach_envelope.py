@@ -44,7 +44,7 @@ def main() -> None:
                                 meta.recipe('pose_topic'), meta.recipe('max_gt_gap_s'),
                                 align_poses=meta.recipe('align', 'none'),
                                 poses=meta.recipe('poses'))
-            fed = rest_bias.model_input(loaded, seq.imu)[:meta.training_span]
+            fed = seq.on_poses(rest_bias.model_input(loaded, seq.stream))[:meta.training_span]
             imus.append(fed)
             corrections.append(correct_gyro(loaded.model, fed) - fed[:, :3])
         # as training: the mean correction is the fallback where the turn-on bias is not

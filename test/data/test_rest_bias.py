@@ -201,7 +201,9 @@ def test_tracking_runs_where_the_model_file_says_unless_switched_off():
     assert rest_bias.tracking(meta, 'off') is None
     assert rest_bias.tracking(parse_meta({}, 'm'), 'on') is None
     for bad in ({'sigma_motion_deg_s': 0.0, 'forgetting_s': 30.0},
-                {'sigma_motion_deg_s': 0.05}, 'fast'):
+                {'sigma_motion_deg_s': 0.05}, 'fast',
+                dict(stored, sigma_init_deg_s=0.0), dict(stored, sigma_init_deg_s=-0.1),
+                dict(stored, sigma_init_deg_s='wide')):
         with pytest.raises(ModelFileError, match='m: inconsistent'):
             parse_meta({'bias_tracking': bad}, 'm')
 

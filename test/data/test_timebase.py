@@ -33,3 +33,17 @@ def test_the_imu_samples_before_the_poses_start_lead_into_the_sequence(tmp_path)
     assert np.array_equal(tail.stream_stamp_ns, late.stream_stamp_ns[:950])
     own = load_sequence(asl)  # its own poses, from the first sample: nothing before
     assert len(own.lead_in) == 0 and own.stream is own.imu
+
+
+def test_a_hole_in_the_imu_before_the_poses_ends_the_lead_in_there(tmp_path):
+    """The node restarts at a hole: only what follows the last one leads in."""
+    from helpers import write_late_trajectory
+    asl = write_asl(tmp_path / 'rec', n_imu=2000, still_s=3.0)
+    csv = asl / 'mav0' / 'imu0' / 'data.csv'
+    lines = csv.read_text().splitlines(keepends=True)
+    csv.write_text(''.join(lines[:301] + lines[501:]))  # samples 300-499 lost: a 1 s hole
+    late = load_sequence(asl, poses=write_late_trajectory(tmp_path / 'vio', asl, 4.0))
+    assert len(late.lead_in) == 300  # samples 500-799
+    assert np.all(np.diff(late.stream_stamp_ns) == 5_000_000)
+    with pytest.raises(ValueError, match='not one per sample of the stream'):
+        late.on_poses(late.imu)  # an array of the poses' span alone: refused, not cut
