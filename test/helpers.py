@@ -78,6 +78,24 @@ def write_late_trajectory(folder: Path, asl: Path, after_s: float) -> Path:
     return folder
 
 
+def shaken_start() -> tuple[np.ndarray, np.ndarray]:
+    """Return 10 s at 200 Hz of a still, unbiased gyro, accelerations not gravity alone."""
+    rng = np.random.default_rng(0)
+    t = np.arange(2000) / 200.0
+    gyro = rng.normal(0, 0.002, (len(t), 3))
+    accel = np.tile([0.0, 0.0, 9.81], (len(t), 1)) + rng.normal(0, 0.02, (len(t), 3))
+    accel[:, 0] += 3.0 * np.sin(2 * np.pi * 0.7 * t)
+    accel[:, 1] += 2.0 * np.cos(2 * np.pi * 0.5 * t)
+    return gyro, accel
+
+
+def learnt_on_a_shaken_start(settings) -> float:
+    """Return the largest bias (deg/s) an output tracker learns where there is none."""
+    from denoise_imu_ros.data.rest_bias import track_bias
+    gyro, accel = shaken_start()
+    return math.degrees(np.abs(gyro - track_bias(gyro, accel, 200.0, settings)).max())
+
+
 def break_line(path: Path, line: int, text: str) -> None:
     """Replace one line of a text file (0-based), to damage a CSV."""
     lines = path.read_text().splitlines()

@@ -400,3 +400,13 @@ def test_held_out_poses_that_start_after_the_stillness_are_scored_from_the_first
         from_stream, rel=1e-9)
     # from the poses' start alone, the turn-on bias would be rec1's (the prior)
     assert from_stream < 0.05 < score(seq, baseline_gyro(net, seq.imu))['aoe_deg']
+
+
+def test_every_tracking_candidate_starts_at_its_sigma_and_learns_less_from_a_shaken_start():
+    """Not at VQF's 0.5 deg/s for a raw gyro: a drone carried before take-off teaches that."""
+    import dataclasses
+    from denoise_imu_ros.evaluation.crossval import TRACKING_GRID
+    from helpers import learnt_on_a_shaken_start
+    for settings in TRACKING_GRID:
+        as_before = dataclasses.replace(settings, sigma_init_deg_s=0.5)
+        assert learnt_on_a_shaken_start(settings) < 0.5 * learnt_on_a_shaken_start(as_before)
