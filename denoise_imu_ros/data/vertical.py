@@ -33,23 +33,31 @@ from vqf import VQF
 from .rest_bias import resolve
 from ..core.schema import ModelMeta, REST_ONLY
 
-__all__ = ['drops_vertical', 'drop_vertical', 'up_in_body', 'Vertical']
+__all__ = ['drops', 'drops_vertical', 'drop_vertical', 'up_in_body', 'Vertical']
 
 TAU_ACC_S = 3.0  # VQF's own default accelerometer time constant
 
 
-def drops_vertical(meta: ModelMeta, rest: str = 'model') -> bool:
+def drops(heading_weight: float, turn_on_bias_removed: bool) -> bool:
     """
-    Whether a model's correction about the vertical is dropped, fed as ``rest`` says.
+    Whether a model's correction about the vertical is dropped: the one rule.
 
     Where its recipe left the heading out (``heading_weight: 0``) and it is fed the gyro
-    less its turn-on bias (``rest`` as :func:`~denoise_imu_ros.data.rest_bias.resolve`):
-    only then is what it leaves about the vertical the practitioner's baseline. Fed the
-    raw gyro, the output would keep the whole turn-on bias about the vertical, so the
-    model's own correction is kept. A rest-only model corrects nothing to drop.
+    less its turn-on bias: only then is what it leaves about the vertical the
+    practitioner's baseline. Fed the raw gyro, the output would keep the whole turn-on
+    bias about the vertical, so the model's own correction is kept.
     """
-    return (meta.heading_weight == 0 and meta.kind != REST_ONLY
-            and resolve(meta, rest) is not None)
+    return heading_weight == 0 and turn_on_bias_removed
+
+
+def drops_vertical(meta: ModelMeta, rest: str = 'model') -> bool:
+    """
+    :func:`drops` for a model file fed as ``rest`` says.
+
+    ``rest`` as :func:`~denoise_imu_ros.data.rest_bias.resolve`; a rest-only model
+    corrects nothing to drop.
+    """
+    return meta.kind != REST_ONLY and drops(meta.heading_weight, resolve(meta, rest) is not None)
 
 
 def _filter(rate_hz: float) -> VQF:

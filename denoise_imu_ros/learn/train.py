@@ -45,7 +45,7 @@ from ..core.modelfile import code_version
 from ..core.records import Sequence
 from ..data import envelope, rest_bias
 from ..data.load import load_imu, load_sequence
-from ..data.vertical import drop_vertical
+from ..data.vertical import drop_vertical, drops
 
 RANK_SEED_STRIDE = 7919  # data-parallel process r draws its dropout masks from seed + r * this
 
@@ -468,7 +468,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     t_start = time.monotonic()
     _setup_process(cfg, rank)
     seqs, rest = without_turn_on_bias(cfg, seqs)
-    drop = cfg.heading_weight == 0 and rest is not None  # as the model file will say
+    drop = drops(cfg.heading_weight, rest is not None)  # as the model file will say
     model, split, gen = build_model(cfg, seqs, rank)
     # each recording's own constant bias, in units of gyro_std (recording_bias)
     offsets = (torch.zeros(len(seqs), 3, device=cfg.device, requires_grad=True)
