@@ -51,7 +51,7 @@ def load_recording(path: str | Path, imu_topic: str | None = None,
     if poses is not None:
         rec = load_imu(path, imu_topic)
         trajectory = read_tum(trajectory_file(poses, Path(path).name))
-        if trajectory.dropped:
+        if trajectory.summary():
             warnings.warn(trajectory.summary(), DataWarning, stacklevel=2)
         rec = with_trajectory(rec, trajectory)
         check_recording(rec, gt_file=trajectory.path)

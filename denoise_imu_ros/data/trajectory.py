@@ -3,12 +3,15 @@
 """
 Trajectory files as VIO and SLAM tools write them (TUM format), as a recording's poses.
 
-One pose a line, ``t x y z qx qy qz qw``: t in seconds, the body-to-world pose of
-whatever the tool tracked (often a camera: ``align: auto`` finds its frame and clock).
-Lines starting with ``#`` are comments. Tools write duplicate stamps (a pose written
-twice), stamps that step back (a re-initialisation rewriting its past) and rows that
-are not poses (NaN, a zero quaternion): those rows are dropped and counted, and a
-file with nothing left is an error.
+One pose a line, ``t x y z qx qy qz qw``: the body-to-world pose of whatever the tool
+tracked (often a camera: ``align: auto`` finds its frame and clock). Lines starting
+with ``#`` are comments. As tools write it: t in seconds, or in nanoseconds (ORB-SLAM3's
+EuRoC files, a ROS stamp's integer; no clock in seconds reaches NANOSECOND_STAMPS), and
+OpenVINS's 20 columns (the 8 followed by the rotation's and the position's covariance,
+which is not used). Both are said. Tools write duplicate stamps (a pose written twice),
+stamps that step back (a re-initialisation rewriting its past) and rows that are not
+poses (NaN, a zero quaternion): those rows are dropped and counted, and a file with
+nothing left is an error.
 """
 
 from __future__ import annotations
@@ -25,6 +28,8 @@ from ..core.records import Recording
 
 SUFFIXES = ('.txt', '.tum')   # a folder of trajectories holds <recording><suffix>
 UNIT_TOLERANCE = 1e-2         # a quaternion's norm off 1 by more is no pose
+NANOSECOND_STAMPS = 1e11      # a stamp this large is no clock in seconds (the year 5138)
+COLUMNS = {8: 'TUM', 20: "OpenVINS's"}  # OpenVINS: TUM's 8, then 12 of covariance
 
 
 @dataclass(frozen=True)
@@ -36,13 +41,16 @@ class Trajectory:
     quat: np.ndarray            # (M, 4) float64 xyzw, unit, body to world
     pos: np.ndarray             # (M, 3) float64
     dropped: dict[str, int]     # rows left out, by reason
+    read_as: tuple[str, ...] = ()  # how the file was read where it is not plain TUM
 
     def summary(self) -> str:
-        """One line: what was dropped, for the commands to say (empty: nothing)."""
-        if not self.dropped:
+        """One line: how it was read and what was dropped, for the commands to say."""
+        if not self.dropped and not self.read_as:
             return ''
-        what = ', '.join(f'{n} {why}' for why, n in self.dropped.items())
-        return f'{self.path}: {len(self.stamp_ns)} poses kept; dropped {what}'
+        said = [f'{len(self.stamp_ns)} poses kept', *self.read_as]
+        if self.dropped:
+            said.append('dropped ' + ', '.join(f'{n} {why}' for why, n in self.dropped.items()))
+        return f'{self.path}: ' + '; '.join(said)
 
 
 def read_tum(path: str | Path) -> Trajectory:
@@ -53,18 +61,23 @@ def read_tum(path: str | Path) -> Trajectory:
     with path.open(encoding='utf-8-sig', errors='strict') as f:
         lines = [line for line in text_lines(f, path)
                  if line.strip() and not line.lstrip().startswith('#')]
-    rows = np.full((len(lines), 8), np.nan)
+    if not lines:
+        raise DatasetError(f'{path}: no poses')
+    width = len(lines[0].replace(',', ' ').split())
+    rows = np.full((len(lines), width), np.nan)
     for i, line in enumerate(lines):
         parts = line.replace(',', ' ').split()
-        if len(parts) != 8:
-            raise DatasetError(f'{path}: line "{line.strip()[:60]}" has {len(parts)} '
-                               'values, not the 8 of a TUM pose (t x y z qx qy qz qw)')
+        if len(parts) != width or width not in COLUMNS:
+            raise DatasetError(
+                f'{path}: line "{line.strip()[:60]}" has {len(parts)} values, not the 8 '
+                "of a TUM pose (t x y z qx qy qz qw) or OpenVINS's 20 (those, then the "
+                'covariance), the same on every line')
         try:
             rows[i] = [float(p) for p in parts]
         except ValueError:
             raise DatasetError(f'{path}: unparsable line "{line.strip()[:60]}"') from None
-    if not len(rows):
-        raise DatasetError(f'{path}: no poses')
+    read_as = [] if width == 8 else [f'read as {COLUMNS[width]} columns (covariance unused)']
+    rows = rows[:, :8]
     dropped: dict[str, int] = {}
 
     def drop(bad: np.ndarray, why: str) -> None:
@@ -75,7 +88,14 @@ def read_tum(path: str | Path) -> Trajectory:
     drop(~np.isfinite(rows).all(axis=1), 'non-finite rows')
     drop(np.abs(np.linalg.norm(rows[:, 4:], axis=1) - 1) > UNIT_TOLERANCE,
          'rows whose quaternion is not a unit one')
-    stamp_ns = np.round(rows[:, 0] * 1e9).astype(np.int64)
+    nanoseconds = len(rows) and np.abs(rows[:, 0]).max() >= NANOSECOND_STAMPS
+    if nanoseconds:
+        read_as.append('stamps read as nanoseconds')
+    stamp = rows[:, 0] * (1.0 if nanoseconds else 1e9)
+    if len(stamp) and np.abs(stamp).max() >= 2.0 ** 63:
+        raise DatasetError(f'{path}: stamps up to {np.abs(rows[:, 0]).max():.6g}: no clock '
+                           'in seconds or nanoseconds')
+    stamp_ns = np.round(stamp).astype(np.int64)
     # keep each stamp above every earlier kept one: duplicates and steps back go
     later = np.concatenate([[True], stamp_ns[1:] > np.maximum.accumulate(stamp_ns)[:-1]])
     duplicate = ~later & np.isin(stamp_ns, stamp_ns[later])
@@ -87,7 +107,7 @@ def read_tum(path: str | Path) -> Trajectory:
     if len(rows) < 2:
         raise DatasetError(f'{path}: fewer than two usable poses')
     quat = rows[:, 4:] / np.linalg.norm(rows[:, 4:], axis=1, keepdims=True)
-    return Trajectory(path, stamp_ns, quat, rows[:, 1:4], dropped)
+    return Trajectory(path, stamp_ns, quat, rows[:, 1:4], dropped, tuple(read_as))
 
 
 def trajectory_file(poses: str | Path, recording: str) -> Path:

@@ -33,6 +33,28 @@ def test_a_real_vio_trajectory_reads_as_evo_reads_it(data_dir):
                                rtol=0, atol=1e-9)
 
 
+def test_nanosecond_stamps_and_openvins_columns_read_as_the_same_poses(data_dir, tmp_path):
+    path = data_dir / 'euroc_vio' / 'vins_mono' / 'MH_01_easy.txt'
+    tum = read_tum(path)
+    rows = np.loadtxt(path)
+    # ORB-SLAM3's EuRoC files: the stamp in nanoseconds, fixed with six decimals
+    nano = _write(tmp_path / 'nano.txt', [f'{t * 1e9:.6f} ' + ' '.join(map(str, r))
+                                          for t, r in zip(rows[:, 0], rows[:, 1:])])
+    # OpenVINS: TUM's 8 columns, then the rotation's and the position's covariance
+    ov = tmp_path / 'ov.txt'
+    np.savetxt(ov, np.column_stack([rows, np.full((len(rows), 12), 1e-4)]), fmt='%.9f',
+               header='timestamp(s) tx ty tz qx qy qz qw Pr11 Pr12 Pr13 Pr22 Pr23 Pr33 '
+                      'Pt11 Pt12 Pt13 Pt22 Pt23 Pt33')
+    for other, said in ((read_tum(nano), 'stamps read as nanoseconds'),
+                        (read_tum(ov), "read as OpenVINS's columns (covariance unused)")):
+        np.testing.assert_allclose(other.stamp_ns, tum.stamp_ns, rtol=0, atol=300)
+        np.testing.assert_allclose(other.quat, tum.quat, rtol=0, atol=1e-8)
+        np.testing.assert_allclose(other.pos, tum.pos, rtol=0, atol=1e-8)
+        assert not other.dropped and other.summary() == (
+            f'{other.path}: {len(tum.stamp_ns)} poses kept; {said}')
+    assert tum.summary() == ''
+
+
 def test_duplicate_backward_non_finite_and_non_unit_rows_are_dropped_and_counted(tmp_path):
     path = _write(tmp_path / 't.txt', [
         '# timestamp tx ty tz qx qy qz qw',
@@ -51,6 +73,8 @@ def test_duplicate_backward_non_finite_and_non_unit_rows_are_dropped_and_counted
 
 @pytest.mark.parametrize('rows, message', [
     (['1.0 0 0 0 0 0 1'], 'has 7 values, not the 8 of a TUM pose'),
+    ([f'1.0 {POSE}', f'1.1 {POSE} 0'], r"has 9 values, not the 8 .* or OpenVINS's 20"),
+    ([f'1e20 {POSE}', f'2e20 {POSE}'], 'stamps up to 2e[+]20: no clock'),
     (['1.0 0 0 zero 0 0 0 1'], 'unparsable line "1.0 0 0 zero'),
     (['# only a comment'], 'no poses'),
     ([f'1.0 {POSE}', f'1.0 {POSE}'], 'fewer than two usable poses')])
