@@ -61,14 +61,19 @@ def test_eval_uses_the_settings_the_model_files_store():
     assert set(rows) == {'raw + VQF', 'rest bias + VQF', 'network + VQF'}
 
 
-def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):
-    t = np.arange(3000) * 0.005
+def _turning_sequence(n: int) -> Sequence:
+    """Return a body turning back and forth about a tilted axis, its IMU exact."""
+    t = np.arange(n) * 0.005
     gt = Rotation.from_rotvec(np.outer(np.sin(t), [0.3, 0.2, 1.0]))
     omega = (gt[:-1].inv() * gt[1:]).as_rotvec() / 0.005
     accel = gt.inv().apply(np.tile([0, 0, 9.81], (len(t), 1)))
-    seq = Sequence('s', (1e9 + t * 1e9).astype(np.int64), np.hstack([np.vstack(
+    return Sequence('s', (1e9 + t * 1e9).astype(np.int64), np.hstack([np.vstack(
         [omega, omega[-1:]]), accel]), gt.as_quat(), np.zeros((len(t), 3)),
         np.ones(len(t), bool))
+
+
+def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):
+    seq = _turning_sequence(3000)
     biased = seq.imu[:, :3] + [0.0, 0.02, 0.0]  # a gyro bias: a short time constant helps
     monkeypatch.setattr(filters, 'TAU_ACC_GRID_S', (0.5, 50.0))
     report = filters.tune([seq], {'raw': [biased]}, 200.0, {'raw': ('vqf',)})
@@ -87,6 +92,21 @@ def test_tuning_picks_the_lowest_mean_error_on_the_tails(monkeypatch):
     assert by_tilt['tilt_deg'] == min(by_tilt['candidates'].values())
     assert by_aoe['aoe_deg'] == min(by_aoe['candidates'].values())
     assert max(by_aoe['candidates'].values()) > max(by_tilt['candidates'].values()) + 0.1
+
+
+def test_tuning_runs_each_filter_from_the_first_sample_and_scores_the_tail():
+    seq = _turning_sequence(4000)
+    biased = seq.imu[:, :3] + [0.0, 0.03, 0.01]
+    tail = seq.tail(2500)
+    chosen = filters.tune([tail], {'raw': [biased]}, 200.0, {'raw': ('vqf',)})['raw vqf']
+    flt = Filter.from_dict(chosen)
+    # as eval scores it (and imu/data runs it): from the first sample, scored on the tail
+    whole = filters.score(tail, filters.run(flt, biased, seq.imu[:, 3:], 200.0,
+                                            seq.stamp_ns)[2500:])
+    assert chosen['aoe_deg'] == pytest.approx(whole.aoe, abs=1e-12)
+    started_in_motion = filters.score(tail, filters.run(flt, biased[2500:], tail.imu[:, 3:],
+                                                        200.0, tail.stamp_ns))
+    assert abs(started_in_motion.aoe - whole.aoe) > 0.01
 
 
 def _moving_sequence(bias: np.ndarray, n: int = 6000) -> Sequence:
