@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .filters import eval_filters, Filter, run_on_stream, score
+from .filters import eval_filters, Filter, run, score
 from .plots import plot_roe, plot_sequence
 from .reports import (crossval_table, eval_table, fitting_note, fused_table, growth_table,
                       scored_on_training_samples)
@@ -210,7 +210,8 @@ def _score(seq: Sequence, gyros: dict[str, np.ndarray],
             'roe_median_deg': {str(int(d)): v for d, v in err.roe_median().items()}}
         roe[method] = err.roe
     for method, (source, flt) in rows.items():
-        quat = run_on_stream(flt, seq, gyros[source], seq.rate_hz)
+        quat = seq.on_poses(run(flt, gyros[source], seq.stream[:, 3:], seq.rate_hz,
+                                seq.stream_stamp_ns))
         err = score(seq, quat)
         fused[method] = {
             'filter': flt.label, 'aoe_deg': err.aoe, 'tilt_deg': err.tilt,

@@ -8,9 +8,10 @@ calibrated gyro is also fed to two other standard filters, each from its library
 ``imufusion`` (x-io's AHRS, C core) and ``ahrs``'s Madgwick. Every filter's settings are
 chosen the same way (``denoise-imu tune-fusion``): on the validation tails of the
 model's training recordings (the samples after its training windows, which no training
-step saw), the setting with the lowest mean 3-D error wins; each filter runs from the
-recording's first IMU sample, as ``imu/data`` does. Test sequences are never used.
-Scores follow :func:`denoise_imu_ros.core.metrics.fused_errors`: yaw aligned once
+step saw), the setting with the lowest mean 3-D error wins. Each filter starts at its
+tail, as a run starts with its filter: a tail stands for a run no training saw, and a
+filter warmed up over the training span would hide what its own start costs (VQF's bias
+estimation: docs/results.md). Test sequences are never used. Scores follow :func:`denoise_imu_ros.core.metrics.fused_errors`: yaw aligned once
 1.5 s in, tilt never. Each model's gyro is its output as it runs, its bias tracked where
 its file says so (``crossval --attach`` chooses that).
 """
@@ -143,16 +144,6 @@ def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
     return np.asarray(wxyz)[:, [1, 2, 3, 0]]
 
 
-def run_on_stream(flt: Filter, seq: Sequence, gyro: np.ndarray, rate_hz: float) -> np.ndarray:
-    """
-    Orientation (xyzw) where ``seq`` has poses, the filter run as the node runs it.
-
-    From the recording's first IMU sample (``gyro`` over :attr:`Sequence.stream`): a filter
-    started where the poses start would start in motion, which ``imu/data`` never does.
-    """
-    return seq.on_poses(run(flt, gyro, seq.stream[:, 3:], rate_hz, seq.stream_stamp_ns))
-
-
 def score(seq: Sequence, quat: np.ndarray) -> FusedErrors:
     """Fused errors of an orientation at every stamp of a sequence."""
     t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
@@ -212,8 +203,7 @@ def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: flo
     """
     Choose every filter's settings for every gyro on the tails: the lowest mean ``key``.
 
-    ``gyros`` maps a source (raw, calibrated, network) to its gyro over each tail's
-    stream (:func:`run_on_stream`: the filters run from each recording's first sample);
+    ``gyros`` maps a source (raw, calibrated, network) to its gyro on each tail;
     ``kinds`` the filters to tune for it; with ``accel_bias`` every setting is tried with
     it removed from the accelerometer too; ``key`` the figure compared (``aoe_deg``, the
     3-D AOE, or ``tilt_deg``, as :func:`~denoise_imu_ros.core.schema.judged_on`
@@ -225,7 +215,7 @@ def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: flo
         for kind in kinds[source]:
             figures = {}
             for flt in grid(kind, accel_bias):
-                errs = [score(seq, run_on_stream(flt, seq, g, rate_hz))
+                errs = [score(seq, run(flt, g, seq.imu[:, 3:], rate_hz, seq.stamp_ns))
                         for seq, g in zip(tails, per_tail)]
                 figures[flt] = errs
             mean = {f: float(np.mean([getattr(e, FUSED[key]) for e in errs]))
@@ -278,12 +268,12 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
         check_rate(seq.stamp_ns, sample_rate(net), f'{folder}/{name}')  # --data: its own?
         if len(seq) - start < 2:
             continue
-        stream = {'raw': seq.stream[:, :3], 'calibrated': calib.correct(seq.stream),
-                  'network': net.correct(seq.stream)}
-        tails.append(seq.tail(start))  # its stream: the whole recording's
+        whole = {'raw': seq.imu[:, :3], 'calibrated': seq.on_poses(calib.correct(seq.stream)),
+                 'network': seq.on_poses(net.correct(seq.stream))}  # the tail's context
+        tails.append(seq.tail(start))
         seqs.append(seq)
-        for source, gyro in stream.items():
-            gyros[source].append(gyro)
+        for source, gyro in whole.items():
+            gyros[source].append(gyro[start:])
         if progress:
             print(f'tail of {name}: {len(seq) - start} samples', flush=True)
     if not tails:
