@@ -11,9 +11,10 @@ model's training recordings (the samples after its training windows, which no tr
 step saw), the setting with the lowest mean 3-D error wins. Each filter starts at its
 tail, as a run starts with its filter: a tail stands for a run no training saw, and a
 filter warmed up over the training span would hide what its own start costs (VQF's bias
-estimation: docs/results.md). Test sequences are never used. Scores follow :func:`denoise_imu_ros.core.metrics.fused_errors`: yaw aligned once
-1.5 s in, tilt never. Each model's gyro is its output as it runs, its bias tracked where
-its file says so (``crossval --attach`` chooses that).
+estimation: docs/results.md). Test sequences are never used. Scores follow
+:func:`denoise_imu_ros.core.metrics.fused_errors`: yaw aligned once 1.5 s in, tilt
+never. Each model's gyro is its output as it runs, its bias tracked where its file says
+so (``crossval --attach`` chooses that).
 """
 
 from __future__ import annotations
