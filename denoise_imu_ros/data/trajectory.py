@@ -6,7 +6,9 @@ Trajectory files as VIO and SLAM tools write them (TUM format), as a recording's
 One pose a line, ``t x y z qx qy qz qw``: the body-to-world pose of whatever the tool
 tracked (often a camera: ``align: auto`` finds its frame and clock). Lines starting
 with ``#`` are comments. As tools write it: t in seconds, or in nanoseconds (ORB-SLAM3's
-EuRoC files, a ROS stamp's integer; no clock in seconds reaches NANOSECOND_STAMPS), and
+EuRoC files, a ROS stamp's integer) where every stamp is at least NANOSECOND_STAMPS,
+which no clock in seconds reaches (a clock counting nanoseconds from 0 is not told
+apart: its stamps would be read as seconds, and miss the IMU's), and
 OpenVINS's 20 columns (the 8 followed by the rotation's and the position's covariance,
 which is not used). Both are said. Tools write duplicate stamps (a pose written twice),
 stamps that step back (a re-initialisation rewriting its past) and rows that are not
@@ -67,11 +69,14 @@ def read_tum(path: str | Path) -> Trajectory:
     rows = np.full((len(lines), width), np.nan)
     for i, line in enumerate(lines):
         parts = line.replace(',', ' ').split()
-        if len(parts) != width or width not in COLUMNS:
+        if width not in COLUMNS:
             raise DatasetError(
                 f'{path}: line "{line.strip()[:60]}" has {len(parts)} values, not the 8 '
                 "of a TUM pose (t x y z qx qy qz qw) or OpenVINS's 20 (those, then the "
-                'covariance), the same on every line')
+                'covariance)')
+        if len(parts) != width:
+            raise DatasetError(f'{path}: line "{line.strip()[:60]}" has {len(parts)} '
+                               f'values where the first pose has {width}')
         try:
             rows[i] = [float(p) for p in parts]
         except ValueError:
@@ -88,13 +93,19 @@ def read_tum(path: str | Path) -> Trajectory:
     drop(~np.isfinite(rows).all(axis=1), 'non-finite rows')
     drop(np.abs(np.linalg.norm(rows[:, 4:], axis=1) - 1) > UNIT_TOLERANCE,
          'rows whose quaternion is not a unit one')
-    nanoseconds = len(rows) and np.abs(rows[:, 0]).max() >= NANOSECOND_STAMPS
-    if nanoseconds:
+    if len(rows) < 2:
+        raise DatasetError(f'{path}: fewer than two usable poses')
+    large = np.abs(rows[:, 0]) >= NANOSECOND_STAMPS
+    if large.any() and not large.all():
+        raise DatasetError(f'{path}: stamps from {rows[:, 0].min():.6g} to '
+                           f'{rows[:, 0].max():.6g}: neither all in seconds nor all in '
+                           f'nanoseconds (a clock in seconds stays below {NANOSECOND_STAMPS:g})')
+    if large.all():
         read_as.append('stamps read as nanoseconds')
-    stamp = rows[:, 0] * (1.0 if nanoseconds else 1e9)
-    if len(stamp) and np.abs(stamp).max() >= 2.0 ** 63:
+    stamp = rows[:, 0] * (1.0 if large.all() else 1e9)
+    if np.abs(stamp).max() >= 2.0 ** 63:
         raise DatasetError(f'{path}: stamps up to {np.abs(rows[:, 0]).max():.6g}: no clock '
-                           'in seconds or nanoseconds')
+                           'in nanoseconds')
     stamp_ns = np.round(stamp).astype(np.int64)
     # keep each stamp above every earlier kept one: duplicates and steps back go
     later = np.concatenate([[True], stamp_ns[1:] > np.maximum.accumulate(stamp_ns)[:-1]])
