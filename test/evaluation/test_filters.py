@@ -206,6 +206,29 @@ def test_tune_fusion_judges_as_the_recipe_trusts_the_heading(tmp_path, monkeypat
         'the lowest mean AOE' if key == 'aoe_deg' else 'the heading is not judged)')
 
 
+def test_tune_fusion_feeds_each_tail_its_gyro_with_the_stream_before_as_context(
+        tmp_path, monkeypatch):
+    from denoise_imu_ros.learn.checkpoint import load_model, save_model
+    from helpers import SAMPLE, untrained_model
+    calib = tmp_path / 'calib.safetensors'
+    save_model(calib, untrained_model(calibration_only=True), {'sample_rate_hz': 200.0})
+    model = tmp_path / 'm.safetensors'
+    save_model(model, untrained_model(), {
+        'sample_rate_hz': 200.0, 'train_sequences': [SAMPLE.name],
+        'run': {'data': str(SAMPLE.parent)}, 'train_config': {'window': 16000}})
+    seen = []
+    monkeypatch.setattr(filters, 'tune', lambda *args, **kw: seen.append(args) or {})
+    filters.tune_model(str(model), str(calib), progress=False)
+    (tail,), gyros = seen[0][0], seen[0][1]
+    assert len(tail.lead_in) >= 16000  # the tail starts after the training window
+    for source, loaded in (('network', load_model(str(model))),
+                           ('calibrated', load_model(str(calib)))):
+        # the model ran from the first sample; the filter gets the tail's part alone
+        np.testing.assert_array_equal(gyros[source][0],
+                                      tail.on_poses(loaded.correct(tail.stream)))
+    np.testing.assert_array_equal(gyros['raw'][0], tail.imu[:, :3])
+
+
 def test_a_bad_stored_filter_is_one_short_line_naming_the_file():
     from denoise_imu_ros.core.errors import ModelFileError
     bad = {'filter': 'vqf', 'settings': {'tau_acc_s': 'long'},
