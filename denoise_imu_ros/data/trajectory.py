@@ -66,14 +66,13 @@ def read_tum(path: str | Path) -> Trajectory:
     if not lines:
         raise DatasetError(f'{path}: no poses')
     width = len(lines[0].replace(',', ' ').split())
+    if width not in COLUMNS:
+        raise DatasetError(
+            f'{path}: line "{lines[0].strip()[:60]}" has {width} values, not the 8 of a '
+            "TUM pose (t x y z qx qy qz qw) or OpenVINS's 20 (those, then the covariance)")
     rows = np.full((len(lines), width), np.nan)
     for i, line in enumerate(lines):
         parts = line.replace(',', ' ').split()
-        if width not in COLUMNS:
-            raise DatasetError(
-                f'{path}: line "{line.strip()[:60]}" has {len(parts)} values, not the 8 '
-                "of a TUM pose (t x y z qx qy qz qw) or OpenVINS's 20 (those, then the "
-                'covariance)')
         if len(parts) != width:
             raise DatasetError(f'{path}: line "{line.strip()[:60]}" has {len(parts)} '
                                f'values where the first pose has {width}')
