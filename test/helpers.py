@@ -70,11 +70,11 @@ def write_late_trajectory(folder: Path, asl: Path, after_s: float) -> Path:
     start of the IMU stream.
     """
     from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.trajectory import write_tum
     rec = read_asl(asl)
     keep = rec.gt_stamp_ns >= rec.imu_stamp_ns[0] + int(after_s * 1e9)
-    folder.mkdir(parents=True, exist_ok=True)
-    np.savetxt(folder / f'{asl.name}.txt', np.column_stack(
-        [rec.gt_stamp_ns[keep] * 1e-9, rec.gt_pos[keep], rec.gt_quat[keep]]), fmt='%.9f')
+    write_tum(folder / f'{asl.name}.txt', rec.gt_stamp_ns[keep], rec.gt_pos[keep],
+              rec.gt_quat[keep])
     return folder
 
 

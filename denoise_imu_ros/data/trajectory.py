@@ -20,11 +20,13 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from decimal import Decimal, InvalidOperation, ROUND_HALF_EVEN
 from pathlib import Path
 
 import numpy as np
 
 from .asl import text_lines
+from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
 from ..core.records import Recording
 
@@ -71,6 +73,7 @@ def read_tum(path: str | Path) -> Trajectory:
             f'{path}: line "{lines[0].strip()[:60]}" has {width} values, not the 8 of a '
             "TUM pose (t x y z qx qy qz qw) or OpenVINS's 20 (those, then the covariance)")
     rows = np.full((len(lines), width), np.nan)
+    stamps = np.empty(len(lines), dtype=object)  # exact: a float64 of seconds misses ns
     for i, line in enumerate(lines):
         parts = line.replace(',', ' ').split()
         if len(parts) != width:
@@ -78,17 +81,18 @@ def read_tum(path: str | Path) -> Trajectory:
                                f'values where the first pose has {width}')
         try:
             rows[i] = [float(p) for p in parts]
-        except ValueError:
+            stamps[i] = Decimal(parts[0])
+        except (ValueError, InvalidOperation):
             raise DatasetError(f'{path}: unparsable line "{line.strip()[:60]}"') from None
     read_as = [] if width == 8 else [f'read as {COLUMNS[width]} columns (covariance unused)']
     rows = rows[:, :8]
     dropped: dict[str, int] = {}
 
     def drop(bad: np.ndarray, why: str) -> None:
-        nonlocal rows
+        nonlocal rows, stamps
         if bad.any():
             dropped[why] = int(bad.sum())
-            rows = rows[~bad]
+            rows, stamps = rows[~bad], stamps[~bad]
     drop(~np.isfinite(rows).all(axis=1), 'non-finite rows')
     drop(np.abs(np.linalg.norm(rows[:, 4:], axis=1) - 1) > UNIT_TOLERANCE,
          'rows whose quaternion is not a unit one')
@@ -101,11 +105,12 @@ def read_tum(path: str | Path) -> Trajectory:
                            f'nanoseconds (a clock in seconds stays below {NANOSECOND_STAMPS:g})')
     if large.all():
         read_as.append('stamps read as nanoseconds')
-    stamp = rows[:, 0] * (1.0 if large.all() else 1e9)
-    if np.abs(stamp).max() >= 2.0 ** 63:
+    scale = 1 if large.all() else 1_000_000_000
+    exact = [int((t * scale).to_integral_value(ROUND_HALF_EVEN)) for t in stamps]
+    if max(map(abs, exact)) >= 2 ** 63:
         raise DatasetError(f'{path}: stamps up to {np.abs(rows[:, 0]).max():.6g}: no clock '
                            'in nanoseconds')
-    stamp_ns = np.round(stamp).astype(np.int64)
+    stamp_ns = np.array(exact, dtype=np.int64)
     # keep each stamp above every earlier kept one: duplicates and steps back go
     later = np.concatenate([[True], stamp_ns[1:] > np.maximum.accumulate(stamp_ns)[:-1]])
     duplicate = ~later & np.isin(stamp_ns, stamp_ns[later])
@@ -118,6 +123,23 @@ def read_tum(path: str | Path) -> Trajectory:
         raise DatasetError(f'{path}: fewer than two usable poses')
     quat = rows[:, 4:] / np.linalg.norm(rows[:, 4:], axis=1, keepdims=True)
     return Trajectory(path, stamp_ns, quat, rows[:, 1:4], dropped, tuple(read_as))
+
+
+def write_tum(path: str | Path, stamp_ns: np.ndarray, pos: np.ndarray,
+              quat: np.ndarray) -> Path:
+    """
+    Write poses as a TUM file, :func:`read_tum`'s inverse (stamps exact to the ns).
+
+    ``quat`` (M, 4) xyzw, body to world; replaces ``path``, whole or not at all.
+    """
+    stamp_ns = np.asarray(stamp_ns, dtype=np.int64)
+    lines = [f'{t // 1_000_000_000}.{t % 1_000_000_000:09d} '
+             + ' '.join(f'{v:.12g}' for v in (*p, *q)) + '\n'
+             for t, p, q in zip(stamp_ns.tolist(), np.asarray(pos).tolist(),
+                                np.asarray(quat).tolist())]
+    with atomic_output(path, overwrite=True) as partial:
+        partial.write_text('# timestamp tx ty tz qx qy qz qw\n' + ''.join(lines))
+    return Path(path)
 
 
 def trajectory_file(poses: str | Path, recording: str) -> Path:

@@ -16,6 +16,7 @@ from pathlib import Path
 import sys
 
 from denoise_imu_ros.data.asl import read_asl
+from denoise_imu_ros.data.trajectory import write_tum
 import numpy as np
 
 MOVING_RAD_S = np.radians(10.0)
@@ -39,8 +40,8 @@ def main() -> None:
         moving = int(away[0])
         start = rec.imu_stamp_ns[moving] + int(args.after * 1e9)
         keep = rec.gt_stamp_ns >= start
-        np.savetxt(args.out / f'{folder.name}.txt', np.column_stack(
-            [rec.gt_stamp_ns[keep] * 1e-9, rec.gt_pos[keep], rec.gt_quat[keep]]), fmt='%.9f')
+        write_tum(args.out / f'{folder.name}.txt', rec.gt_stamp_ns[keep], rec.gt_pos[keep],
+                  rec.gt_quat[keep])
         first = rec.imu_stamp_ns[0]
         print(f'{folder.name}: moving at {(rec.imu_stamp_ns[moving] - first) * 1e-9:.1f} s, '
               f'poses from {(start - first) * 1e-9:.1f} s')

@@ -8,7 +8,7 @@ import re
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError, DataWarning
 from denoise_imu_ros.data.load import load_recording, load_sequence
-from denoise_imu_ros.data.trajectory import read_tum, trajectory_file
+from denoise_imu_ros.data.trajectory import read_tum, trajectory_file, write_tum
 from helpers import T0, write_asl
 import numpy as np
 import pytest
@@ -38,8 +38,8 @@ def test_nanosecond_stamps_and_openvins_columns_read_as_the_same_poses(data_dir,
     tum = read_tum(path)
     rows = np.loadtxt(path)
     # ORB-SLAM3's EuRoC files: the stamp in nanoseconds, fixed with six decimals
-    nano = _write(tmp_path / 'nano.txt', [f'{t * 1e9:.6f} ' + ' '.join(map(str, r))
-                                          for t, r in zip(rows[:, 0], rows[:, 1:])])
+    nano = _write(tmp_path / 'nano.txt', [f'{t}.000000 ' + ' '.join(map(str, r))
+                                          for t, r in zip(tum.stamp_ns, rows[:, 1:])])
     # OpenVINS: TUM's 8 columns, then the rotation's and the position's covariance
     ov = tmp_path / 'ov.txt'
     np.savetxt(ov, np.column_stack([rows, np.full((len(rows), 12), 1e-4)]), fmt='%.9f',
@@ -47,12 +47,21 @@ def test_nanosecond_stamps_and_openvins_columns_read_as_the_same_poses(data_dir,
                       'Pt11 Pt12 Pt13 Pt22 Pt23 Pt33')
     for other, said in ((read_tum(nano), 'stamps read as nanoseconds'),
                         (read_tum(ov), "read as OpenVINS's columns (covariance unused)")):
-        np.testing.assert_allclose(other.stamp_ns, tum.stamp_ns, rtol=0, atol=128)
+        np.testing.assert_array_equal(other.stamp_ns, tum.stamp_ns)
         np.testing.assert_allclose(other.quat, tum.quat, rtol=0, atol=1e-8)
         np.testing.assert_allclose(other.pos, tum.pos, rtol=0, atol=1e-8)
         assert not other.dropped and other.summary() == (
             f'{other.path}: {len(tum.stamp_ns)} poses kept; {said}')
     assert tum.summary() == ''
+
+
+def test_written_poses_read_back_exactly(data_dir, tmp_path):
+    tum = read_tum(data_dir / 'euroc_vio' / 'vins_mono' / 'MH_01_easy.txt')
+    back = read_tum(write_tum(tmp_path / 'a' / 't.txt', tum.stamp_ns, tum.pos, tum.quat))
+    np.testing.assert_array_equal(back.stamp_ns, tum.stamp_ns)
+    np.testing.assert_allclose(back.pos, tum.pos, rtol=1e-11, atol=0)
+    np.testing.assert_allclose(back.quat, tum.quat, rtol=0, atol=1e-11)
+    assert back.summary() == ''
 
 
 def test_duplicate_backward_non_finite_and_non_unit_rows_are_dropped_and_counted(tmp_path):
@@ -136,8 +145,7 @@ def test_the_recordings_own_poses_as_tum_files_give_the_same_recipe(euroc, tmp_p
     names = ['MH_01_easy', 'V2_01_easy']
     for name in names:  # the motion capture, written as a VIO tool writes its trajectory
         rec = read(euroc / name)
-        rows = np.column_stack([rec.gt_stamp_ns * 1e-9, rec.gt_pos, rec.gt_quat])
-        np.savetxt(tmp_path / f'{name}.txt', rows, fmt='%.9f')
+        write_tum(tmp_path / f'{name}.txt', rec.gt_stamp_ns, rec.gt_pos, rec.gt_quat)
     own, _ = init_recipe(euroc, names)
     from_files, said = init_recipe(euroc, names, poses=tmp_path)
     assert from_files.pop('poses') == str(tmp_path) and own.pop('poses') is None
@@ -183,8 +191,7 @@ def test_poses_whose_heading_is_noisier_than_their_tilt_teach_the_tilt_alone(eur
         about = np.zeros((len(rec.gt_quat), 3))
         about[:, 2] = rng.normal(0, 2e-3, len(rec.gt_quat))
         quat = (Rotation.from_rotvec(about) * Rotation.from_quat(rec.gt_quat)).as_quat()
-        rows = np.column_stack([rec.gt_stamp_ns * 1e-9, rec.gt_pos, quat])
-        np.savetxt(tmp_path / f'{name}.txt', rows, fmt='%.9f')
+        write_tum(tmp_path / f'{name}.txt', rec.gt_stamp_ns, rec.gt_pos, quat)
     recipe, said = init_recipe(euroc, names, poses=tmp_path)
     assert recipe['heading_weight'] == 0.0
     assert any(line.startswith('heading_weight 0: ') and 'learnt from the tilt alone' in line

@@ -143,6 +143,7 @@ def test_a_baseline_that_is_a_network_or_of_another_rate_is_refused_by_every_com
 def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_path, capsys):
     """Motion capture written as a VIO writes it, once as it is, once 0.2 deg noisier."""
     from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.trajectory import write_tum
     from scipy.spatial.transform import Rotation
     rec = read_asl(euroc / 'MH_01_easy')
     keep = slice(None, None, 10)  # 20 Hz, a VIO's rate
@@ -150,9 +151,8 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
     noisy = Rotation.from_rotvec(np.radians(rng.normal(0, 0.2, (len(rec.gt_quat[keep]), 3))))
     for name, quat in (('clean', rec.gt_quat[keep]),
                        ('noisy', (Rotation.from_quat(rec.gt_quat[keep]) * noisy).as_quat())):
-        (tmp_path / name).mkdir()
-        np.savetxt(tmp_path / name / 'MH_01_easy.txt', np.column_stack(
-            [rec.gt_stamp_ns[keep] * 1e-9, rec.gt_pos[keep], quat]), fmt='%.9f')
+        write_tum(tmp_path / name / 'MH_01_easy.txt', rec.gt_stamp_ns[keep], rec.gt_pos[keep],
+                  quat)
         assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences',
                      'MH_01_easy', '--poses', str(tmp_path / name), '--align', 'auto',
                      '--out', str(tmp_path / f'e_{name}'), '--no-plots']) == 0
