@@ -62,8 +62,8 @@ ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'tim
              'imu_from_pose_rotation_xyzw', 'imu_from_pose_rotation_deg',
              'imu_from_pose_rotation_std_deg', 'gyro_bias_vs_pose_deg_s',
              'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
-             'rate_window_s', 'judged_after_alignment', 'pose_jumps', 'paper_increments',
-             'shortest_clean_increment', 'label_noise', 'supervision')
+             'rate_window_s', 'rate_windows_left_out', 'judged_after_alignment', 'pose_jumps',
+             'paper_increments', 'shortest_clean_increment', 'label_noise', 'supervision')
 
 
 def paper_increments(rate_hz: float) -> tuple[int, int]:
@@ -327,6 +327,9 @@ def markdown(report: dict[str, Any]) -> str:
                           for v in r['gyro_scale_error_percent']),
               '  excitation, RMS rate per IMU axis (deg/s): '
               + ', '.join(f'{v:.1f}' for v in r['excitation_rms_deg_s']),
+              *([f'  left out of the alignment: {100 * r["rate_windows_left_out"]:.1f} % of '
+                 'its rate windows, whose poses no frame and offset explain (a VIO '
+                 'initialising, a relocalisation)'] if r['rate_windows_left_out'] else []),
               '  increment residual after a constant bias (samples: mrad per axis, as deg/s):']
     if r['judged_after_alignment']:
         lines[-1] = ('  with the clock offset and frame rotation applied: increment residual '

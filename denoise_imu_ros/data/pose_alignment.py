@@ -10,8 +10,12 @@ Method: the mean angular rate over short windows (50 ms, or two pose periods) of
 gyro and of the poses are compared; for each candidate clock offset the rotation from
 the pose body frame to the IMU frame and the gyro bias follow in closed form (Kabsch
 with centring), and the offset minimising the residual is refined to a fraction of a
-millisecond by a parabola. Confidence figures are the spread of the same estimates on
-four consecutive quarters of the recording (standard error of their mean).
+millisecond by a parabola. Every fit leaves out the windows it cannot explain (a VIO
+initialising, a relocalisation: :func:`robust_fit`) and is made again. Confidence
+figures are the spread of the same estimates on four consecutive quarters of the
+recording (standard error of their mean). Excitation is the gyro's own rate over
+RATE_WINDOW_S, less its bias: poses a few times a second (a SLAM's keyframes) average a
+turn away, the gyro does not.
 """
 
 from __future__ import annotations
@@ -44,6 +48,8 @@ JUMP_RATE_MARGIN_RAD_S = 0.2  # this, are jumps: left out of the comparison
 OFFSET_TOLERANCE_S = 1e-3  # above, and SIGNIFICANCE standard errors: apply the offset
 ROTATION_TOLERANCE_DEG = 0.2  # above, and SIGNIFICANCE standard errors: apply the rotation
 SIGNIFICANCE = 2.0
+OUTLIER_FACTOR = 6.0       # a window whose residual is beyond this times the median
+OUTLIER_MAX_FRACTION = 0.2  # more than this part of them: the poses do not follow
 
 
 class Rates:
@@ -64,15 +70,7 @@ class Rates:
         relative = multiply_arrays(conjugate_arrays(quat[:-w]), quat[w:])
         self.pose = Rotation.from_quat(relative).as_rotvec() / (w * GRID_S)
         self.pose_ok = valid[:-w] & valid[w:]
-        # gyro mean rates over windows of the same length, every sample; a sample is the
-        # rate at its stamp, so n samples cover from half a period before the first
-        t = (rec.imu_stamp_ns - t0) * 1e-9
-        n = max(1, int(round(window_s / np.median(np.diff(t)))))
-        steps = rec.imu[:-1, :3] * np.diff(t)[:, None]
-        cs = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
-        self.imu_t = t[:-n] - 0.5 * np.diff(t)[:len(t) - n]
-        self.imu = (cs[n:] - cs[:-n]) / (t[n:] - t[:-n])[:, None]
-        self.window_s = n * float(np.median(np.diff(t)))
+        self.imu_t, self.imu, self.window_s = gyro_means(rec, window_s)
         # a pose jump (a VIO re-initialising, a placeholder pose) turns faster than the
         # gyro ever does: those windows are not compared (norms: any frame, any clock)
         fastest = float(np.linalg.norm(self.imu, axis=1).max())
@@ -93,6 +91,21 @@ class Rates:
         return self.imu[part][ok], self.pose[i] * (1 - f) + self.pose[i + 1] * f
 
 
+def gyro_means(rec: Recording, window_s: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """
+    Return windows of about ``window_s`` from every sample: starts, gyro means, length.
+
+    Starts are in s from the first pose; a sample is the rate at its stamp, so n samples
+    cover from half a period before the first.
+    """
+    t = (rec.imu_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
+    n = max(1, int(round(window_s / np.median(np.diff(t)))))
+    steps = rec.imu[:-1, :3] * np.diff(t)[:, None]
+    cs = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
+    start = t[:-n] - 0.5 * np.diff(t)[:len(t) - n]
+    return start, (cs[n:] - cs[:-n]) / (t[n:] - t[:-n])[:, None], n * float(np.median(np.diff(t)))
+
+
 def fit_frame(imu: np.ndarray, pose: np.ndarray) -> tuple[Rotation, np.ndarray, float]:
     """Rotation R and bias b with imu = R pose + b (least squares); RMS residual."""
     mi, mp = imu.mean(0), pose.mean(0)
@@ -101,6 +114,23 @@ def fit_frame(imu: np.ndarray, pose: np.ndarray) -> tuple[Rotation, np.ndarray, 
         rot, rssd = Rotation.align_vectors(imu - mi, pose - mp)
     # the residual imu - R pose - b is the centred one, whose root sum of squares is rssd
     return rot, mi - rot.apply(mp), float(rssd / math.sqrt(imu.size))
+
+
+def robust_fit(imu: np.ndarray,
+               pose: np.ndarray) -> tuple[Rotation, np.ndarray, float, np.ndarray]:
+    """
+    Fit the frame again without the windows it cannot explain; also say which those are.
+
+    A window beyond OUTLIER_FACTOR times the median residual is left out (a VIO
+    initialising, a relocalisation), unless more than OUTLIER_MAX_FRACTION are: then the
+    poses do not follow the gyro, and the residual of them all says so.
+    """
+    rot, bias, rms = fit_frame(imu, pose)
+    residual = np.linalg.norm(imu - rot.apply(pose) - bias, axis=1)
+    out = residual > OUTLIER_FACTOR * float(np.median(residual))
+    if not out.any() or out.mean() > OUTLIER_MAX_FRACTION:
+        return rot, bias, rms, np.zeros(len(imu), dtype=bool)
+    return (*fit_frame(imu[~out], pose[~out]), out)
 
 
 def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
@@ -115,7 +145,7 @@ def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
     """
     def cost(d: float, windows: slice) -> float:
         imu, pose = rates.matched(d, windows)
-        return fit_frame(imu, pose)[2] if len(imu) > 100 else math.inf
+        return robust_fit(imu, pose)[2] if len(imu) > 100 else math.inf
 
     n = len(rates.imu_t[part])
     coarse = slice(part.start, part.stop, max(1, n // COARSE_WINDOWS))
@@ -180,8 +210,13 @@ def estimate_pose_alignment(rec: Recording,
     rates = Rates(rec, max(RATE_WINDOW_S, 2 * period))
     offset = _best_offset(rates, max_offset_s)
     imu, pose = rates.matched(offset)
-    rot, bias, rms = fit_frame(imu, pose)
+    rot, bias, rms, out = robust_fit(imu, pose)
+    imu, pose = imu[~out], pose[~out]
     aligned = rot.apply(pose)
+    # the gyro's own turn where the poses are, over RATE_WINDOW_S, less its bias
+    start, gyro, _ = gyro_means(rec, RATE_WINDOW_S)
+    inside = (start - offset >= 0) & (start - offset <= rates.pose_t[-1])
+    excitation = np.sqrt(np.mean((gyro[inside] - bias) ** 2, axis=0))
     power = (aligned ** 2).sum(0)
     observed = power > 1e-12 * len(aligned)  # an axis without rotation has no scale
     scale = ((imu - bias) * aligned).sum(0) / np.where(observed, power, 1.0)
@@ -193,7 +228,7 @@ def estimate_pose_alignment(rec: Recording,
         offsets.append(_best_offset(rates, 4e-3, part, center=offset))
         qi, qp = rates.matched(offset, part)
         if len(qi) > 100:
-            angles.append(math.degrees((fit_frame(qi, qp)[0] * rot.inv()).magnitude()))
+            angles.append(math.degrees((robust_fit(qi, qp)[0] * rot.inv()).magnitude()))
     return {
         'time_offset_s': offset,
         # the standard error of their mean: the sample std (ddof 1; of four, ddof 0 is 13 % low)
@@ -207,9 +242,10 @@ def estimate_pose_alignment(rec: Recording,
         'gyro_bias_vs_pose_deg_s': np.degrees(bias).tolist(),
         'gyro_scale_error_percent': [float(100 * (v - 1)) if ok else None
                                      for v, ok in zip(scale, observed)],
-        'excitation_rms_deg_s': np.degrees(np.sqrt(np.mean(aligned ** 2, axis=0))).tolist(),
+        'excitation_rms_deg_s': np.degrees(excitation).tolist(),
         'rate_residual_rms_deg_s': math.degrees(rms),
         'rate_window_s': rates.window_s,
+        'rate_windows_left_out': float(out.mean()),
     }
 
 

@@ -10,7 +10,8 @@ import re
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError
 from denoise_imu_ros.data.asl import read_asl
-from denoise_imu_ros.data.check import check, ESTIMATES, label_noise, paper_increments, supervision
+from denoise_imu_ros.data.check import check, ESTIMATES, label_noise, markdown
+from denoise_imu_ros.data.check import paper_increments, supervision
 from denoise_imu_ros.data.pose_alignment import estimate_pose_alignment
 from denoise_imu_ros.data.timebase import onto_imu_stamps
 from helpers import ROOT, write_asl
@@ -350,3 +351,54 @@ def test_a_saturated_gyro_is_named_not_taken_for_a_frame_rotation(euroc, tmp_pat
     assert report['reasons'][0].startswith('gyro saturated: ')
     assert f'pinned at +-{math.degrees(limit):.4g} deg/s on its z axis' in report['reasons'][0]
     assert check(rec)['gyro_clipped'] is None and check(rec)['accel_clipped'] is None
+
+
+def _camera_poses(rec, keep, late_ms=90):
+    """``rec``'s poses as a camera 90 deg from the IMU writes them, late, at ``keep``."""
+    camera = Rotation.from_rotvec([0.0, 0.0, 90.0], degrees=True)
+    return dataclasses.replace(
+        rec, gt_stamp_ns=rec.gt_stamp_ns[keep] - late_ms * 1_000_000,
+        gt_quat=(Rotation.from_quat(rec.gt_quat[keep]) * camera).as_quat(),
+        gt_pos=rec.gt_pos[keep])
+
+
+def test_an_initialising_vios_first_seconds_do_not_move_the_alignment(euroc):
+    rec = read_asl(euroc / 'MH_01_easy')
+    clean = _camera_poses(rec, slice(None, None, 20))
+    # its first 5 s wrong by 8 deg per axis and pose, at random (a VIO initialising)
+    t = (clean.gt_stamp_ns - clean.gt_stamp_ns[0]) * 1e-9
+    wrong = Rotation.from_rotvec(np.random.default_rng(3).normal(0, np.radians(8), (
+        int(np.count_nonzero(t < 5.0)), 3)))
+    quat = clean.gt_quat.copy()
+    quat[t < 5.0] = (wrong * Rotation.from_quat(quat[t < 5.0])).as_quat()
+    start = dataclasses.replace(clean, gt_quat=quat)
+    base, found = estimate_pose_alignment(clean), estimate_pose_alignment(start)
+    assert abs(found['time_offset_s'] - base['time_offset_s']) < 1e-3
+    turn = Rotation.from_quat(found['imu_from_pose_rotation_xyzw']) * Rotation.from_quat(
+        base['imu_from_pose_rotation_xyzw']).inv()
+    assert math.degrees(turn.magnitude()) < 0.2
+    assert found['rate_residual_rms_deg_s'] < 1.5 * base['rate_residual_rms_deg_s']
+    # those seconds are 3.8 % of the recording: left out, and said
+    assert 0.02 < found['rate_windows_left_out'] < 0.06
+    report = check(start)
+    assert report['usable'] == 'after alignment' and report['judged_after_alignment']
+    assert report['pose_jumps'][0]['start_s'] < 1.0  # masked for training
+    assert re.search(r'left out of the alignment: \d\.\d % of its rate windows',
+                     markdown(report))
+
+
+def test_keyframes_a_few_times_a_second_still_see_the_gyro_turn(euroc):
+    rec = read_asl(euroc / 'V2_01_easy')
+    # a SLAM's keyframe trajectory: a pose every 0.2-1.0 s
+    t = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
+    gaps = np.random.default_rng(4).uniform(0.2, 1.0, 1000)
+    wanted = np.cumsum(gaps)[np.cumsum(gaps) < t[-1]]
+    keyframes = _camera_poses(rec, np.searchsorted(t, wanted))
+    dense = _camera_poses(rec, slice(None, None, 20))
+    sparse, full = check(keyframes), check(dense)
+    # the rotation about each axis is the gyro's, not what poses seconds apart average to
+    np.testing.assert_allclose(sparse['excitation_rms_deg_s'], full['excitation_rms_deg_s'],
+                               rtol=0.05)
+    assert min(sparse['excitation_rms_deg_s']) > 4.0
+    assert sparse['usable'] == 'after alignment' and sparse['judged_after_alignment']
+    assert abs(sparse['time_offset_s'] - 0.090) < 0.01
