@@ -44,6 +44,9 @@ from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residu
 from ..core.records import Recording, Sequence
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
+# a trajectory's heading drift grows over these, its noise (and a keyframe trajectory's
+# interpolation, mostly tilt) does not: heading and tilt are compared there too
+DRIFT_HORIZONS_S = (5.0, 10.0, 20.0)
 BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)
 NOISE_RATE_LIMIT_DEG_S = 1.0
 MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
@@ -63,7 +66,8 @@ ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'tim
              'imu_from_pose_rotation_std_deg', 'gyro_bias_vs_pose_deg_s',
              'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
              'rate_window_s', 'rate_windows_left_out', 'judged_after_alignment', 'pose_jumps',
-             'paper_increments', 'shortest_clean_increment', 'label_noise', 'supervision')
+             'drift_increments', 'paper_increments', 'shortest_clean_increment', 'label_noise',
+             'supervision')
 
 
 def paper_increments(rate_hz: float) -> tuple[int, int]:
@@ -78,31 +82,46 @@ def paper_increments(rate_hz: float) -> tuple[int, int]:
 
 
 def label_noise(seq: Sequence) -> dict[str, Any]:
-    """Constant gyro bias against the ground truth, and the increment residual per length."""
+    """
+    Constant gyro bias against the ground truth, and the increment residual per length.
+
+    Also the heading and tilt residuals over DRIFT_HORIZONS_S (``drift_increments``).
+    """
     gyro = seq.imu[:, :3]
     dt = float(np.mean(seq.dt))
     bias = fit_constant_bias(seq.gt_quat, seq.gt_valid, gyro, seq.dt, BIAS_FIT_LENGTH)
     if bias is None:  # no trusted block that long: the profile shows the raw residual
         bias = np.zeros(3)
-    profile = {}
     est = integrate(seq.gt_quat[0], gyro[:-1] - bias, seq.dt)  # one for every length
     world = level(seq)[0].gt_quat  # the same increments, the vertical along z
-    for j in LENGTHS:
+
+    def split(j: int) -> dict[str, float] | None:
         if (len(seq) - 1) // j < 2:
-            break
+            return None
         res, _ = increment_residuals(seq.gt_quat, seq.gt_valid, gyro - bias, seq.dt, j, est)
         if len(res) == 0:
-            continue
-        rms = float(np.sqrt(np.mean(res ** 2)))  # per axis
+            return None
         # each residual is in the body frame at its block's end
         turned = Rotation.from_quat(world[trusted_blocks(seq.gt_valid, j) + j]).apply(res)
-        profile[j] = {'residual_mrad': 1e3 * rms,
-                      'noise_rate_deg_s': math.degrees(rms / (j * dt)),
-                      'heading_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, 2] ** 2))),
-                      'tilt_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, :2] ** 2)))}
+        return {'residual_mrad': 1e3 * float(np.sqrt(np.mean(res ** 2))),  # per axis
+                'heading_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, 2] ** 2))),
+                'tilt_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, :2] ** 2)))}
+
+    profile = {}
+    for j in LENGTHS:
+        found = split(j)
+        if found:
+            profile[j] = {**found, 'noise_rate_deg_s': math.degrees(
+                found['residual_mrad'] * 1e-3 / (j * dt))}
+    drift = {}
+    for horizon in DRIFT_HORIZONS_S:
+        j = int(round(horizon / dt))
+        found = split(j)
+        if found:
+            drift[j] = found
     noisy = [j for j, p in profile.items() if p['noise_rate_deg_s'] > NOISE_RATE_LIMIT_DEG_S]
     return {'gyro_bias_deg_s': np.degrees(bias).tolist(), 'increments': profile,
-            'noise_dominated_increments': noisy}
+            'noise_dominated_increments': noisy, 'drift_increments': drift}
 
 
 def supervision(seq: Sequence, lengths: tuple[int, ...]) -> dict[str, Any]:

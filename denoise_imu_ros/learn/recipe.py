@@ -125,7 +125,8 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     estimate = poses is not None and bool(set(still) & set(sequences))
     if estimate:  # a trajectory's drift is not the gyro's bias: stillness measures that
         recipe.update(rest_bias=True, recording_bias=True)
-    heading = _heading_ratio(reports.values(), increments[0])
+    found = _heading_ratio(reports.values(), increments[0])
+    heading, where = found if found else (None, '')
     if poses is not None and heading is not None and heading > HEADING_RATIO:
         recipe.update(heading_weight=0.0)
     why = [f'IMU rate {rate:.1f} Hz (the model is for this rate only; receptive field '
@@ -152,7 +153,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         measured = ('not measured (no increment of that length with trusted poses)'
                     if heading is None else
                     f"the poses' heading disagrees with the gyro {heading:.2f}x as much as "
-                    f'their tilt ({increments[0]}-sample increments)')
+                    f'their tilt ({where})')
         why.append(f"heading_weight {recipe['heading_weight']:g}: {measured}; " + (
             "a heading gravity does not hold would teach the model the trajectory's "
             'drift: learnt from the tilt alone' if recipe['heading_weight'] == 0 else
@@ -186,14 +187,29 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     return recipe, why
 
 
-def _heading_ratio(reports: Iterable[dict[str, Any]], length: int) -> float | None:
-    """Heading residual over tilt residual of the poses' increments, over all recordings."""
-    profiles = [r['increments'][length] for r in reports if length in r['increments']]
-    if not profiles:
-        return None
-    heading = np.sqrt(np.mean([p['heading_mrad'] ** 2 for p in profiles]))
-    tilt = np.sqrt(np.mean([p['tilt_mrad'] ** 2 for p in profiles]))
-    return float(heading / tilt) if tilt > 0 else None
+def _heading_ratio(reports: Iterable[dict[str, Any]],
+                   length: int) -> tuple[float, str] | None:
+    """
+    Heading residual over tilt residual of the poses, over all recordings, and where.
+
+    The largest of the ratios at the first increment (a heading noisier than the tilt)
+    and over check-data's drift horizons (a heading that drifts: a keyframe trajectory's
+    interpolation inflates the tilt at short lengths, not the drift at long ones).
+    """
+    reports = list(reports)
+    horizons = sorted({j for r in reports for j in r['drift_increments'] or {}})
+    ratios = []
+    for key, j, label in ([('increments', length, f'{length}-sample increments')]
+                          + [('drift_increments', j, f'{j}-sample increments, a drift horizon')
+                             for j in horizons]):
+        profiles = [r[key][j] for r in reports if j in (r[key] or {})]
+        if not profiles:
+            continue
+        heading = np.sqrt(np.mean([p['heading_mrad'] ** 2 for p in profiles]))
+        tilt = np.sqrt(np.mean([p['tilt_mrad'] ** 2 for p in profiles]))
+        if tilt > 0:
+            ratios.append((float(heading / tilt), label))
+    return max(ratios) if ratios else None
 
 
 def _starts_still(imu: np.ndarray, rate_hz: float) -> bool:

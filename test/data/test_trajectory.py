@@ -196,3 +196,25 @@ def test_poses_whose_heading_is_noisier_than_their_tilt_teach_the_tilt_alone(eur
     assert recipe['heading_weight'] == 0.0
     assert any(line.startswith('heading_weight 0: ') and 'learnt from the tilt alone' in line
                for line in said)
+
+
+def test_a_keyframe_trajectorys_drifting_heading_is_seen_over_its_drift_horizons(
+        data_dir, euroc, tmp_path):
+    from denoise_imu_ros.data.check import DRIFT_HORIZONS_S
+    from denoise_imu_ros.learn.recipe import init_recipe
+    names = ['MH_01_easy', 'V1_02_medium']
+    rng = np.random.default_rng(6)
+    for name in names:  # VINS-Mono's trajectory as keyframes: a pose every 0.2-1.0 s
+        vins = read_tum(data_dir / 'euroc_vio' / 'vins_mono' / f'{name}.txt')
+        t = (vins.stamp_ns - vins.stamp_ns[0]) * 1e-9
+        wanted = np.cumsum(rng.uniform(0.2, 1.0, 1000))
+        keep = np.unique(np.searchsorted(t, wanted[wanted < t[-1]]))
+        write_tum(tmp_path / f'{name}.txt', vins.stamp_ns[keep], vins.pos[keep],
+                  vins.quat[keep])
+    recipe, said = init_recipe(euroc, names, poses=tmp_path)
+    # between keyframes the interpolated tilt is the poses' largest error, so at the first
+    # increment their heading looks the better half; its drift shows over 20 s
+    line = next(line for line in said if line.startswith('heading_weight'))
+    assert recipe['heading_weight'] == 0.0 and re.search(
+        r'\((\d+)-sample increments, a drift horizon\)', line).group(1) in {
+            str(round(h * 200)) for h in DRIFT_HORIZONS_S}
