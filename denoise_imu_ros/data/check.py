@@ -33,8 +33,9 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment, level,
-                             MAX_OFFSET_S, needs_alignment, not_following)
+from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
+                             interpolation_scale_error, level, MAX_OFFSET_S, needs_alignment,
+                             not_following)
 from .pose_jumps import describe as describe_jumps, find_jumps, Jump, mask_jumps
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
@@ -47,6 +48,10 @@ LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled 
 # a trajectory's heading drift grows over these, its noise (and a keyframe trajectory's
 # interpolation, mostly tilt) does not: heading and tilt are compared there too
 DRIFT_HORIZONS_S = (5.0, 10.0, 20.0)
+# the gyro's scale against its own attitude interpolated between the pose stamps beyond
+# this (%): poses too sparse for the motion (EuRoC: 5-10 Hz trajectories 0.5 at most, a
+# pose every 0.2-1.0 s 0.9-31)
+INTERPOLATION_LIMIT_PERCENT = 1.0
 BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)
 NOISE_RATE_LIMIT_DEG_S = 1.0
 MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
@@ -66,7 +71,8 @@ ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'tim
              'imu_from_pose_rotation_std_deg', 'gyro_bias_vs_pose_deg_s',
              'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
              'rate_window_s', 'rate_windows_left_out', 'judged_after_alignment', 'pose_jumps',
-             'drift_increments', 'paper_increments', 'shortest_clean_increment', 'label_noise',
+             'drift_increments', 'interpolation_scale_error_percent', 'too_sparse',
+             'paper_increments', 'shortest_clean_increment', 'label_noise',
              'supervision')
 
 
@@ -216,6 +222,10 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
             'blurred by it')
     if not units and not report['supervision']['helps']:
         report['reasons'].append(report['supervision']['summary'])
+    report['interpolation_scale_error_percent'] = interpolation_scale_error(rec)
+    report['too_sparse'] = _too_sparse(report)
+    if not units and report['too_sparse']:
+        report['reasons'].append(report['too_sparse'])
     report['verdict'] = {'yes': 'usable for training', 'after alignment':
                          'usable for training with alignment applied',
                          'no': 'not usable for training'}[report['usable']]
@@ -308,6 +318,25 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
     return 'yes', []
 
 
+def interpolation_worst(report: dict[str, Any]) -> tuple[float, str] | None:
+    """Return the interpolation's largest scale error (%) and its axis, or None."""
+    errors = [(v, axis) for v, axis in zip(report['interpolation_scale_error_percent'], 'xyz')
+              if v is not None]
+    return max(errors, key=lambda e: abs(e[0]), default=None)
+
+
+def _too_sparse(report: dict[str, Any]) -> str | None:
+    """Why the poses are too sparse for the motion to teach the gyro's scale, or None."""
+    worst = interpolation_worst(report)
+    if worst is None or abs(worst[0]) <= INTERPOLATION_LIMIT_PERCENT:
+        return None
+    return (f'poses too sparse for the motion ({report["pose_rate_hz"]:.1f} Hz): the gyro '
+            f'against its own attitude known only at the pose stamps is off its scale by '
+            f'{worst[0]:+.1f} % about the IMU {worst[1]} axis (limit '
+            f'{INTERPOLATION_LIMIT_PERCENT:g} %), which a model would learn as the '
+            "gyro's; record poses more often, or move more slowly")
+
+
 def _units(report: dict[str, Any]) -> list[str]:
     """Return what the accelerometer's norm and the gyro's scale say of the units."""
     reasons = []
@@ -344,6 +373,9 @@ def markdown(report: dict[str, Any]) -> str:
               '  gyro scale error (%): '
               + ', '.join('-' if v is None else f'{v:+.3f}'
                           for v in r['gyro_scale_error_percent']),
+              "  the same against the gyro's own attitude between the pose stamps (%): "
+              + ', '.join('-' if v is None else f'{v:+.3f}'
+                          for v in r['interpolation_scale_error_percent']),
               '  excitation, RMS rate per IMU axis (deg/s): '
               + ', '.join(f'{v:.1f}' for v in r['excitation_rms_deg_s']),
               *([f'  left out of the alignment: {100 * r["rate_windows_left_out"]:.1f} % of '

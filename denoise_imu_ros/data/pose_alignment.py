@@ -27,10 +27,11 @@ import warnings
 
 import numpy as np
 from scipy.optimize import minimize_scalar
-from scipy.spatial.transform import Rotation
+from scipy.spatial.transform import Rotation, Slerp
 
 from .timebase import poses_at
 from ..core.errors import DatasetError
+from ..core.metrics import integrate
 from ..core.records import Recording, Sequence
 from ..core.rotation import conjugate_arrays, multiply_arrays
 
@@ -133,6 +134,38 @@ def robust_fit(imu: np.ndarray,
     return (*fit_frame(imu[~out], pose[~out]), out)
 
 
+def _scale_error(imu: np.ndarray, pose: np.ndarray) -> list[float | None]:
+    """Return the gyro's scale error (%) per axis against pose rates in its frame, bias-free."""
+    power = (pose ** 2).sum(0)
+    observed = power > 1e-12 * len(pose)  # an axis without rotation has no scale
+    scale = (imu * pose).sum(0) / np.where(observed, power, 1.0)
+    return [float(100 * (v - 1)) if ok else None for v, ok in zip(scale, observed)]
+
+
+def interpolation_scale_error(rec: Recording) -> list[float | None]:
+    """
+    Return the gyro's scale error (%) per axis against its own attitude at the poses.
+
+    The gyro's integrated attitude, sampled at the pose stamps and interpolated between
+    them as poses are (:func:`~denoise_imu_ros.data.timebase.poses_at`), compared with the
+    gyro as :func:`estimate_pose_alignment` compares poses: poses without error, on the
+    IMU's clock and in its frame, so what is left is the interpolation's alone. Poses
+    a few times a second (a SLAM's keyframes) miss what turns faster; a model trained on
+    them learns the difference as the gyro's scale.
+    """
+    t = rec.imu_stamp_ns
+    attitude = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rec.imu[:-1, :3], np.diff(t) * 1e-9)
+    stamps = rec.gt_stamp_ns[(rec.gt_stamp_ns >= t[0]) & (rec.gt_stamp_ns <= t[-1])]
+    if len(stamps) < 3:
+        return [None, None, None]
+    sampled = Slerp((t - t[0]) * 1e-9, attitude)((stamps - t[0]) * 1e-9).as_quat()
+    own = Recording(rec.name, rec.source, t, rec.imu, stamps, sampled,
+                    np.zeros((len(stamps), 3)))
+    period = float(np.median(np.diff(stamps))) * 1e-9
+    imu, pose = Rates(own, max(RATE_WINDOW_S, 2 * period)).matched(0.0)
+    return _scale_error(imu - imu.mean(0) + pose.mean(0), pose)
+
+
 def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
                  center: float = 0.0) -> float:
     """
@@ -217,9 +250,6 @@ def estimate_pose_alignment(rec: Recording,
     start, gyro, _ = gyro_means(rec, RATE_WINDOW_S)
     inside = (start - offset >= 0) & (start - offset <= rates.pose_t[-1])
     excitation = np.sqrt(np.mean((gyro[inside] - bias) ** 2, axis=0))
-    power = (aligned ** 2).sum(0)
-    observed = power > 1e-12 * len(aligned)  # an axis without rotation has no scale
-    scale = ((imu - bias) * aligned).sum(0) / np.where(observed, power, 1.0)
     # confidence: the same estimates on four quarters of the recording
     n = len(rates.imu_t)
     offsets, angles = [], []
@@ -240,8 +270,7 @@ def estimate_pose_alignment(rec: Recording,
         'imu_from_pose_rotation_std_deg': float(np.sqrt(np.mean(np.square(angles)))
                                                 / math.sqrt(max(len(angles), 1))),
         'gyro_bias_vs_pose_deg_s': np.degrees(bias).tolist(),
-        'gyro_scale_error_percent': [float(100 * (v - 1)) if ok else None
-                                     for v, ok in zip(scale, observed)],
+        'gyro_scale_error_percent': _scale_error(imu - bias, aligned),
         'excitation_rms_deg_s': np.degrees(excitation).tolist(),
         'rate_residual_rms_deg_s': math.degrees(rms),
         'rate_window_s': rates.window_s,

@@ -57,7 +57,8 @@ from ..core.atomic import write_text
 from ..core.errors import DatasetError
 from ..core.limits import common_rate
 from ..data import rest_bias
-from ..data.check import check, paper_increments
+from ..data.check import (check, INTERPOLATION_LIMIT_PERCENT, interpolation_worst,
+                          paper_increments)
 from ..data.load import load_recording
 
 WINDOW_S = 80.0
@@ -88,10 +89,20 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     if len(noise) == len(reports):
         raise DatasetError('no increment up to 512 samples is free of ground-truth noise '
                            'on any recording: the poses cannot supervise the loss')
-    weak = [n for n, r in reports.items() if not r['supervision']['helps'] and n not in noise]
-    if len(reports) - len(noise) - len(weak) < 2:
+    sparse = [n for n, r in reports.items() if r['too_sparse'] and n not in noise]
+    off_scale = ', '.join('{} {:+.1f} % about {}'.format(n, *interpolation_worst(reports[n]))
+                          for n in sparse)
+    if len(noise) + len(sparse) == len(reports):
+        raise DatasetError(
+            'the poses are too sparse for the motion on every recording (the gyro against '
+            f'its own attitude known only at their stamps is off its scale: {off_scale}; '
+            f'limit {INTERPOLATION_LIMIT_PERCENT:g} %), which a model would learn as the '
+            "gyro's: record poses more often, or move more slowly")
+    weak = [n for n, r in reports.items()
+            if not r['supervision']['helps'] and n not in noise + sparse]
+    if len(reports) - len(noise) - len(sparse) - len(weak) < 2:
         weak = []  # kept, and named below: crossval needs two recordings
-    left_out = noise + weak
+    left_out = noise + sparse + weak
     reports = {n: r for n, r in reports.items() if n not in left_out}
     sequences = [n for n in sequences if n not in left_out]
     noisy = set().union(*(r['noise_dominated_increments'] for r in reports.values()))
@@ -163,6 +174,11 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                    'of ground-truth noise there (poses too noisy for the motion), so '
                    + ('it cannot' if len(noise) == 1 else 'they cannot')
                    + ' supervise the loss; score with eval instead')
+    if sparse:
+        why.append(f'left out: {", ".join(sparse)}: poses too sparse for the motion (the '
+                   'gyro against its own attitude known only at their stamps is off its '
+                   f"scale: {off_scale}), which a model would learn as the gyro's; score "
+                   'with eval instead')
     if weak:
         why.append(f'left out: {", ".join(weak)}: '
                    + ('its poses do not lower its own' if len(weak) == 1 else

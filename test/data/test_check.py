@@ -387,7 +387,7 @@ def test_an_initialising_vios_first_seconds_do_not_move_the_alignment(euroc):
                      markdown(report))
 
 
-def test_keyframes_a_few_times_a_second_still_see_the_gyro_turn(euroc):
+def test_keyframes_a_few_times_a_second_see_the_gyro_turn_and_are_too_sparse(euroc):
     rec = read_asl(euroc / 'V2_01_easy')
     # a SLAM's keyframe trajectory: a pose every 0.2-1.0 s
     t = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
@@ -402,3 +402,10 @@ def test_keyframes_a_few_times_a_second_still_see_the_gyro_turn(euroc):
     assert min(sparse['excitation_rms_deg_s']) > 4.0
     assert sparse['usable'] == 'after alignment' and sparse['judged_after_alignment']
     assert abs(sparse['time_offset_s'] - 0.090) < 0.01
+    # but between them the interpolated attitude misses the drone's faster turns, which a
+    # model would learn as the gyro's scale: said, and left out by init-recipe
+    assert max(map(abs, full['interpolation_scale_error_percent'])) < 0.5
+    assert full['too_sparse'] is None
+    assert min(sparse['interpolation_scale_error_percent']) < -5.0
+    assert sparse['too_sparse'] in sparse['reasons'] and sparse['too_sparse'].startswith(
+        'poses too sparse for the motion (1.')
