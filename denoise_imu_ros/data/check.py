@@ -48,9 +48,9 @@ LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled 
 # a trajectory's heading drift grows over these, its noise (and a keyframe trajectory's
 # interpolation, mostly tilt) does not: heading and tilt are compared there too
 DRIFT_HORIZONS_S = (5.0, 10.0, 20.0)
-# the gyro's scale against its own attitude interpolated between the pose stamps beyond
-# this (%): poses too sparse for the motion (EuRoC: 5-10 Hz trajectories 0.5 at most, a
-# pose every 0.2-1.0 s 0.9-31)
+# the scale error interpolating between the pose stamps makes beyond this (%): poses too
+# sparse for the motion (EuRoC: 5-10 Hz trajectories 0.9 at most, a pose every 0.2-1.0 s
+# 1.1-40; motion capture 0.15 at most, BROAD's and TUM-VI's too)
 INTERPOLATION_LIMIT_PERCENT = 1.0
 BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)
 NOISE_RATE_LIMIT_DEG_S = 1.0
@@ -330,9 +330,9 @@ def _too_sparse(report: dict[str, Any]) -> str | None:
     worst = interpolation_worst(report)
     if worst is None or abs(worst[0]) <= INTERPOLATION_LIMIT_PERCENT:
         return None
-    return (f'poses too sparse for the motion ({report["pose_rate_hz"]:.1f} Hz): the gyro '
-            f'against its own attitude known only at the pose stamps is off its scale by '
-            f'{worst[0]:+.1f} % about the IMU {worst[1]} axis (limit '
+    return (f'poses too sparse for the motion ({report["pose_rate_hz"]:.1f} Hz): '
+            "interpolating between their stamps puts the gyro's own attitude off its scale "
+            f'by {worst[0]:+.1f} % about the IMU {worst[1]} axis (limit '
             f'{INTERPOLATION_LIMIT_PERCENT:g} %), which a model would learn as the '
             "gyro's; record poses more often, or move more slowly")
 
@@ -373,7 +373,7 @@ def markdown(report: dict[str, Any]) -> str:
               '  gyro scale error (%): '
               + ', '.join('-' if v is None else f'{v:+.3f}'
                           for v in r['gyro_scale_error_percent']),
-              "  the same against the gyro's own attitude between the pose stamps (%): "
+              '  of which interpolating between the pose stamps makes (%): '
               + ', '.join('-' if v is None else f'{v:+.3f}'
                           for v in r['interpolation_scale_error_percent']),
               '  excitation, RMS rate per IMU axis (deg/s): '

@@ -144,26 +144,37 @@ def _scale_error(imu: np.ndarray, pose: np.ndarray) -> list[float | None]:
 
 def interpolation_scale_error(rec: Recording) -> list[float | None]:
     """
-    Return the gyro's scale error (%) per axis against its own attitude at the poses.
+    Return the scale error (%) per axis that interpolating between the pose stamps makes.
 
-    The gyro's integrated attitude, sampled at the pose stamps and interpolated between
-    them as poses are (:func:`~denoise_imu_ros.data.timebase.poses_at`), compared with the
-    gyro as :func:`estimate_pose_alignment` compares poses: poses without error, on the
-    IMU's clock and in its frame, so what is left is the interpolation's alone. Poses
-    a few times a second (a SLAM's keyframes) miss what turns faster; a model trained on
-    them learns the difference as the gyro's scale.
+    The gyro's integrated attitude stands for poses without error: its rates over the
+    alignment's windows, from its values at the pose stamps interpolated as poses are
+    (:func:`~denoise_imu_ros.data.timebase.poses_at`), are compared with the same from
+    every IMU sample; what differs is the interpolation's alone, whatever the poses' errors
+    and the gyro's own scale. Poses a few times a second (a SLAM's keyframes) miss what
+    turns faster; a model trained on them learns the difference as the gyro's scale.
     """
     t = rec.imu_stamp_ns
     attitude = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rec.imu[:-1, :3], np.diff(t) * 1e-9)
     stamps = rec.gt_stamp_ns[(rec.gt_stamp_ns >= t[0]) & (rec.gt_stamp_ns <= t[-1])]
-    if len(stamps) < 3:
+    window_s = max(RATE_WINDOW_S, 2 * float(np.median(np.diff(stamps))) * 1e-9) \
+        if len(stamps) > 2 else 0.0
+    w = int(round(window_s / GRID_S))
+    grid = stamps[0] + np.arange(0, stamps[-1] - stamps[0], int(GRID_S * 1e9)) \
+        if len(stamps) > 2 else stamps
+    if len(grid) <= w + 1:
         return [None, None, None]
-    sampled = Slerp((t - t[0]) * 1e-9, attitude)((stamps - t[0]) * 1e-9).as_quat()
-    own = Recording(rec.name, rec.source, t, rec.imu, stamps, sampled,
-                    np.zeros((len(stamps), 3)))
-    period = float(np.median(np.diff(stamps))) * 1e-9
-    imu, pose = Rates(own, max(RATE_WINDOW_S, 2 * period)).matched(0.0)
-    return _scale_error(imu - imu.mean(0) + pose.mean(0), pose)
+    at_poses = Recording(rec.name, rec.source, t, rec.imu, stamps,
+                         Slerp((t - t[0]) * 1e-9, attitude)((stamps - t[0]) * 1e-9).as_quat(),
+                         np.zeros((len(stamps), 3)))
+    sparse, _, valid = poses_at(at_poses, grid)
+    dense = Slerp((t - t[0]) * 1e-9, attitude)((grid - t[0]) * 1e-9).as_quat()
+    ok = valid[:-w] & valid[w:]
+
+    def rates(quat: np.ndarray) -> np.ndarray:
+        return Rotation.from_quat(multiply_arrays(conjugate_arrays(quat[:-w]),
+                                                  quat[w:])[ok]).as_rotvec()
+
+    return _scale_error(rates(dense), rates(sparse))
 
 
 def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),

@@ -94,8 +94,8 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                           for n in sparse)
     if len(noise) + len(sparse) == len(reports):
         raise DatasetError(
-            'the poses are too sparse for the motion on every recording (the gyro against '
-            f'its own attitude known only at their stamps is off its scale: {off_scale}; '
+            'the poses are too sparse for the motion on every recording (interpolating '
+            f"between their stamps puts the gyro's own attitude off its scale: {off_scale}; "
             f'limit {INTERPOLATION_LIMIT_PERCENT:g} %), which a model would learn as the '
             "gyro's: record poses more often, or move more slowly")
     weak = [n for n, r in reports.items()
@@ -175,8 +175,8 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                    + ('it cannot' if len(noise) == 1 else 'they cannot')
                    + ' supervise the loss; score with eval instead')
     if sparse:
-        why.append(f'left out: {", ".join(sparse)}: poses too sparse for the motion (the '
-                   'gyro against its own attitude known only at their stamps is off its '
+        why.append(f'left out: {", ".join(sparse)}: poses too sparse for the motion '
+                   "(interpolating between their stamps puts the gyro's own attitude off its "
                    f"scale: {off_scale}), which a model would learn as the gyro's; score "
                    'with eval instead')
     if weak:
