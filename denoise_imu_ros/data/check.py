@@ -45,8 +45,8 @@ from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residu
 from ..core.records import Recording, Sequence
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
-# a trajectory's heading drift grows over these, its noise (and a keyframe trajectory's
-# interpolation, mostly tilt) does not: heading and tilt are compared there too
+# a trajectory's heading drift grows over these, its noise does not: heading and tilt
+# are compared there too (init-recipe's heading_weight)
 DRIFT_HORIZONS_S = (5.0, 10.0, 20.0)
 # the scale error interpolating between the pose stamps makes beyond this (%): poses too
 # sparse for the motion (EuRoC: 5-10 Hz trajectories 0.9 at most, a pose every 0.2-1.0 s

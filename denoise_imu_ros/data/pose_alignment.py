@@ -156,11 +156,10 @@ def interpolation_scale_error(rec: Recording) -> list[float | None]:
     t = rec.imu_stamp_ns
     attitude = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rec.imu[:-1, :3], np.diff(t) * 1e-9)
     stamps = rec.gt_stamp_ns[(rec.gt_stamp_ns >= t[0]) & (rec.gt_stamp_ns <= t[-1])]
-    window_s = max(RATE_WINDOW_S, 2 * float(np.median(np.diff(stamps))) * 1e-9) \
-        if len(stamps) > 2 else 0.0
-    w = int(round(window_s / GRID_S))
-    grid = stamps[0] + np.arange(0, stamps[-1] - stamps[0], int(GRID_S * 1e9)) \
-        if len(stamps) > 2 else stamps
+    if len(stamps) < 3:
+        return [None, None, None]
+    w = int(round(max(RATE_WINDOW_S, 2 * float(np.median(np.diff(stamps))) * 1e-9) / GRID_S))
+    grid = stamps[0] + np.arange(0, stamps[-1] - stamps[0], int(GRID_S * 1e9))
     if len(grid) <= w + 1:
         return [None, None, None]
     at_poses = Recording(rec.name, rec.source, t, rec.imu, stamps,

@@ -29,13 +29,15 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
   from the model (docs/results.md).
 - heading_weight: 0 under trajectory files whose heading disagrees with the gyro more
   than HEADING_RATIO times their tilt does (check-data's label noise at the first
-  increment, pooled over the recordings): a VIO's heading is not held by gravity, and a
-  model taught it learns its drift (VINS-Mono on EuRoC: heading 2.1x tilt; a model then
-  learns from the tilt alone); else 1.
+  increment and over its drift horizons, 5-20 s, the largest, pooled over the
+  recordings): a VIO's heading is not held by gravity, and a model taught it learns its
+  drift (VINS-Mono on EuRoC: heading 2.1x tilt at 256 samples, 2.8x over 20 s; a model
+  then learns from the tilt alone); else 1.
 A recording the poses cannot supervise is left out of the recipe and named, and the
 rules above apply to the others: one with no increment up to 512 samples free of
 ground-truth noise (poses too noisy for its motion, e.g. a fast trial under slow motion
-capture: an error only when every recording is so), and one whose poses do not lower its
+capture: an error only when every recording is so), one whose poses are too sparse for
+its motion (check-data's ``too_sparse``: the same), and one whose poses do not lower its
 own attitude error even with a constant bias fitted on them (check-data's
 ``supervision``), unless fewer than two recordings would remain: then they are kept and
 named in the reasons, and such a recipe is not expected to beat plain integration,
@@ -209,8 +211,8 @@ def _heading_ratio(reports: Iterable[dict[str, Any]],
     Heading residual over tilt residual of the poses, over all recordings, and where.
 
     The largest of the ratios at the first increment (a heading noisier than the tilt)
-    and over check-data's drift horizons (a heading that drifts: a keyframe trajectory's
-    interpolation inflates the tilt at short lengths, not the drift at long ones).
+    and over check-data's drift horizons (a heading that drifts: noise as large in the
+    tilt hides it at short lengths, and does not grow with the length as a drift does).
     """
     reports = list(reports)
     horizons = sorted({j for r in reports for j in r['drift_increments'] or {}})
