@@ -34,8 +34,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
-                             interpolation_scale_error, level, MAX_OFFSET_S, needs_alignment,
-                             not_following)
+                             interpolation_scale_error, level, MAX_OFFSET_S,
+                             MIN_EXCITATION_DEG_S, needs_alignment, not_following)
 from .pose_jumps import describe as describe_jumps, find_jumps, Jump, mask_jumps
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
@@ -52,9 +52,9 @@ DRIFT_HORIZONS_S = (5.0, 10.0, 20.0)
 # sparse for the motion (EuRoC: 5-10 Hz trajectories 0.9 at most, a pose every 0.2-1.0 s
 # 1.1-40; motion capture 0.15 at most, BROAD's and TUM-VI's too)
 INTERPOLATION_LIMIT_PERCENT = 1.0
+LEFT_OUT_SAID = 0.01       # a fraction of rate windows left out of the alignment said from
 BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)
 NOISE_RATE_LIMIT_DEG_S = 1.0
-MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
 MIN_DURATION_S = 30.0      # shorter recordings cannot train (window, tail, warm-up)
 OFFSET_SPREAD_S = 4e-3     # quarters spread wider (clean ones: 3.2 ms at most): drift
 PAPER_INCREMENT_S = 0.08  # the paper's 16 samples at 200 Hz (and twice it, 32)
@@ -111,7 +111,8 @@ def label_noise(seq: Sequence) -> dict[str, Any]:
         turned = Rotation.from_quat(world[trusted_blocks(seq.gt_valid, j) + j]).apply(res)
         return {'residual_mrad': 1e3 * float(np.sqrt(np.mean(res ** 2))),  # per axis
                 'heading_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, 2] ** 2))),
-                'tilt_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, :2] ** 2)))}
+                'tilt_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, :2] ** 2))),
+                'blocks': len(res)}
 
     profile = {}
     for j in LENGTHS:
@@ -208,6 +209,8 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     report.update(_increments(report, seq.rate_hz))
     long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
     report['supervision'] = supervision(seq, (*report['paper_increments'], long))
+    report['interpolation_scale_error_percent'] = interpolation_scale_error(rec)
+    report['too_sparse'] = _too_sparse(report)
     units = _units(report)  # wrong units explain every other symptom: say only that
     report['usable'], report['reasons'] = ('no', units) if units else _usable(report,
                                                                               max_offset_s)
@@ -222,10 +225,6 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
             'blurred by it')
     if not units and not report['supervision']['helps']:
         report['reasons'].append(report['supervision']['summary'])
-    report['interpolation_scale_error_percent'] = interpolation_scale_error(rec)
-    report['too_sparse'] = _too_sparse(report)
-    if not units and report['too_sparse']:
-        report['reasons'].append(report['too_sparse'])
     report['verdict'] = {'yes': 'usable for training', 'after alignment':
                          'usable for training with alignment applied',
                          'no': 'not usable for training'}[report['usable']]
@@ -311,6 +310,8 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
     for axis, rms in zip('xyz', report['excitation_rms_deg_s']):
         if rms < MIN_EXCITATION_DEG_S:
             reasons.append(f'no rotation about the IMU {axis} axis ({rms:.2f} deg/s RMS)')
+    if report['too_sparse']:  # last: init-recipe leaves out a recording with this alone
+        reasons.append(report['too_sparse'])
     if reasons:
         return 'no', reasons
     if needs_alignment(report):
@@ -320,8 +321,8 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
 
 def interpolation_worst(report: dict[str, Any]) -> tuple[float, str] | None:
     """Return the interpolation's largest scale error (%) and its axis, or None."""
-    errors = [(v, axis) for v, axis in zip(report['interpolation_scale_error_percent'], 'xyz')
-              if v is not None]
+    found = report['interpolation_scale_error_percent'] or ()
+    errors = [(v, axis) for v, axis in zip(found, 'xyz') if v is not None]
     return max(errors, key=lambda e: abs(e[0]), default=None)
 
 
@@ -330,11 +331,12 @@ def _too_sparse(report: dict[str, Any]) -> str | None:
     worst = interpolation_worst(report)
     if worst is None or abs(worst[0]) <= INTERPOLATION_LIMIT_PERCENT:
         return None
-    return (f'poses too sparse for the motion ({report["pose_rate_hz"]:.1f} Hz): '
-            "interpolating between their stamps puts the gyro's own attitude off its scale "
-            f'by {worst[0]:+.1f} % about the IMU {worst[1]} axis (limit '
-            f'{INTERPOLATION_LIMIT_PERCENT:g} %), which a model would learn as the '
-            "gyro's; record poses more often, or move more slowly")
+    return (f'poses too sparse for the motion ({report["pose_rate_hz"]:.1f} Hz): the '
+            "gyro's own attitude, known only at their stamps and interpolated between them, "
+            f"is off the gyro's scale by {worst[0]:+.1f} % about the IMU {worst[1]} axis "
+            f'(limit {INTERPOLATION_LIMIT_PERCENT:g} %), which a model would learn as the '
+            "gyro's; write every frame's pose (e.g. ORB-SLAM's CameraTrajectory, not its "
+            'KeyFrameTrajectory)')
 
 
 def _units(report: dict[str, Any]) -> list[str]:
@@ -379,8 +381,8 @@ def markdown(report: dict[str, Any]) -> str:
               '  excitation, RMS rate per IMU axis (deg/s): '
               + ', '.join(f'{v:.1f}' for v in r['excitation_rms_deg_s']),
               *([f'  left out of the alignment: {100 * r["rate_windows_left_out"]:.1f} % of '
-                 'its rate windows, whose poses no frame and offset explain (a VIO '
-                 'initialising, a relocalisation)'] if r['rate_windows_left_out'] else []),
+                 'its rate windows, which no frame and offset explain (poses that jump or '
+                 'glitch)'] if r['rate_windows_left_out'] >= LEFT_OUT_SAID else []),
               '  increment residual after a constant bias (samples: mrad per axis, as deg/s):']
     if r['judged_after_alignment']:
         lines[-1] = ('  with the clock offset and frame rotation applied: increment residual '

@@ -13,9 +13,8 @@ with centring), and the offset minimising the residual is refined to a fraction 
 millisecond by a parabola. Every fit leaves out the windows it cannot explain (a VIO
 initialising, a relocalisation: :func:`robust_fit`) and is made again. Confidence
 figures are the spread of the same estimates on four consecutive quarters of the
-recording (standard error of their mean). Excitation is the gyro's own rate over
-RATE_WINDOW_S, less its bias: poses a few times a second (a SLAM's keyframes) average a
-turn away, the gyro does not.
+recording (standard error of their mean). Excitation is the gyro's over the windows
+compared, less its bias: what the poses could see turn, without their own noise.
 """
 
 from __future__ import annotations
@@ -50,6 +49,7 @@ OFFSET_TOLERANCE_S = 1e-3  # above, and SIGNIFICANCE standard errors: apply the 
 ROTATION_TOLERANCE_DEG = 0.2  # above, and SIGNIFICANCE standard errors: apply the rotation
 SIGNIFICANCE = 2.0
 OUTLIER_FACTOR = 6.0       # a window whose residual is beyond this times the median
+MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
 OUTLIER_MAX_FRACTION = 0.2  # more than this part of them: the poses do not follow
 
 
@@ -151,7 +151,9 @@ def interpolation_scale_error(rec: Recording) -> list[float | None]:
     (:func:`~denoise_imu_ros.data.timebase.poses_at`), are compared with the same from
     every IMU sample; what differs is the interpolation's alone, whatever the poses' errors
     and the gyro's own scale. Poses a few times a second (a SLAM's keyframes) miss what
-    turns faster; a model trained on them learns the difference as the gyro's scale.
+    turns faster; a model trained on them learns the difference as the gyro's scale. An
+    axis that turns less than MIN_EXCITATION_DEG_S over those windows (vibration) has no
+    scale to judge: None.
     """
     t = rec.imu_stamp_ns
     attitude = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rec.imu[:-1, :3], np.diff(t) * 1e-9)
@@ -171,9 +173,11 @@ def interpolation_scale_error(rec: Recording) -> list[float | None]:
 
     def rates(quat: np.ndarray) -> np.ndarray:
         return Rotation.from_quat(multiply_arrays(conjugate_arrays(quat[:-w]),
-                                                  quat[w:])[ok]).as_rotvec()
+                                                  quat[w:])[ok]).as_rotvec() / (w * GRID_S)
 
-    return _scale_error(rates(dense), rates(sparse))
+    truth = rates(dense)
+    turns = np.degrees(np.sqrt(np.mean(truth ** 2, axis=0))) >= MIN_EXCITATION_DEG_S
+    return [v if ok else None for v, ok in zip(_scale_error(truth, rates(sparse)), turns)]
 
 
 def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
@@ -247,7 +251,8 @@ def estimate_pose_alignment(rec: Recording,
     Clock offset and frame rotation between the poses and the IMU, with confidences.
 
     ``time_offset_s``: t_imu = t_pose + offset. ``imu_from_pose_rotation_xyzw``:
-    omega_imu = R omega_pose_body. Also the gyro bias, per-axis scale and excitation.
+    omega_imu = R omega_pose_body. Also the gyro bias, per-axis scale and excitation, and
+    the fraction of rate windows the fit left out (``rate_windows_left_out``).
     """
     period = float(np.median(np.diff(rec.gt_stamp_ns))) * 1e-9
     rates = Rates(rec, max(RATE_WINDOW_S, 2 * period))
@@ -256,10 +261,8 @@ def estimate_pose_alignment(rec: Recording,
     rot, bias, rms, out = robust_fit(imu, pose)
     imu, pose = imu[~out], pose[~out]
     aligned = rot.apply(pose)
-    # the gyro's own turn where the poses are, over RATE_WINDOW_S, less its bias
-    start, gyro, _ = gyro_means(rec, RATE_WINDOW_S)
-    inside = (start - offset >= 0) & (start - offset <= rates.pose_t[-1])
-    excitation = np.sqrt(np.mean((gyro[inside] - bias) ** 2, axis=0))
+    # what the poses can see turn: the gyro over the windows compared, less its bias
+    excitation = np.sqrt(np.mean((imu - bias) ** 2, axis=0))
     # confidence: the same estimates on four quarters of the recording
     n = len(rates.imu_t)
     offsets, angles = [], []

@@ -67,9 +67,10 @@ WINDOW_S = 80.0
 START_STILL_S = 5.0  # a recording still within this many seconds of its start starts still
 MIN_GYRO_STD_DEG = 0.2
 # heading residual over tilt residual above which the heading is left out of the loss
-# (pooled; EuRoC at 1.28 s: motion capture 0.85, at most 1.28 on one recording;
-# VINS-Mono 2.1; ORB-SLAM2 1.6)
+# (pooled; EuRoC at 1.28 s: motion capture 0.85, at most 1.28 on one recording, and 0.87
+# at most over 5-20 s; VINS-Mono 2.1, 2.8 over 20 s; ORB-SLAM2 1.8 at 0.64 s)
 HEADING_RATIO = 1.3
+MIN_DRIFT_BLOCKS = 10  # a drift horizon's ratio from fewer increments, pooled, is not used
 
 
 def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = None,
@@ -80,7 +81,9 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     for name in sequences:
         rec = load_recording(Path(data) / name, imu_topic, pose_topic, poses)
         report = check(rec)
-        if report['usable'] == 'no':
+        # too sparse for the motion is the last of check's reasons: alone, it leaves the
+        # recording out (below); with any other, the recording cannot be used at all
+        if report['usable'] == 'no' and report['reasons'][0] != report['too_sparse']:
             raise DatasetError(f'{Path(data) / name}: not usable for training: '
                                + '; '.join(report['reasons']))
         reports[name] = report
@@ -96,10 +99,13 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                           for n in sparse)
     if len(noise) + len(sparse) == len(reports):
         raise DatasetError(
-            'the poses are too sparse for the motion on every recording (interpolating '
-            f"between their stamps puts the gyro's own attitude off its scale: {off_scale}; "
-            f'limit {INTERPOLATION_LIMIT_PERCENT:g} %), which a model would learn as the '
-            "gyro's: record poses more often, or move more slowly")
+            'the poses are too sparse for the motion on every recording they do not drown '
+            "in noise (the gyro's own attitude, known only at their stamps and interpolated "
+            f"between them, is off the gyro's scale: {off_scale}; limit "
+            f'{INTERPOLATION_LIMIT_PERCENT:g} %'
+            + (f'; noise-dominated up to 512 samples: {", ".join(noise)}' if noise else '')
+            + "), which a model would learn as the gyro's: write every frame's pose (e.g. "
+            "ORB-SLAM's CameraTrajectory, not its KeyFrameTrajectory)")
     weak = [n for n, r in reports.items()
             if not r['supervision']['helps'] and n not in noise + sparse]
     if len(reports) - len(noise) - len(sparse) - len(weak) < 2:
@@ -177,10 +183,10 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                    + ('it cannot' if len(noise) == 1 else 'they cannot')
                    + ' supervise the loss; score with eval instead')
     if sparse:
-        why.append(f'left out: {", ".join(sparse)}: poses too sparse for the motion '
-                   "(interpolating between their stamps puts the gyro's own attitude off its "
-                   f"scale: {off_scale}), which a model would learn as the gyro's; score "
-                   'with eval instead')
+        why.append(f'left out: {", ".join(sparse)}: poses too sparse for the motion (the '
+                   "gyro's own attitude, known only at their stamps and interpolated between "
+                   f"them, is off the gyro's scale: {off_scale}), which a model would learn "
+                   "as the gyro's; score with eval instead")
     if weak:
         why.append(f'left out: {", ".join(weak)}: '
                    + ('its poses do not lower its own' if len(weak) == 1 else
@@ -215,13 +221,15 @@ def _heading_ratio(reports: Iterable[dict[str, Any]],
     tilt hides it at short lengths, and does not grow with the length as a drift does).
     """
     reports = list(reports)
+    rate = reports[0]['imu_rate_hz'] if reports else 1.0
     horizons = sorted({j for r in reports for j in r['drift_increments'] or {}})
     ratios = []
     for key, j, label in ([('increments', length, f'{length}-sample increments')]
-                          + [('drift_increments', j, f'{j}-sample increments, a drift horizon')
-                             for j in horizons]):
+                          + [('drift_increments', j, f'{j / rate:.0f} s increments, a drift '
+                              'horizon') for j in horizons]):
         profiles = [r[key][j] for r in reports if j in (r[key] or {})]
-        if not profiles:
+        if not profiles or (key == 'drift_increments'
+                            and sum(p['blocks'] for p in profiles) < MIN_DRIFT_BLOCKS):
             continue
         heading = np.sqrt(np.mean([p['heading_mrad'] ** 2 for p in profiles]))
         tilt = np.sqrt(np.mean([p['tilt_mrad'] ** 2 for p in profiles]))

@@ -108,6 +108,8 @@ def test_check_data_on_real_recordings(data_dir, capsys):
     assert not {16, 32} & set(euroc['noise_dominated_increments'])
     assert euroc['supervision']['fits'][16]['aoe_deg'] < 1.0  # from 114 deg of raw gyro
     assert abs(euroc['time_offset_s']) < 1e-3 and euroc['imu_from_pose_rotation_deg'] < 0.2
+    assert max(map(abs, euroc['interpolation_scale_error_percent'])) < 0.2
+    assert euroc['too_sparse'] is None and euroc['rate_windows_left_out'] < 0.01
     # V2_03's poses lag by +2 to -4 ms along the recording: reported, not "fixed"
     drift = check(read_asl(data_dir / 'euroc' / 'V2_03_difficult'))
     assert drift['usable'] == 'yes' and abs(drift['time_offset_s']) < 2 * (
@@ -387,8 +389,8 @@ def test_an_initialising_vios_first_seconds_do_not_move_the_alignment(euroc):
                      markdown(report))
 
 
-def test_keyframes_a_few_times_a_second_see_the_gyro_turn_and_are_too_sparse(euroc):
-    rec = read_asl(euroc / 'V2_01_easy')
+def test_keyframes_a_few_times_a_second_are_too_sparse_for_a_drone(euroc):
+    rec = read_asl(euroc / 'MH_01_easy')
     # a SLAM's keyframe trajectory: a pose every 0.2-1.0 s
     t = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
     gaps = np.random.default_rng(4).uniform(0.2, 1.0, 1000)
@@ -396,16 +398,26 @@ def test_keyframes_a_few_times_a_second_see_the_gyro_turn_and_are_too_sparse(eur
     keyframes = _camera_poses(rec, np.searchsorted(t, wanted))
     dense = _camera_poses(rec, slice(None, None, 20))
     sparse, full = check(keyframes), check(dense)
-    # the rotation about each axis is the gyro's, not what poses seconds apart average to
-    np.testing.assert_allclose(sparse['excitation_rms_deg_s'], full['excitation_rms_deg_s'],
-                               rtol=0.05)
-    assert min(sparse['excitation_rms_deg_s']) > 4.0
-    assert sparse['usable'] == 'after alignment' and sparse['judged_after_alignment']
-    assert abs(sparse['time_offset_s'] - 0.090) < 0.01
-    # but between them the interpolated attitude misses the drone's faster turns, which a
-    # model would learn as the gyro's scale: said, and left out by init-recipe
+    assert abs(sparse['time_offset_s'] - 0.090) < 0.02  # keyframes place it less well
+    # between them the interpolated attitude misses the drone's faster turns, which a
+    # model would learn as the gyro's scale: not usable, for that reason alone
     assert max(map(abs, full['interpolation_scale_error_percent'])) < 0.5
-    assert full['too_sparse'] is None
+    assert full['too_sparse'] is None and full['usable'] == 'after alignment'
     assert min(sparse['interpolation_scale_error_percent']) < -5.0
-    assert sparse['too_sparse'] in sparse['reasons'] and sparse['too_sparse'].startswith(
-        'poses too sparse for the motion (1.')
+    assert sparse['usable'] == 'no' and sparse['reasons'][0] == sparse['too_sparse']
+    assert sparse['too_sparse'].startswith('poses too sparse for the motion (1.')
+    # what the poses can see turn is the gyro over their longer windows, less than at 10 Hz
+    assert all(s < f for s, f in zip(sparse['excitation_rms_deg_s'],
+                                     full['excitation_rms_deg_s']))
+
+
+def test_an_axis_that_only_vibrates_has_no_interpolation_scale_to_judge(tmp_path):
+    from denoise_imu_ros.data.pose_alignment import interpolation_scale_error
+    rec = read_asl(write_asl(tmp_path / 's', n_imu=12000, gt_rate=10.0, gt_dir='mocap0'))
+    # a yawing robot whose body shakes by 4 deg/s at 8 Hz about x and y
+    t = (rec.imu_stamp_ns - rec.imu_stamp_ns[0]) * 1e-9
+    shaken = rec.imu.copy()
+    shaken[:, 0] += np.radians(4.0) * np.sin(2 * np.pi * 8.0 * t)
+    shaken[:, 1] += np.radians(4.0) * np.cos(2 * np.pi * 8.0 * t)
+    found = interpolation_scale_error(dataclasses.replace(rec, imu=shaken))
+    assert found[:2] == [None, None] and abs(found[2]) < 0.5

@@ -215,27 +215,27 @@ def test_a_vios_drifting_heading_is_seen_over_the_drift_horizons_where_noise_hid
     # heading's drift; over 5-20 s the noise does not grow and the drift does
     line = next(line for line in said if line.startswith('heading_weight'))
     assert recipe['heading_weight'] == 0.0 and re.search(
-        r'\((\d+)-sample increments, a drift horizon\)', line).group(1) in {
-            str(round(h * 200)) for h in DRIFT_HORIZONS_S}
+        r'\((\d+) s increments, a drift horizon\)', line).group(1) in {
+            f'{h:.0f}' for h in DRIFT_HORIZONS_S}
 
 
 def test_keyframes_too_sparse_for_the_motion_are_left_out_and_said(data_dir, euroc, tmp_path):
     from denoise_imu_ros.learn.recipe import init_recipe
     rng = np.random.default_rng(6)
-    for name in ('MH_01_easy', 'MH_03_medium', 'V2_01_easy'):
+    names = ['MH_01_easy', 'MH_03_medium', 'V2_01_easy']
+    for name in names:
         vins = read_tum(data_dir / 'euroc_vio' / 'vins_mono' / f'{name}.txt')
         keep = slice(None)
-        if name == 'V2_01_easy':  # a SLAM's keyframe trajectory: a pose every 0.2-1.0 s
+        if name == 'MH_01_easy':  # a SLAM's keyframe trajectory: a pose every 0.2-1.0 s
             t = (vins.stamp_ns - vins.stamp_ns[0]) * 1e-9
             wanted = np.cumsum(rng.uniform(0.2, 1.0, 1000))
             keep = np.unique(np.searchsorted(t, wanted[wanted < t[-1]]))
         write_tum(tmp_path / f'{name}.txt', vins.stamp_ns[keep], vins.pos[keep],
                   vins.quat[keep])
-    recipe, said = init_recipe(euroc, ['MH_01_easy', 'MH_03_medium', 'V2_01_easy'],
-                               poses=tmp_path)
-    assert recipe['sequences'] == ['MH_01_easy', 'MH_03_medium']
-    assert any(re.match(r'left out: V2_01_easy: poses too sparse for the motion \(.*'
-                        r'V2_01_easy -\d+\.\d % about y\)', line) for line in said)
+    recipe, said = init_recipe(euroc, names, poses=tmp_path)
+    assert recipe['sequences'] == ['MH_03_medium', 'V2_01_easy']
+    assert any(re.match(r'left out: MH_01_easy: poses too sparse for the motion \(.*'
+                        r'MH_01_easy -\d+\.\d % about y\)', line) for line in said)
     with pytest.raises(DatasetError, match=r'^the poses are too sparse for the motion on '
-                       r'every recording \(.*V2_01_easy -\d+\.\d % about y; limit 1 %\)'):
-        init_recipe(euroc, ['V2_01_easy'], poses=tmp_path)
+                       r'every recording .*MH_01_easy -\d+\.\d % about y; limit 1 %\)'):
+        init_recipe(euroc, ['MH_01_easy'], poses=tmp_path)
