@@ -50,7 +50,7 @@ LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled 
 DRIFT_HORIZONS_S = (5.0, 10.0, 20.0)
 # the scale error interpolating between the pose stamps makes beyond this (%): poses too
 # sparse for the motion (EuRoC: 5-10 Hz trajectories 0.9 at most, a pose every 0.2-1.0 s
-# 1.1-40; motion capture 0.15 at most, BROAD's and TUM-VI's too)
+# 1.1-11 and 40 on V2_03; motion capture 0.15 at most, BROAD's and TUM-VI's too)
 INTERPOLATION_LIMIT_PERCENT = 1.0
 LEFT_OUT_SAID = 0.01       # a fraction of rate windows left out of the alignment said from
 BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)

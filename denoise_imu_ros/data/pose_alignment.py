@@ -49,8 +49,8 @@ OFFSET_TOLERANCE_S = 1e-3  # above, and SIGNIFICANCE standard errors: apply the 
 ROTATION_TOLERANCE_DEG = 0.2  # above, and SIGNIFICANCE standard errors: apply the rotation
 SIGNIFICANCE = 2.0
 OUTLIER_FACTOR = 6.0       # a window whose residual is beyond this times the median
-MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
 OUTLIER_MAX_FRACTION = 0.2  # more than this part of them: the poses do not follow
+MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
 
 
 class Rates:
@@ -71,7 +71,15 @@ class Rates:
         relative = multiply_arrays(conjugate_arrays(quat[:-w]), quat[w:])
         self.pose = Rotation.from_quat(relative).as_rotvec() / (w * GRID_S)
         self.pose_ok = valid[:-w] & valid[w:]
-        self.imu_t, self.imu, self.window_s = gyro_means(rec, window_s)
+        # gyro mean rates over windows of the same length, every sample; a sample is the
+        # rate at its stamp, so n samples cover from half a period before the first
+        t = (rec.imu_stamp_ns - t0) * 1e-9
+        n = max(1, int(round(window_s / np.median(np.diff(t)))))
+        steps = rec.imu[:-1, :3] * np.diff(t)[:, None]
+        cs = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
+        self.imu_t = t[:-n] - 0.5 * np.diff(t)[:len(t) - n]
+        self.imu = (cs[n:] - cs[:-n]) / (t[n:] - t[:-n])[:, None]
+        self.window_s = n * float(np.median(np.diff(t)))
         # a pose jump (a VIO re-initialising, a placeholder pose) turns faster than the
         # gyro ever does: those windows are not compared (norms: any frame, any clock)
         fastest = float(np.linalg.norm(self.imu, axis=1).max())
@@ -90,21 +98,6 @@ class Rates:
         i = np.clip(np.floor(x).astype(int), 0, len(self.pose_t) - 2)
         f = (x - i)[:, None]
         return self.imu[part][ok], self.pose[i] * (1 - f) + self.pose[i + 1] * f
-
-
-def gyro_means(rec: Recording, window_s: float) -> tuple[np.ndarray, np.ndarray, float]:
-    """
-    Return windows of about ``window_s`` from every sample: starts, gyro means, length.
-
-    Starts are in s from the first pose; a sample is the rate at its stamp, so n samples
-    cover from half a period before the first.
-    """
-    t = (rec.imu_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
-    n = max(1, int(round(window_s / np.median(np.diff(t)))))
-    steps = rec.imu[:-1, :3] * np.diff(t)[:, None]
-    cs = np.concatenate([np.zeros((1, 3)), np.cumsum(steps, axis=0)])
-    start = t[:-n] - 0.5 * np.diff(t)[:len(t) - n]
-    return start, (cs[n:] - cs[:-n]) / (t[n:] - t[:-n])[:, None], n * float(np.median(np.diff(t)))
 
 
 def fit_frame(imu: np.ndarray, pose: np.ndarray) -> tuple[Rotation, np.ndarray, float]:
