@@ -421,3 +421,21 @@ def test_an_axis_that_only_vibrates_has_no_interpolation_scale_to_judge(tmp_path
     shaken[:, 1] += np.radians(4.0) * np.cos(2 * np.pi * 8.0 * t)
     found = interpolation_scale_error(dataclasses.replace(rec, imu=shaken))
     assert found[:2] == [None, None] and abs(found[2]) < 0.5
+
+
+def test_the_frame_fit_leaves_out_a_few_windows_it_cannot_explain_not_many():
+    from denoise_imu_ros.data.pose_alignment import fit_frame, robust_fit
+    rng = np.random.default_rng(8)
+    frame = Rotation.from_rotvec([0.1, -0.4, 1.5])
+    pose = rng.normal(0, 0.5, (2000, 3))
+    imu = frame.apply(pose) + [0.01, -0.02, 0.03] + rng.normal(0, 1e-3, (2000, 3))
+    for wrong, left_out in ((0.1, True), (0.3, False)):  # windows whose poses jumped
+        spoilt = pose.copy()
+        spoilt[:int(wrong * len(pose))] = rng.normal(0, 2.0, (int(wrong * len(pose)), 3))
+        rot, bias, rms, out = robust_fit(imu, spoilt)
+        if left_out:  # the frame and bias as if those windows were not there
+            assert out.sum() == int(wrong * len(pose))
+            assert math.degrees((rot * frame.inv()).magnitude()) < 0.01 and rms < 2e-3
+            np.testing.assert_allclose(bias, [0.01, -0.02, 0.03], atol=1e-3)
+        else:  # more than a fifth: the poses do not follow, and the residual says so
+            assert not out.any() and rms == fit_frame(imu, spoilt)[2] and rms > 0.1
