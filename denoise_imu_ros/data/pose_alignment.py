@@ -140,37 +140,33 @@ def interpolation_scale_error(rec: Recording) -> list[float | None]:
     Return the scale error (%) per axis that interpolating between the pose stamps makes.
 
     The gyro's integrated attitude stands for poses without error: its rates over the
-    alignment's windows, from its values at the pose stamps interpolated as poses are
-    (:func:`~denoise_imu_ros.data.timebase.poses_at`), are compared with the same from
-    every IMU sample; what differs is the interpolation's alone, whatever the poses' errors
+    alignment's windows (:class:`Rates`), from its values at the pose stamps interpolated
+    as poses are, are compared with the same from every IMU sample; what differs is the interpolation's alone, whatever the poses' errors
     and the gyro's own scale. Poses a few times a second (a SLAM's keyframes) miss what
     turns faster; a model trained on them learns the difference as the gyro's scale. An
     axis that turns less than MIN_EXCITATION_DEG_S over those windows (vibration) has no
     scale to judge: None.
     """
     t = rec.imu_stamp_ns
-    attitude = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rec.imu[:-1, :3], np.diff(t) * 1e-9)
     stamps = rec.gt_stamp_ns[(rec.gt_stamp_ns >= t[0]) & (rec.gt_stamp_ns <= t[-1])]
     if len(stamps) < 3:
         return [None, None, None]
-    w = int(round(max(RATE_WINDOW_S, 2 * float(np.median(np.diff(stamps))) * 1e-9) / GRID_S))
-    grid = stamps[0] + np.arange(0, stamps[-1] - stamps[0], int(GRID_S * 1e9))
-    if len(grid) <= w + 1:
-        return [None, None, None]
-    at_poses = Recording(rec.name, rec.source, t, rec.imu, stamps,
-                         Slerp((t - t[0]) * 1e-9, attitude)((stamps - t[0]) * 1e-9).as_quat(),
-                         np.zeros((len(stamps), 3)))
-    sparse, _, valid = poses_at(at_poses, grid)
-    dense = Slerp((t - t[0]) * 1e-9, attitude)((grid - t[0]) * 1e-9).as_quat()
-    ok = valid[:-w] & valid[w:]
+    integrated = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rec.imu[:-1, :3], np.diff(t) * 1e-9)
+    attitude = Slerp((t - t[0]) * 1e-9, integrated)
+    window_s = max(RATE_WINDOW_S, 2 * float(np.median(np.diff(stamps))) * 1e-9)
 
-    def rates(quat: np.ndarray) -> np.ndarray:
-        return Rotation.from_quat(multiply_arrays(conjugate_arrays(quat[:-w]),
-                                                  quat[w:])[ok]).as_rotvec() / (w * GRID_S)
+    def seen_at(known: np.ndarray) -> Rates:  # the attitude known only at these stamps
+        return Rates(Recording(rec.name, rec.source, t, rec.imu, known,
+                               attitude((known - t[0]) * 1e-9).as_quat(),
+                               np.zeros((len(known), 3))), window_s)
 
-    truth = rates(dense)
+    # the same span, so the same grid: every IMU stamp inside it, and its ends
+    sparse = seen_at(stamps)
+    dense = seen_at(np.union1d(stamps[[0, -1]], t[(t > stamps[0]) & (t < stamps[-1])]))
+    ok = sparse.pose_ok & dense.pose_ok
+    truth = dense.pose[ok]
     turns = np.degrees(np.sqrt(np.mean(truth ** 2, axis=0))) >= MIN_EXCITATION_DEG_S
-    return [v if ok else None for v, ok in zip(_scale_error(truth, rates(sparse)), turns)]
+    return [v if on else None for v, on in zip(_scale_error(truth, sparse.pose[ok]), turns)]
 
 
 def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
