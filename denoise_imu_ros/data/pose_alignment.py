@@ -142,10 +142,10 @@ def interpolation_scale_error(rec: Recording) -> list[float | None]:
     The gyro's integrated attitude stands for poses without error: its rates over the
     alignment's windows (:class:`Rates`), from its values at the pose stamps interpolated
     as poses are, are compared with the same from every IMU sample; what differs is the
-    interpolation's alone, whatever the poses' errors and the gyro's own scale. Poses a few times a second (a SLAM's keyframes) miss what
-    turns faster; a model trained on them learns the difference as the gyro's scale. An
-    axis that turns less than MIN_EXCITATION_DEG_S over those windows (vibration) has no
-    scale to judge: None.
+    interpolation's alone, whatever the poses' errors and the gyro's own scale. Poses a
+    few times a second (a SLAM's keyframes) miss what turns faster; a model trained on
+    them learns the difference as the gyro's scale. An axis that turns less than
+    MIN_EXCITATION_DEG_S over those windows (vibration) has no scale to judge: None.
     """
     t = rec.imu_stamp_ns
     stamps = rec.gt_stamp_ns[(rec.gt_stamp_ns >= t[0]) & (rec.gt_stamp_ns <= t[-1])]
