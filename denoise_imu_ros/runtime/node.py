@@ -504,6 +504,14 @@ def _section_applies(key: str, node_name: str) -> bool:
 
 def main(args: list[str] | None = None) -> int:
     """Entry point of ``gyro_denoiser`` (console script and ``ros2 run``)."""
+    try:
+        return _run(args)
+    except KeyboardInterrupt:  # a Ctrl-C (rclpy's handler, then Python's) raised while
+        return 0               # the first half of it, a shut-down context, was handled
+
+
+def _run(args: list[str] | None) -> int:
+    """Parse the arguments, build the node and spin it until shut down; the exit code."""
     # args, as in tests, holds no program name; sys.argv does
     try:
         rest = remove_ros_args(sys.argv)[1:] if args is None else remove_ros_args(args)

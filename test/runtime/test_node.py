@@ -358,6 +358,31 @@ sys.exit(node.main(['--ros-args', '-p', 'model:={model_file}']))
     assert run.returncode == 0 and 'Traceback' not in run.stderr, run.stderr
 
 
+def test_a_ctrl_c_landing_while_its_shutdown_is_handled_ends_cleanly(tmp_path, model_file):
+    """Python's KeyboardInterrupt arriving inside the handler of rclpy's shutdown: exit 0."""
+    script = tmp_path / 'race.py'
+    script.write_text(f"""
+import sys
+import rclpy
+from rclpy._rclpy_pybind11 import RCLError
+from denoise_imu_ros.runtime import node
+class Executor:  # the context a signal shut down: no guard condition can be made
+    def __init__(self):
+        rclpy.try_shutdown()
+        raise RCLError('failed to create guard_condition: the given context is not valid')
+def ok(*args, **kwargs):  # where Python's own SIGINT handler lands next
+    raise KeyboardInterrupt
+node.SingleThreadedExecutor = Executor
+node.rclpy.ok = ok
+sys.exit(node.main(['--ros-args', '-p', 'model:={model_file}']))
+""")
+    import subprocess
+    import sys
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=120, env=dict(os.environ, ROS_DOMAIN_ID=str(DOMAIN)))
+    assert run.returncode == 0 and 'Traceback' not in run.stderr, run.stderr
+
+
 def test_the_node_needs_no_torch_and_equals_the_batch_network(tmp_path):
     # torch made unimportable: the node starts with the shipped model, and every message
     # through its callback gives the batch network's output (computed here, with torch)
