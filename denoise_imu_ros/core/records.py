@@ -53,6 +53,9 @@ class Sequence:
     # (M, 6) and (M,): the recording's IMU samples before the first here (before its poses)
     lead_in: np.ndarray = field(default_factory=lambda: np.empty((0, 6)))
     lead_in_stamp_ns: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))
+    # (N,) bool: the IMU samples nearest a pose's stamp (within half an IMU period); None:
+    # not known (the loss between poses needs it)
+    pose_at: np.ndarray | None = None
 
     def __len__(self) -> int:
         """Return the number of IMU samples with poses (the lead-in not counted)."""
@@ -93,7 +96,8 @@ class Sequence:
         return Sequence(self.name, self.stamp_ns[part], self.imu[part], self.gt_quat[part],
                         self.gt_pos[part], self.gt_valid[part], self.pose_alignment,
                         np.vstack([self.lead_in, self.imu[:start]]),
-                        np.concatenate([self.lead_in_stamp_ns, self.stamp_ns[:start]]))
+                        np.concatenate([self.lead_in_stamp_ns, self.stamp_ns[:start]]),
+                        None if self.pose_at is None else self.pose_at[part])
 
     @property
     def rate_hz(self) -> float:

@@ -310,13 +310,12 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
     for axis, rms in zip('xyz', report['excitation_rms_deg_s']):
         if rms < MIN_EXCITATION_DEG_S:
             reasons.append(f'no rotation about the IMU {axis} axis ({rms:.2f} deg/s RMS)')
-    if report['too_sparse']:  # last: init-recipe leaves out a recording with this alone
-        reasons.append(report['too_sparse'])
     if reasons:
         return 'no', reasons
+    sparse = [report['too_sparse']] if report['too_sparse'] else []
     if needs_alignment(report):
-        return 'after alignment', [f'{describe(report)}: apply both before training']
-    return 'yes', []
+        return 'after alignment', [f'{describe(report)}: apply both before training'] + sparse
+    return 'yes', sparse
 
 
 def interpolation_worst(report: dict[str, Any]) -> tuple[float, str] | None:
@@ -327,7 +326,7 @@ def interpolation_worst(report: dict[str, Any]) -> tuple[float, str] | None:
 
 
 def _too_sparse(report: dict[str, Any]) -> str | None:
-    """Why the poses are too sparse for the motion to teach the gyro's scale, or None."""
+    """Why the poses are too sparse for the motion to be interpolated, or None."""
     worst = interpolation_worst(report)
     if worst is None or abs(worst[0]) <= INTERPOLATION_LIMIT_PERCENT:
         return None
@@ -335,8 +334,9 @@ def _too_sparse(report: dict[str, Any]) -> str | None:
             "gyro's own attitude, known only at their stamps and interpolated between them, "
             f"is off the gyro's scale by {worst[0]:+.1f} % about the IMU {worst[1]} axis "
             f'(limit {INTERPOLATION_LIMIT_PERCENT:g} %), which a model would learn as the '
-            "gyro's; write every frame's pose (e.g. ORB-SLAM's CameraTrajectory, not its "
-            'KeyFrameTrajectory)')
+            "gyro's from increments of fixed length: train on increments between the pose "
+            'stamps (increments_between_poses, which init-recipe sets), or write every '
+            "frame's pose (e.g. ORB-SLAM's CameraTrajectory, not its KeyFrameTrajectory)")
 
 
 def _units(report: dict[str, Any]) -> list[str]:

@@ -129,4 +129,22 @@ def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
     lead = slice(int(holes[-1]) + 1 if len(holes) else 0, first)
     return Sequence(name=rec.name, stamp_ns=t_imu[keep], imu=rec.imu[keep], gt_quat=quat,
                     gt_pos=pos, gt_valid=valid, lead_in=rec.imu[lead],
-                    lead_in_stamp_ns=t_imu[lead])
+                    lead_in_stamp_ns=t_imu[lead], pose_at=nearest_samples(t_imu[keep], t_gt))
+
+
+def nearest_samples(stamps_ns: np.ndarray, pose_stamps_ns: np.ndarray) -> np.ndarray:
+    """
+    Return (N,) bool: the stamps nearest a pose stamp, within half their median period.
+
+    There the poses' attitude is known up to half an IMU sample's motion, whatever
+    happens between poses (what the loss between poses compares).
+    """
+    at = np.zeros(len(stamps_ns), bool)
+    if len(stamps_ns) < 2:
+        return at
+    half = 0.5 * float(np.median(np.diff(stamps_ns)))
+    after = np.clip(np.searchsorted(stamps_ns, pose_stamps_ns), 1, len(stamps_ns) - 1)
+    nearer = np.where(pose_stamps_ns - stamps_ns[after - 1] <= stamps_ns[after] - pose_stamps_ns,
+                      after - 1, after)
+    at[nearer[np.abs(stamps_ns[nearer] - pose_stamps_ns) <= half]] = True
+    return at

@@ -47,6 +47,7 @@ class LossConfig:
     weights: tuple[float, ...] = (1.0, 0.5)  # per increment length (the reference code's)
     skip_blocks: int = 5         # first blocks of a window are warm-up (padded input)
     heading_weight: float = 1.0  # scales each error's component about the poses' vertical
+    between_poses: bool = False  # increments from pose stamp to pose stamp (sparse poses)
 
     def __post_init__(self) -> None:
         """Check the increments and their weights (user input through the training recipe)."""
@@ -122,6 +123,10 @@ class TrainConfig:
     # counts less than its tilt: for poses whose heading drifts (a VIO's yaw is not
     # observable) while their tilt is held by gravity
     heading_weight: float = 1.0
+    # True: each increment runs from a pose's stamp to a later pose's (the nearest IMU
+    # samples), not on a fixed grid with the poses interpolated: for poses too sparse for
+    # the motion (check-data's too_sparse: a SLAM's keyframes)
+    increments_between_poses: bool = False
     val_every: int = 100               # steps between validations (and at the end)
     swa_start: int = 0                 # > 0: average weights from this step on (SWA)
     select: str = 'best_validation'    # kept: best_validation (of all candidates), final, swa
@@ -142,7 +147,8 @@ class TrainConfig:
         """Return the loss constants of this recipe."""
         return LossConfig(huber_delta=self.huber_delta, increments=tuple(self.increments),
                           weights=tuple(self.increment_weights), skip_blocks=self.skip_blocks,
-                          heading_weight=self.heading_weight)
+                          heading_weight=self.heading_weight,
+                          between_poses=self.increments_between_poses)
 
     def recipe(self) -> dict[str, Any]:
         """Return what the model learns from: every key but the run environment."""

@@ -33,11 +33,14 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
   recordings): a VIO's heading is not held by gravity, and a model taught it learns its
   drift (VINS-Mono on EuRoC: heading 2.1x tilt at 256 samples, 2.8x over 20 s; a model
   then learns from the tilt alone); else 1.
+- increments_between_poses: on where the poses are too sparse for the motion on any
+  recording (check-data's ``too_sparse``: interpolated between their stamps, they are off
+  the gyro's scale by more than 1 %, e.g. a SLAM's keyframes), so that each increment
+  runs between two poses' stamps, where the poses are right.
 A recording the poses cannot supervise is left out of the recipe and named, and the
 rules above apply to the others: one with no increment up to 512 samples free of
 ground-truth noise (poses too noisy for its motion, e.g. a fast trial under slow motion
-capture: an error only when every recording is so), one whose poses are too sparse for
-its motion (check-data's ``too_sparse``: the same), and one whose poses do not lower its
+capture: an error only when every recording is so), and one whose poses do not lower its
 own attitude error even with a constant bias fitted on them (check-data's
 ``supervision``), unless fewer than two recordings would remain: then they are kept and
 named in the reasons, and such a recipe is not expected to beat plain integration,
@@ -81,9 +84,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     for name in sequences:
         rec = load_recording(Path(data) / name, imu_topic, pose_topic, poses)
         report = check(rec)
-        # too sparse for the motion is the last of check's reasons: alone, it leaves the
-        # recording out (below); with any other, the recording cannot be used at all
-        if report['usable'] == 'no' and report['reasons'][0] != report['too_sparse']:
+        if report['usable'] == 'no':
             raise DatasetError(f'{Path(data) / name}: not usable for training: '
                                + '; '.join(report['reasons']))
         reports[name] = report
@@ -94,23 +95,10 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     if len(noise) == len(reports):
         raise DatasetError('no increment up to 512 samples is free of ground-truth noise '
                            'on any recording: the poses cannot supervise the loss')
-    sparse = [n for n, r in reports.items() if r['too_sparse'] and n not in noise]
-    off_scale = ', '.join('{} {:+.1f} % about {}'.format(n, *interpolation_worst(reports[n]))
-                          for n in sparse)
-    if len(noise) + len(sparse) == len(reports):
-        raise DatasetError(
-            'the poses are too sparse for the motion on every recording they do not drown '
-            "in noise (the gyro's own attitude, known only at their stamps and interpolated "
-            f"between them, is off the gyro's scale: {off_scale}; limit "
-            f'{INTERPOLATION_LIMIT_PERCENT:g} %'
-            + (f'; noise-dominated up to 512 samples: {", ".join(noise)}' if noise else '')
-            + "), which a model would learn as the gyro's: write every frame's pose (e.g. "
-            "ORB-SLAM's CameraTrajectory, not its KeyFrameTrajectory)")
-    weak = [n for n, r in reports.items()
-            if not r['supervision']['helps'] and n not in noise + sparse]
-    if len(reports) - len(noise) - len(sparse) - len(weak) < 2:
+    weak = [n for n, r in reports.items() if not r['supervision']['helps'] and n not in noise]
+    if len(reports) - len(noise) - len(weak) < 2:
         weak = []  # kept, and named below: crossval needs two recordings
-    left_out = noise + sparse + weak
+    left_out = noise + weak
     reports = {n: r for n, r in reports.items() if n not in left_out}
     sequences = [n for n in sequences if n not in left_out]
     noisy = set().union(*(r['noise_dominated_increments'] for r in reports.values()))
@@ -141,6 +129,9 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         increment_weights=[1.0, 0.5], window=window, gyro_std_deg=gyro_std,
         align='auto' if off else 'none', swa_start=1200, select='swa',
         rest_bias=False, recording_bias=False, workers='auto', threads='auto')
+    sparse = [n for n, r in reports.items() if r['too_sparse']]
+    if sparse:
+        recipe.update(increments_between_poses=True)
     estimate = poses is not None and bool(set(still) & set(sequences))
     if estimate:  # a trajectory's drift is not the gyro's bias: stillness measures that
         recipe.update(rest_bias=True, recording_bias=True)
@@ -183,10 +174,14 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                    + ('it cannot' if len(noise) == 1 else 'they cannot')
                    + ' supervise the loss; score with eval instead')
     if sparse:
-        why.append(f'left out: {", ".join(sparse)}: poses too sparse for the motion (the '
-                   "gyro's own attitude, known only at their stamps and interpolated between "
-                   f"them, is off the gyro's scale: {off_scale}), which a model would learn "
-                   "as the gyro's; score with eval instead")
+        off_scale = ', '.join('{} {:+.1f} % about {}'.format(
+            n, *interpolation_worst(reports[n])) for n in sparse)
+        why.append('increments_between_poses: the poses are too sparse for the motion on '
+                   f"{', '.join(sparse)} (the gyro's own attitude, known only at their stamps "
+                   f"and interpolated between them, is off the gyro's scale: {off_scale}; "
+                   f'limit {INTERPOLATION_LIMIT_PERCENT:g} %), which a model would learn as '
+                   "the gyro's from increments of fixed length: each increment runs from a "
+                   "pose's stamp to a later pose's instead")
     if weak:
         why.append(f'left out: {", ".join(weak)}: '
                    + ('its poses do not lower its own' if len(weak) == 1 else

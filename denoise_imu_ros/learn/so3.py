@@ -76,3 +76,29 @@ def tree_product(q: torch.Tensor, levels: int) -> torch.Tensor:
     for _ in range(levels):
         q = quat_mul(q[..., 0::2, :], q[..., 1::2, :])
     return q
+
+
+def prefix_product(q: torch.Tensor) -> torch.Tensor:
+    """
+    Attitudes from ordered products of quaternions along dim -2, identity first.
+
+    (..., T, 4) -> (..., T + 1, 4), element k being q[0] * q[1] * ... * q[k - 1]: the
+    attitude at stamp k relative to stamp 0. A work-efficient parallel scan: pairs are
+    multiplied (as in :func:`tree_product`), their prefix found recursively, and each
+    even element from the prefix before it; about 2T batched products in all.
+    """
+    identity = torch.zeros_like(q[..., :1, :])
+    identity[..., 3] = 1.0
+    return torch.cat((identity, _inclusive(q, identity)), -2)
+
+
+def _inclusive(q: torch.Tensor, identity: torch.Tensor) -> torch.Tensor:
+    """Return (..., T, 4): element k the ordered product q[0] * ... * q[k]."""
+    n = q.shape[-2]
+    if n == 1:
+        return q
+    if n % 2:  # an identity at the end pairs the last element, and is dropped after
+        return _inclusive(torch.cat((q, identity), -2), identity)[..., :n, :]
+    odd = _inclusive(quat_mul(q[..., 0::2, :], q[..., 1::2, :]), identity)  # q[0] ... q[2i+1]
+    even = torch.cat((q[..., :1, :], quat_mul(odd[..., :-1, :], q[..., 2::2, :])), -2)
+    return torch.stack((even, odd), -2).reshape(q.shape)

@@ -34,7 +34,7 @@ from tqdm import tqdm
 from . import parallel
 from .checkpoint import save_model
 from .config import LossConfig, TrainConfig
-from .loss import increment_loss
+from .loss import increment_loss, pose_increments
 from .model import correct_gyro, GyroNet
 from ..core.compat import check_stream
 from ..core.errors import DataWarning, TrainingError
@@ -96,11 +96,18 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
                             cfg.max_gt_gap_s, min_samples=max(min_len, receptive_field),
                             align_poses=cfg.align, poses=cfg.poses)
         head = cfg.window + cfg.max_offset
-        for part, valid in (('training window', seq.gt_valid[:head + 1]),
-                            ('validation tail', seq.gt_valid[head:])):
-            if len(trusted_blocks(valid, cfg.increments[0])) == 0:
+        for part, where in (('training window', slice(None, head + 1)),
+                            ('validation tail', slice(head, None))):
+            valid, length = seq.gt_valid[where], cfg.increments[0]
+            if cfg.increments_between_poses:
+                found = pose_increments(torch.tensor(_pose_at(seq)[where])[None],
+                                        torch.tensor(valid)[None], length)[1].any()
+            else:
+                found = len(trusted_blocks(valid, length)) > 0
+            if not found:
+                between = ' between poses' if cfg.increments_between_poses else ''
                 raise TrainingError(
-                    f'{Path(cfg.data) / name}: no {cfg.increments[0]}-sample increment with '
+                    f'{Path(cfg.data) / name}: no {length}-sample increment{between} with '
                     f'trusted ground truth in its {part} ({100 * valid.mean():.0f} % of its '
                     'IMU stamps have trusted ground truth): nothing to supervise the loss')
         check_stream(seq.stamp_ns, seq.imu, Path(cfg.data) / name)
@@ -159,6 +166,7 @@ class Split:
     dt: torch.Tensor         # (S_mine, L - 1) float64
     quat: torch.Tensor       # (S_mine, L, 4) float64
     valid: torch.Tensor      # (S_mine, L) bool
+    pose_at: torch.Tensor    # (S_mine, L) bool: a pose's stamp is nearest (Sequence.pose_at)
     max_start: torch.Tensor  # (S,) int64: window starts are drawn in [0, max_start)
     mine: torch.Tensor       # (S_mine,) int64: this process's sequences, in the draws
 
@@ -193,6 +201,7 @@ def training_split(seqs: list[Sequence], cfg: TrainConfig, rank: int | None = No
         dt=torch.tensor(stack([s.dt for s in held], n - 1)),
         quat=torch.tensor(stack([s.gt_quat for s in held], n)),
         valid=torch.tensor(stack([s.gt_valid[:m] for s, m in zip(held, held_lengths)], n)),
+        pose_at=torch.tensor(stack([_pose_at(s) for s in held], n)),
         max_start=torch.tensor([m - cfg.window for m in lengths]), mine=mine)
 
 
@@ -213,7 +222,13 @@ def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.T
     idx = n0[mine, None] + torch.arange(w + 1)[None]              # (S_mine, W + 1)
     rows = torch.arange(len(mine))[:, None]
     u = split.imu[rows, idx[:, :-1]] + noise[mine] + bias[mine]    # (S_mine, W, 6)
-    return u, split.dt[rows, idx[:, :-1]], split.quat[rows, idx], split.valid[rows, idx]
+    return (u, split.dt[rows, idx[:, :-1]], split.quat[rows, idx], split.valid[rows, idx],
+            split.pose_at[rows, idx])
+
+
+def _pose_at(seq: Sequence) -> np.ndarray:
+    """Return where a pose's stamp is nearest (none known: nowhere)."""
+    return np.zeros(len(seq), bool) if seq.pose_at is None else seq.pose_at
 
 
 # ----------------------------------------------------------------------------------
@@ -296,7 +311,8 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
         losses.append(float(increment_loss(
             s.on_poses(omega)[None, sl], torch.tensor(s.dt[sl])[None],
             torch.tensor(s.gt_quat[start:start + n + 1])[None],
-            torch.tensor(s.gt_valid[start:start + n + 1])[None], tail_cfg)))
+            torch.tensor(s.gt_valid[start:start + n + 1])[None], tail_cfg,
+            pose_at=torch.tensor(_pose_at(s)[start:start + n + 1])[None])))
         w = s.on_poses(drop_vertical(omega.numpy(), s.stream, s.rate_hz) if drop
                        else omega.numpy())[start:]
         aoes[s.name] = sequence_errors(s.tail(start), w, distances=())[1].aoe
@@ -485,12 +501,12 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     bar = tqdm(range(0, cfg.steps + 1), disable=not progress, desc='train', unit='step')
     for step in bar:
         if step > 0:
-            u, dt, quat, valid = (x.to(cfg.device) for x in batch(split, cfg, gen))
+            u, dt, quat, valid, pose_at = (x.to(cfg.device) for x in batch(split, cfg, gen))
             omega = model(u)
             if offsets is not None:  # each window's recording adds its own constant
                 omega = omega + model.gyro_std * offsets[split.mine, None, :]
             loss = increment_loss(omega, dt, quat, valid, loss_cfg,
-                                  parallel.sum_over_processes)
+                                  parallel.sum_over_processes, pose_at)
             optimizer.zero_grad(set_to_none=True)
             loss.backward()
             if cfg.workers > 1:

@@ -47,3 +47,15 @@ def test_a_hole_in_the_imu_before_the_poses_ends_the_lead_in_there(tmp_path):
     assert np.all(np.diff(late.stream_stamp_ns) == 5_000_000)
     with pytest.raises(ValueError, match='not one per sample of the stream'):
         late.on_poses(late.imu)  # an array of the poses' span alone: refused, not cut
+
+
+def test_each_pose_marks_the_imu_sample_nearest_its_stamp_within_half_a_period(
+        tmp_path):
+    from denoise_imu_ros.data.timebase import nearest_samples
+    imu = np.arange(0, 100_000_000, 5_000_000)  # 200 Hz
+    poses = np.array([-4_000_000, 0, 7_400_000, 7_600_000, 52_000_000, 94_900_000,
+                      97_600_000])
+    at = nearest_samples(imu, poses)
+    assert np.flatnonzero(at).tolist() == [0, 1, 2, 10, 19]  # 97.6 ms: 2.6 ms from the last
+    seq = load_sequence(write_asl(tmp_path / 'r', n_imu=2000, gt_rate=20.0))
+    assert 0.09 < seq.pose_at.mean() < 0.11 and np.array_equal(seq.tail(100).pose_at, seq.pose_at[100:])

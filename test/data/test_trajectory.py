@@ -219,7 +219,8 @@ def test_a_vios_drifting_heading_is_seen_over_the_drift_horizons_where_noise_hid
             f'{h:.0f}' for h in DRIFT_HORIZONS_S}
 
 
-def test_keyframes_too_sparse_for_the_motion_are_left_out_and_said(data_dir, euroc, tmp_path):
+def test_keyframes_too_sparse_for_the_motion_train_between_their_stamps(
+        data_dir, euroc, tmp_path):
     from denoise_imu_ros.learn.recipe import init_recipe
     rng = np.random.default_rng(6)
     names = ['MH_01_easy', 'MH_03_medium', 'V2_01_easy']
@@ -233,9 +234,9 @@ def test_keyframes_too_sparse_for_the_motion_are_left_out_and_said(data_dir, eur
         write_tum(tmp_path / f'{name}.txt', vins.stamp_ns[keep], vins.pos[keep],
                   vins.quat[keep])
     recipe, said = init_recipe(euroc, names, poses=tmp_path)
-    assert recipe['sequences'] == ['MH_03_medium', 'V2_01_easy']
-    assert any(re.match(r'left out: MH_01_easy: poses too sparse for the motion \(.*'
-                        r'MH_01_easy -\d+\.\d % about y\)', line) for line in said)
-    with pytest.raises(DatasetError, match=r'^the poses are too sparse for the motion on '
-                       r'every recording .*MH_01_easy -\d+\.\d % about y; limit 1 %\)'):
-        init_recipe(euroc, ['MH_01_easy'], poses=tmp_path)
+    assert recipe['sequences'] == names and recipe['increments_between_poses'] is True
+    assert any(re.match(r'increments_between_poses: the poses are too sparse for the motion '
+                        r'on MH_01_easy \(.*MH_01_easy -\d+\.\d % about y; limit 1 %\)', line)
+               for line in said)
+    dense, _ = init_recipe(euroc, names[1:], poses=tmp_path)
+    assert dense['increments_between_poses'] is False

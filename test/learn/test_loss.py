@@ -86,3 +86,69 @@ def test_increment_terms_add_up_and_bad_lengths_are_refused():
     for bad in [(16, 24), (32, 16), ()]:
         with pytest.raises(ValueError, match='powers of two'):
             LossConfig(increments=bad, weights=(1.0,) * len(bad))
+
+
+def _between(cfg: LossConfig) -> LossConfig:
+    """Return the same loss between poses."""
+    return LossConfig(**{**cfg.__dict__, 'between_poses': True})
+
+
+def test_between_poses_at_every_block_boundary_is_the_grid_loss():
+    omega, dt, quat, valid = _truth()
+    omega = omega + 0.003
+    one = LossConfig(increments=(32,), weights=(1.0,))
+    pose_at = torch.zeros_like(valid)
+    pose_at[:, ::32] = True
+    grid = increment_loss(omega, dt, quat, valid, one)
+    assert increment_loss(omega, dt, quat, valid, _between(one),
+                          pose_at=pose_at).item() == pytest.approx(grid.item(), rel=1e-9)
+    with pytest.raises(ValueError, match='pose stamps'):
+        increment_loss(omega, dt, quat, valid, _between(one))
+
+
+def test_between_poses_compares_each_pose_with_the_first_one_long_enough_after():
+    omega, dt, quat, valid = _truth(seed=2)
+    rng = np.random.default_rng(3)
+    stamps = np.cumsum(rng.integers(10, 60, size=40))
+    stamps = stamps[stamps <= T]
+    pose_at = torch.zeros_like(valid)
+    pose_at[0, stamps] = True
+    bias = torch.tensor([0.004, -0.002, 0.003], dtype=torch.float64)
+    cfg = LossConfig(increments=(64,), weights=(1.0,), skip_blocks=1, huber_delta=1.0,
+                     between_poses=True)
+    got = increment_loss(omega + bias, dt, quat, valid, cfg, pose_at=pose_at).item()
+    # the reference: scipy, pose by pose
+    est = [Rotation.identity()]
+    for w, h in zip((omega + bias)[0].numpy(), dt[0].numpy()):
+        est.append(est[-1] * Rotation.from_rotvec(w * h))
+    truth = Rotation.from_quat(quat[0].numpy())
+    terms = []
+    for a in stamps[stamps >= 64]:
+        b = stamps[stamps >= a + 64]
+        if len(b) and b[0] - a <= 128:
+            err = ((est[a].inv() * est[b[0]]).inv() * (truth[a].inv() * truth[b[0]])).as_rotvec()
+            terms.append(0.5 * err ** 2)  # Huber below its threshold
+    assert len(terms) > 10
+    assert got == pytest.approx(cfg.scale * np.sum(terms) / (3 * len(terms)), rel=1e-6)
+    # the true rate gives zero, and samples before the first compared pose change nothing
+    assert increment_loss(omega, dt, quat, valid, cfg, pose_at=pose_at).item() < 1e-12
+    early = omega + bias
+    early[:, :stamps[stamps >= 64][0]] += 1.0
+    assert increment_loss(early, dt, quat, valid, cfg, pose_at=pose_at).item() == pytest.approx(
+        got, rel=1e-9)
+
+
+def test_between_poses_masks_holes_and_stretches():
+    omega, dt, quat, valid = _truth()
+    omega = omega + 0.002
+    cfg = LossConfig(increments=(32,), weights=(1.0,), skip_blocks=0, between_poses=True)
+    pose_at = torch.zeros_like(valid)
+    pose_at[:, [0, 40, 100, 140, 300, 340]] = True  # 100 -> 300 is beyond twice 32 samples
+    base = increment_loss(omega, dt, quat, valid, cfg, pose_at=pose_at)
+    garbage = quat.clone()
+    garbage[:, 150:290] = torch.tensor([1.0, 0.0, 0.0, 0.0], dtype=torch.float64)
+    assert increment_loss(omega, dt, garbage, valid, cfg,
+                          pose_at=pose_at).item() == pytest.approx(base.item())
+    valid[:, 20] = False  # inside the first increment: it no longer counts
+    assert increment_loss(omega, dt, quat, valid, cfg, pose_at=pose_at).item() != pytest.approx(
+        base.item())

@@ -2,7 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Torch quaternion helpers against scipy, including at zero rotation."""
 
-from denoise_imu_ros.learn.so3 import quat_exp, quat_log, quat_mul, quat_rotate, tree_product
+from denoise_imu_ros.learn.so3 import (prefix_product, quat_exp, quat_log, quat_mul,
+                                       quat_rotate, tree_product)
 import numpy as np
 from scipy.spatial.transform import Rotation
 import torch
@@ -46,3 +47,18 @@ def test_gradients_are_finite_at_zero_rotation():
     quat_log(quat_exp(v)).sum().backward()
     assert torch.isfinite(v.grad).all()
     torch.testing.assert_close(v.grad, torch.ones_like(v))
+
+
+def test_prefix_product_is_every_ordered_product_from_the_first():
+    rng = np.random.default_rng(4)
+    rot = Rotation.from_rotvec(rng.normal(scale=0.3, size=(2, 37, 3)).reshape(-1, 3))
+    q = torch.tensor(rot.as_quat().reshape(2, 37, 4))
+    got = prefix_product(q).numpy()
+    assert got.shape == (2, 38, 4)
+    for row in range(2):
+        att = Rotation.identity()
+        for k in range(38):
+            assert min(np.abs(got[row, k] - att.as_quat()).max(),
+                       np.abs(got[row, k] + att.as_quat()).max()) < 1e-12
+            if k < 37:
+                att = att * Rotation.from_quat(q[row, k].numpy())

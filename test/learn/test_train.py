@@ -63,6 +63,23 @@ def test_twenty_hz_ground_truth_trains_with_a_finite_falling_loss(euroc, tmp_pat
     assert meta['history'][-1]['val_loss'] < 0.9 * meta['history'][0]['val_loss']
 
 
+def test_twenty_hz_ground_truth_trains_between_its_poses(euroc):
+    cfg = _short(euroc, sequences=['V1_01_easy'], val_every=6, swa_start=0, select='final',
+                 increments_between_poses=True)
+    assert cfg.loss_config().between_poses
+    meta = train(cfg, progress=False).meta
+    losses = [h['train_loss'] for h in meta['history'][1:]]
+    assert all(np.isfinite(v) and v > 0 for v in losses)
+    assert losses[-1] < 0.5 * losses[0]
+    seq = load_sequence(euroc / 'V1_01_easy')
+    assert 0.09 < seq.pose_at.mean() < 0.11  # every 10th sample of 200 Hz has a pose
+    # poses trusted nowhere between them: nothing to compare, said as for the grid
+    with pytest.raises(TrainingError, match='V1_01_easy: no 16-sample increment between '
+                                            'poses with trusted ground truth in its training '
+                                            'window'):
+        train(dataclasses.replace(cfg, max_gt_gap_s=0.02), progress=False)
+
+
 def test_a_recording_that_cannot_supervise_the_loss_is_named(euroc, tmp_path):
     cfg = _short(euroc, sequences=['MH_01_easy', 'V1_01_easy'], max_gt_gap_s=0.02)
     with pytest.raises(TrainingError, match='V1_01_easy: no 16-sample increment with trusted '
@@ -222,13 +239,14 @@ def test_windows_are_drawn_from_the_head_or_the_whole_of_each_sequence(euroc, wh
     gen = torch.Generator().manual_seed(0)
     last_stamp_seen = [0] * len(seqs)
     for _ in range(300):
-        u, dt, quat, valid = batch(split, cfg, gen)
+        u, dt, quat, valid, pose_at = batch(split, cfg, gen)
         assert u.shape == (2, cfg.window, 6) and quat.shape == (2, cfg.window + 1, 4)
         assert bool(valid.all()) and bool((dt > 0).all())  # never the zero padding
         for i, s in enumerate(seqs):
             # find where this window ends in the sequence from its last quaternion
             end = int(np.flatnonzero((s.gt_quat == quat[i, -1].numpy()).all(1))[0])
             last_stamp_seen[i] = max(last_stamp_seen[i], end)
+            assert np.array_equal(pose_at[i].numpy(), s.pose_at[end - cfg.window:end + 1])
     for s, end in zip(seqs, last_stamp_seen):
         if whole:
             assert end > len(s) - 2000  # windows reach the end of every sequence
