@@ -24,6 +24,7 @@ ROE_DISTANCES_M = (7.0, 21.0, 35.0)
 SCAN_BLOCK = 16  # steps composed per block by integrate (4x faster than one scan)
 RESIDUAL_BLOCK = 16  # samples per increment of the gyro residual estimate (training, noise)
 ALIGN_AT_S = 1.5  # a fused orientation's arbitrary yaw is aligned to the ground truth here
+MAX_STRETCH = 2  # an increment between poses spans at most this many times its length
 
 
 def _prefix_products(q: np.ndarray) -> np.ndarray:
@@ -69,55 +70,80 @@ def trusted_blocks(gt_valid: np.ndarray, length: int) -> np.ndarray:
     return np.arange(m)[ok] * length
 
 
-def _block_errors(gt_quat: np.ndarray, starts: np.ndarray, est: Rotation,
-                  length: int) -> np.ndarray:
-    """Return the errors (rotation vectors) of the given blocks of a trajectory."""
-    gt = Rotation.from_quat(gt_quat[np.concatenate([starts, starts + length])])
+def increments(gt_valid: np.ndarray, length: int,
+               pose_at: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """
+    Return the starts and ends of the ``length``-sample increments compared with poses.
+
+    Without ``pose_at``: the non-overlapping blocks trusted throughout
+    (:func:`trusted_blocks`). With it (the stamps nearest a pose's, as the loss between
+    poses compares them): from each pose's stamp to the first pose's at least ``length``
+    samples later, if at most MAX_STRETCH times ``length`` away and trusted throughout.
+    """
+    if pose_at is None:
+        starts = trusted_blocks(gt_valid, length)
+        return starts, starts + length
+    poses = np.flatnonzero(pose_at)
+    later = np.searchsorted(poses, poses + length)
+    starts, ends = poses[later < len(poses)], poses[later[later < len(poses)]]
+    untrusted = np.cumsum(~gt_valid)
+    ok = ((ends - starts <= MAX_STRETCH * length) & gt_valid[starts]
+          & (untrusted[ends] == untrusted[starts]))
+    return starts[ok], ends[ok]
+
+
+def _block_errors(gt_quat: np.ndarray, starts: np.ndarray, ends: np.ndarray,
+                  est: Rotation) -> np.ndarray:
+    """Return the errors (rotation vectors) of the given increments of a trajectory."""
+    gt = Rotation.from_quat(gt_quat[np.concatenate([starts, ends])])
     m = len(starts)
-    i, j = starts, starts + length
-    return ((gt[:m].inv() * gt[m:]).inv() * (est[i].inv() * est[j])).as_rotvec().reshape(-1, 3)
+    return ((gt[:m].inv() * gt[m:]).inv() * (est[starts].inv() * est[ends])).as_rotvec(
+    ).reshape(-1, 3)
 
 
 def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
-                        dt: np.ndarray, length: int, est: Rotation | None = None
-                        ) -> tuple[np.ndarray, np.ndarray]:
+                        dt: np.ndarray, length: int, est: Rotation | None = None,
+                        pose_at: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """
-    Errors of the gyro's rotation increments over blocks of ``length`` samples.
+    Errors of the gyro's rotation increments over ``length`` samples (:func:`increments`).
 
-    Non-overlapping blocks with trusted ground truth at every stamp they span; returns
-    the rotation vectors (M, 3) rad of R_gt_inc^T R_gyro_inc and the blocks' durations
-    (M,) s. ``gyro`` holds one sample per stamp (the last drives nothing); ``est``, when
-    given, is its integration from ``gt_quat[0]`` (callers share one between lengths).
+    Non-overlapping blocks with trusted ground truth at every stamp they span, or with
+    ``pose_at`` the increments between poses; returns the rotation vectors (M, 3) rad of
+    R_gt_inc^T R_gyro_inc and the increments' durations (M,) s. ``gyro`` holds one
+    sample per stamp (the last drives nothing); ``est``, when given, is its integration
+    from ``gt_quat[0]`` (callers share one between lengths).
     """
-    i = trusted_blocks(gt_valid, length)
+    i, e = increments(gt_valid, length, pose_at)
     if len(i) == 0:
         return np.zeros((0, 3)), np.zeros(0)
     est = integrate(gt_quat[0], gyro[:len(dt)], dt) if est is None else est
-    res = _block_errors(gt_quat, i, est, length)
+    res = _block_errors(gt_quat, i, e, est)
     t = np.concatenate([[0.0], np.cumsum(dt)])
-    return res, t[i + length] - t[i]
+    return res, t[e] - t[i]
 
 
 def fit_constant_bias(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
-                      dt: np.ndarray, length: int, est: Rotation | None = None
-                      ) -> np.ndarray | None:
+                      dt: np.ndarray, length: int, est: Rotation | None = None,
+                      pose_at: np.ndarray | None = None) -> np.ndarray | None:
     """
-    Return the least-squares constant gyro bias (3,) rad/s from ``length``-sample blocks.
+    Return the least-squares constant gyro bias (3,) rad/s from ``length``-sample increments.
 
-    To first order a bias b gives a block the error sum_k Q_k^T b dt_k, Q_k the rotation
-    from sample k + 1 to the block's end: the bias as seen from a turning frame. Dividing
-    the error by the duration instead is right only while the body barely turns within a
-    block. None when no block has trusted ground truth. ``est`` as in
-    :func:`increment_residuals`.
+    To first order a bias b gives an increment the error sum_k Q_k^T b dt_k, Q_k the
+    rotation from sample k + 1 to the increment's end: the bias as seen from a turning
+    frame. Dividing the error by the duration instead is right only while the body
+    barely turns within an increment. None when no increment has trusted ground truth.
+    ``est`` and ``pose_at`` as in :func:`increment_residuals`.
     """
-    i = trusted_blocks(gt_valid, length)
+    i, e = increments(gt_valid, length, pose_at)
     if len(i) == 0:
         return None
     est = integrate(gt_quat[0], gyro[:len(dt)], dt) if est is None else est
-    res = _block_errors(gt_quat, i, est, length)
-    k = (i[:, None] + np.arange(length)).ravel()  # every step of the trusted blocks
-    turn = (est[k + 1].inv() * est[np.repeat(i + length, length)]).as_matrix()
-    jac = (np.swapaxes(turn, 1, 2) * dt[k, None, None]).reshape(len(i), length, 3, 3).sum(1)
+    res = _block_errors(gt_quat, i, e, est)
+    spans = e - i
+    first = np.cumsum(spans) - spans  # where each increment's steps start among all
+    k = np.repeat(i - first, spans) + np.arange(spans.sum())  # every step of them
+    turn = (est[k + 1].inv() * est[np.repeat(e, spans)]).as_matrix()
+    jac = np.add.reduceat(np.swapaxes(turn, 1, 2) * dt[k, None, None], first, axis=0)
     normal = np.einsum('mji,mjk->ik', jac, jac)
     return np.linalg.solve(normal, np.einsum('mji,mj->i', jac, res))
 

@@ -40,8 +40,8 @@ from .pose_jumps import describe as describe_jumps, find_jumps, Jump, mask_jumps
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
 from ..core.limits import accel_units, DEG_S_HINT, imu_holes, MAX_GAP_FACTOR
-from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residuals, integrate,
-                            integrate_from_trusted, sequence_errors, trusted_blocks)
+from ..core.metrics import (attitude_errors, fit_constant_bias, increment_residuals, increments,
+                            integrate, integrate_from_trusted, sequence_errors)
 from ..core.records import Recording, Sequence
 
 LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled (samples)
@@ -52,6 +52,9 @@ DRIFT_HORIZONS_S = (5.0, 10.0, 20.0)
 # sparse for the motion (EuRoC: 5-10 Hz trajectories 0.9 at most, a pose every 0.2-1.0 s
 # 1.1-11 and 40 on V2_03; motion capture 0.01 at most, BROAD's and TUM-VI's too)
 INTERPOLATION_LIMIT_PERCENT = 1.0
+# between pose stamps, a length counts only where its increments span this much of the
+# recording (keyframes 0.2-1.0 s apart: 32 samples span almost nothing, 128 most of it)
+MIN_POSE_COVERAGE = 0.5
 LEFT_OUT_SAID = 0.01       # a fraction of rate windows left out of the alignment said from
 BIAS_FIT_LENGTH = 64      # increments the constant bias is fitted on (samples)
 NOISE_RATE_LIMIT_DEG_S = 1.0
@@ -87,15 +90,21 @@ def paper_increments(rate_hz: float) -> tuple[int, int]:
     return first, 2 * first
 
 
-def label_noise(seq: Sequence, horizons_s: tuple[float, ...] = ()) -> dict[str, Any]:
+def label_noise(seq: Sequence, horizons_s: tuple[float, ...] = (),
+                between_poses: bool = False) -> dict[str, Any]:
     """
     Constant gyro bias against the ground truth, and the increment residual per length.
 
-    Also the heading and tilt residuals over ``horizons_s`` (``drift_increments``).
+    Also the heading and tilt residuals over ``horizons_s`` (``drift_increments``). With
+    ``between_poses`` every increment runs between pose stamps, as the loss then compares
+    them (:func:`~denoise_imu_ros.core.metrics.increments`): what is left is the poses'
+    own noise, not what interpolating between them misses.
     """
     gyro = seq.imu[:, :3]
     dt = float(np.mean(seq.dt))
-    bias = fit_constant_bias(seq.gt_quat, seq.gt_valid, gyro, seq.dt, BIAS_FIT_LENGTH)
+    pose_at = seq.pose_at if between_poses else None
+    bias = fit_constant_bias(seq.gt_quat, seq.gt_valid, gyro, seq.dt, BIAS_FIT_LENGTH,
+                             pose_at=pose_at)
     if bias is None:  # no trusted block that long: the profile shows the raw residual
         bias = np.zeros(3)
     est = integrate(seq.gt_quat[0], gyro[:-1] - bias, seq.dt)  # one for every length
@@ -104,11 +113,15 @@ def label_noise(seq: Sequence, horizons_s: tuple[float, ...] = ()) -> dict[str, 
     def split(j: int) -> dict[str, float] | None:
         if (len(seq) - 1) // j < 2:
             return None
-        res, _ = increment_residuals(seq.gt_quat, seq.gt_valid, gyro - bias, seq.dt, j, est)
+        res, _ = increment_residuals(seq.gt_quat, seq.gt_valid, gyro - bias, seq.dt, j, est,
+                                     pose_at)
         if len(res) == 0:
             return None
-        # each residual is in the body frame at its block's end
-        turned = Rotation.from_quat(world[trusted_blocks(seq.gt_valid, j) + j]).apply(res)
+        starts, ends = increments(seq.gt_valid, j, pose_at)
+        if pose_at is not None and _covered(starts, ends, len(seq)) < MIN_POSE_COVERAGE:
+            return None  # too few poses that far apart: the loss would see little of it
+        # each residual is in the body frame at its increment's end
+        turned = Rotation.from_quat(world[ends]).apply(res)
         return {'residual_mrad': 1e3 * float(np.sqrt(np.mean(res ** 2))),  # per axis
                 'heading_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, 2] ** 2))),
                 'tilt_mrad': 1e3 * float(np.sqrt(np.mean(turned[:, :2] ** 2))),
@@ -131,7 +144,16 @@ def label_noise(seq: Sequence, horizons_s: tuple[float, ...] = ()) -> dict[str, 
             'noise_dominated_increments': noisy, 'drift_increments': drift}
 
 
-def supervision(seq: Sequence, lengths: tuple[int, ...]) -> dict[str, Any]:
+def _covered(starts: np.ndarray, ends: np.ndarray, n: int) -> float:
+    """Return the fraction of n stamps that some increment [start, end] spans."""
+    steps = np.zeros(n + 1, int)
+    np.add.at(steps, starts, 1)
+    np.add.at(steps, ends + 1, -1)
+    return float(np.mean(np.cumsum(steps)[:n] > 0))
+
+
+def supervision(seq: Sequence, lengths: tuple[int, ...],
+                between_poses: bool = False) -> dict[str, Any]:
     """
     Whether the poses can supervise a correction of this gyro, at each increment length.
 
@@ -140,8 +162,10 @@ def supervision(seq: Sequence, lengths: tuple[int, ...]) -> dict[str, Any]:
     recording's own attitude error (AOE over the whole recording, from the first pose),
     what the increments say about the gyro is the poses' error, not the gyro's; a
     network trained on them has nothing right to learn, on this recording or another.
+    ``between_poses`` as for :func:`label_noise`.
     """
     gyro = seq.imu[:, :3]
+    pose_at = seq.pose_at if between_poses else None
 
     def aoe(g: np.ndarray) -> float:
         return sequence_errors(seq, g, distances=())[1].aoe
@@ -151,7 +175,7 @@ def supervision(seq: Sequence, lengths: tuple[int, ...]) -> dict[str, Any]:
                             distances=()).aoe
     fits = {}
     for j in lengths:
-        bias = fit_constant_bias(seq.gt_quat, seq.gt_valid, gyro, seq.dt, j, est)
+        bias = fit_constant_bias(seq.gt_quat, seq.gt_valid, gyro, seq.dt, j, est, pose_at)
         if bias is not None:
             fits[j] = {'bias_deg_s': np.degrees(bias).tolist(), 'aoe_deg': aoe(gyro - bias)}
     best = min(fits, key=lambda j: fits[j]['aoe_deg'], default=None)
@@ -205,12 +229,14 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     jumps = find_jumps(seq)
     seq = mask_jumps(seq, jumps)
     report['pose_jumps'] = [j._asdict() for j in jumps]
-    report.update(label_noise(seq, DRIFT_HORIZONS_S))
-    report.update(_increments(report, seq.rate_hz))
-    long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
-    report['supervision'] = supervision(seq, (*report['paper_increments'], long))
     report['interpolation_scale_error_percent'] = interpolation_scale_error(rec)
     report['too_sparse'] = _too_sparse(report)
+    # poses too sparse to interpolate are judged between their stamps, as training uses them
+    between = report['too_sparse'] is not None
+    report.update(label_noise(seq, DRIFT_HORIZONS_S, between))
+    report.update(_increments(report, seq.rate_hz))
+    long = 2 ** round(math.log2(SUPERVISION_LONG_S * seq.rate_hz))
+    report['supervision'] = supervision(seq, (*report['paper_increments'], long), between)
     units = _units(report)  # wrong units explain every other symptom: say only that
     report['usable'], report['reasons'] = ('no', units) if units else _usable(report,
                                                                               max_offset_s)
@@ -276,13 +302,19 @@ def _increments(report: dict[str, Any], rate_hz: float) -> dict[str, Any]:
     paper = paper_increments(rate_hz)
     clean = [j for j in report['increments'] if j >= paper[0] and j not in noisy]
     short = [j for j in paper if j in noisy]
-    if not short:
+    absent = [j for j in paper if j not in report['increments']]
+    if not short and not absent:
         line = (f"the paper's {paper[0]}- and {paper[1]}-sample increments (0.08/0.16 s at "
                 f'{rate_hz:.0f} Hz) are not dominated by ground-truth noise')
     else:
-        line = (f'increments of {" and ".join(map(str, short))} samples are dominated by '
-                'ground-truth noise' + (f'; from {clean[0]} samples on they are not'
-                                        if clean else '; so are all up to 512 samples'))
+        line = '; '.join(
+            ([f'increments of {" and ".join(map(str, short))} samples are dominated by '
+              'ground-truth noise'] if short else [])
+            + ([f'{" and ".join(map(str, absent))} samples apart, too few poses (or too '
+                'short a recording) to compare'] if absent else [])) + (
+            f'; from {clean[0]} samples on they are not' if clean and short else
+            f'; from {clean[0]} samples on they are clean' if clean else
+            '; no clean length up to 512 samples')
     return {'paper_increments': list(paper),
             'shortest_clean_increment': clean[0] if clean else None, 'label_noise': line}
 
@@ -387,6 +419,8 @@ def markdown(report: dict[str, Any]) -> str:
     if r['judged_after_alignment']:
         lines[-1] = ('  with the clock offset and frame rotation applied: increment residual '
                      'after a constant bias (samples: mrad per axis, as deg/s):')
+    if r['too_sparse']:
+        lines[-1] = lines[-1][:-2] + ', each between pose stamps):'
     lines += [f'    {j:4d}: {p["residual_mrad"]:7.3f}  {p["noise_rate_deg_s"]:7.3f}'
               for j, p in r['increments'].items()]
     if r['pose_jumps']:

@@ -30,10 +30,10 @@ import torch.nn.functional as F  # noqa: N812
 from .config import LossConfig
 from .so3 import (prefix_product, quat_conj, quat_exp, quat_log, quat_mul, quat_rotate,
                   tree_product)
+from ..core.metrics import MAX_STRETCH
 
 
 Count = Callable[[torch.Tensor], torch.Tensor]
-MAX_STRETCH = 2  # an increment between poses spans at most this many times its length
 
 
 def _huber(residual: torch.Tensor, valid: torch.Tensor, cfg: LossConfig,
@@ -119,7 +119,8 @@ def pose_increments(pose_at: torch.Tensor, gt_valid: torch.Tensor, length: int,
     pose_at and gt_valid (B, T + 1); both results (B, T + 1 - length): the first pose
     stamp at least ``length`` samples later (clamped to T), and whether the start is a
     pose stamp from ``first`` on whose increment spans at most MAX_STRETCH times
-    ``length`` with the poses trusted throughout.
+    ``length`` with the poses trusted throughout: per window, on the device, the
+    increments :func:`~denoise_imu_ros.core.metrics.increments` finds in a recording.
     """
     t = pose_at.shape[1] - 1
     index = torch.arange(t + 1, device=pose_at.device)

@@ -103,14 +103,17 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     sequences = [n for n in sequences if n not in left_out]
     noisy = set().union(*(r['noise_dominated_increments'] for r in reports.values()))
     paper = paper_increments(rate)
-    if not set(paper) & noisy:
+    absent = {j for r in reports.values() for j in paper if j not in r['increments']}
+    if not set(paper) & (noisy | absent):
         increments = list(paper)
         why_inc = "the paper's 0.08/0.16 s, clean on every recording"
     else:
         first = max(r['shortest_clean_increment'] for r in reports.values())
         increments = [first, 2 * first]
-        why_inc = (f"the paper's {paper[0]}/{paper[1]} are noise-dominated "
-                   f'({sorted(noisy)}); {first} is clean on every recording')
+        why_inc = (f"the paper's {paper[0]}/{paper[1]} are "
+                   + ' or '.join((['noise-dominated'] if set(paper) & noisy else [])
+                                 + (['without enough poses that far apart'] if absent else []))
+                   + f' ({sorted(noisy | absent)}); {first} is clean on every recording')
     span = increments[-1]
     shortest = min(r['duration_s'] for r in reports.values()) * rate
     window = int(min(WINDOW_S * rate, shortest * 2 / 3) // span * span)

@@ -34,13 +34,12 @@ from tqdm import tqdm
 from . import parallel
 from .checkpoint import save_model
 from .config import LossConfig, TrainConfig
-from .loss import increment_loss, pose_increments
+from .loss import increment_loss
 from .model import correct_gyro, GyroNet
 from ..core.compat import check_stream
 from ..core.errors import DataWarning, TrainingError
 from ..core.limits import common_rate
-from ..core.metrics import (increment_residuals, RESIDUAL_BLOCK, sequence_errors,
-                            trusted_blocks)
+from ..core.metrics import increment_residuals, increments, RESIDUAL_BLOCK, sequence_errors
 from ..core.modelfile import code_version
 from ..core.records import Sequence
 from ..data import envelope, rest_bias
@@ -99,12 +98,8 @@ def load_sequences(cfg: TrainConfig) -> list[Sequence]:
         for part, where in (('training window', slice(None, head + 1)),
                             ('validation tail', slice(head, None))):
             valid, length = seq.gt_valid[where], cfg.increments[0]
-            if cfg.increments_between_poses:
-                found = pose_increments(torch.tensor(_pose_at(seq)[where])[None],
-                                        torch.tensor(valid)[None], length)[1].any()
-            else:
-                found = len(trusted_blocks(valid, length)) > 0
-            if not found:
+            pose_at = _pose_at(seq)[where] if cfg.increments_between_poses else None
+            if len(increments(valid, length, pose_at)[0]) == 0:
                 between = ' between poses' if cfg.increments_between_poses else ''
                 raise TrainingError(
                     f'{Path(cfg.data) / name}: no {length}-sample increment{between} with '

@@ -90,3 +90,30 @@ def test_integration_starts_at_the_first_trusted_pose_not_one_across_a_hole():
     np.testing.assert_allclose(est[50:].as_quat(), quat[50:], atol=1e-12)
     whole = integrate_from_trusted(quat, np.ones(n, bool), gyro, np.diff(t) * 1e-9)
     np.testing.assert_allclose(whole.as_quat()[0], quat[0])  # all trusted: from the first
+
+
+def test_a_constant_bias_is_recovered_from_increments_between_sparse_poses():
+    from denoise_imu_ros.core.metrics import fit_constant_bias, increment_residuals, increments
+    rng = np.random.default_rng(5)
+    n = 6001
+    dt = np.full(n - 1, 0.005)
+    rate = np.cumsum(rng.normal(scale=0.05, size=(n, 3)), axis=0)  # a body that turns
+    truth = integrate(Rotation.random(random_state=2).as_quat(), rate[:-1], dt).as_quat()
+    pose_at = np.zeros(n, bool)
+    pose_at[np.cumsum(rng.integers(40, 201, n // 40))[:-1] % n] = True  # keyframes
+    valid = np.ones(n, bool)
+    valid[3000:3100] = False  # a hole: no increment spans it
+    bias = np.array([0.01, -0.02, 0.005])
+    starts, ends = increments(valid, 128, pose_at)
+    assert pose_at[starts].all() and pose_at[ends].all()
+    assert ((ends - starts >= 128) & (ends - starts <= 256)).all()
+    assert not ((starts < 3100) & (ends >= 3000)).any()
+    # the fit is to first order in the bias: as close as from the blocks of a full grid
+    fitted = fit_constant_bias(truth, valid, rate + bias, dt, 128, pose_at=pose_at)
+    grid = fit_constant_bias(truth, valid, rate + bias, dt, 128)
+    assert np.abs(fitted - bias).max() < 2e-4 and np.abs(grid - bias).max() < 2e-4
+    res, duration = increment_residuals(truth, valid, rate, dt, 128, pose_at=pose_at)
+    assert np.abs(res).max() < 1e-9 and np.allclose(duration, (ends - starts) * 0.005)
+    # without pose_at, the non-overlapping blocks as before
+    blocks = increments(valid, 128)
+    assert (blocks[1] - blocks[0] == 128).all() and (blocks[0] % 128 == 0).all()

@@ -408,6 +408,11 @@ def test_keyframes_a_few_times_a_second_are_too_sparse_for_a_drone(euroc):
     assert sparse['usable'] == 'after alignment' and sparse['too_sparse'] in sparse['reasons']
     assert sparse['too_sparse'].startswith('poses too sparse for the motion (1.')
     assert 'increments_between_poses' in sparse['too_sparse']
+    # and so its label noise is judged between the pose stamps: no two poses 16 samples
+    # apart, and what is compared is the poses' own noise, not interpolation's
+    assert 'each between pose stamps' in markdown(sparse)
+    assert 16 not in sparse['increments'] and 16 in full['increments']
+    assert sparse['shortest_clean_increment'] <= 256
     # what the poses can see turn is the gyro over their longer windows, less than at 10 Hz
     assert all(s < f for s, f in zip(sparse['excitation_rms_deg_s'],
                                      full['excitation_rms_deg_s']))

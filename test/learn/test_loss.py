@@ -152,3 +152,19 @@ def test_between_poses_masks_holes_and_stretches():
     valid[:, 20] = False  # inside the first increment: it no longer counts
     assert increment_loss(omega, dt, quat, valid, cfg, pose_at=pose_at).item() != pytest.approx(
         base.item())
+
+
+def test_the_loss_compares_the_increments_check_data_and_training_find_between_poses():
+    from denoise_imu_ros.core.metrics import increments
+    from denoise_imu_ros.learn.loss import pose_increments
+    rng = np.random.default_rng(7)
+    pose_at = rng.random((3, 2001)) < 0.03
+    valid = rng.random((3, 2001)) > 0.0005
+    for length in (32, 64, 128):
+        end, ok = pose_increments(torch.tensor(pose_at), torch.tensor(valid), length)
+        for row in range(3):
+            starts, ends = increments(valid[row], length, pose_at[row])
+            found = np.flatnonzero(ok[row].numpy())
+            assert len(found) > 5
+            assert np.array_equal(found, starts)
+            assert np.array_equal(end[row, found].numpy(), ends)
