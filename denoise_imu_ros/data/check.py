@@ -35,7 +35,8 @@ from scipy.spatial.transform import Rotation
 
 from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
                              interpolation_scale_error, level, MAX_OFFSET_S,
-                             MIN_EXCITATION_DEG_S, needs_alignment, not_following)
+                             MIN_EXCITATION_DEG_S, needs_alignment, not_following,
+                             other_convention)
 from .pose_jumps import describe as describe_jumps, find_jumps, Jump, mask_jumps
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
@@ -75,6 +76,7 @@ ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'tim
              'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
              'rate_window_s', 'rate_windows_left_out', 'judged_after_alignment', 'pose_jumps',
              'drift_increments', 'interpolation_scale_error_percent', 'too_sparse',
+             'read_as',
              'paper_increments', 'shortest_clean_increment', 'label_noise',
              'supervision')
 
@@ -217,6 +219,11 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
                           f'receptive field ({field} samples): nothing to estimate or train'])
         return report
     report.update(estimate_pose_alignment(rec, max_offset_s))
+    other = other_convention(rec, max_offset_s) if not_following(report, max_offset_s) else None
+    report['read_as'] = None
+    if other is not None:  # every command reads them so (data.load)
+        rec, found, report['read_as'] = other
+        report.update(found)
     # the poses as training would use them: on the IMU clock and in its frame, when the
     # estimate says they are not and is itself trustworthy (the poses follow the gyro,
     # and rotation about every axis makes the frame observable)
@@ -344,10 +351,13 @@ def _usable(report: dict[str, Any], max_offset_s: float) -> tuple[str, list[str]
             reasons.append(f'no rotation about the IMU {axis} axis ({rms:.2f} deg/s RMS)')
     if reasons:
         return 'no', reasons
-    sparse = [report['too_sparse']] if report['too_sparse'] else []
+    notes = [report['too_sparse']] if report['too_sparse'] else []
+    if report['read_as']:
+        notes.insert(0, f'the poses follow the gyro only read {report["read_as"]}: every '
+                        'command reads them so')
     if needs_alignment(report):
-        return 'after alignment', [f'{describe(report)}: apply both before training'] + sparse
-    return 'yes', sparse
+        return 'after alignment', [f'{describe(report)}: apply both before training'] + notes
+    return 'yes', notes
 
 
 def interpolation_worst(report: dict[str, Any]) -> tuple[float, str] | None:

@@ -15,7 +15,8 @@ import warnings
 
 from .asl import read_asl
 from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment, level,
-                             LEVEL_TOLERANCE_DEG, needs_alignment, not_following)
+                             LEVEL_TOLERANCE_DEG, needs_alignment, not_following,
+                             other_convention)
 from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
 from .timebase import onto_imu_stamps
 from .trajectory import read_tum, trajectory_file, with_trajectory
@@ -87,7 +88,7 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     # a gyro in deg/s follows no poses at any clock or frame: said before any alignment
     raw = onto_imu_stamps(rec, max_gt_gap_s=max_gt_gap_s)
     check_gyro_against_poses(raw.imu[:, :3], raw.gt_quat, raw.gt_valid, raw.dt, path)
-    used = _alignment(rec, align_poses, path)
+    rec, used = _alignment(rec, align_poses, path)
     if used is not None:
         rec = apply_pose_alignment(rec, used['time_offset_s'], used['imu_from_pose_rotation_xyzw'])
     seq = onto_imu_stamps(rec, max_gt_gap_s=max_gt_gap_s, min_samples=min_samples)
@@ -103,31 +104,42 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     return dataclasses.replace(seq, pose_alignment=used)
 
 
-def _alignment(rec: Recording, align_poses: str | dict, path: str | Path) -> dict | None:
-    """Return the clock offset and frame rotation to apply to the poses (None: none)."""
-    if align_poses == 'check':
+def _alignment(rec: Recording, align_poses: str | dict,
+               path: str | Path) -> tuple[Recording, dict | None]:
+    """
+    Return the poses and the clock offset and frame rotation to apply to them (None: none).
+
+    Poses that follow the gyro only read another common way (inverted, w first:
+    :func:`~denoise_imu_ros.data.pose_alignment.other_convention`) are read so, and said.
+    """
+    if align_poses in ('check', 'auto'):
         found = estimate_pose_alignment(rec)
+        other = other_convention(rec) if not_following(found) else None
+        if other is not None:
+            rec, found, way = other
+            warnings.warn(f'{path}: the poses follow the gyro only read {way}: read so',
+                          DataWarning, stacklevel=3)
+    if align_poses == 'check':
         why = not_following(found)
         if why:
-            raise DatasetError(f'{path}: {why} (a quaternion order other than its format '
-                               "says? another recording's poses?): figures against them would "
-                               'be wrong; --align none scores them as they are')
+            raise DatasetError(f'{path}: {why} (nor read inverted or with w first: another '
+                               "recording's poses?): figures against them would be wrong; "
+                               '--align none scores them as they are')
         if needs_alignment(found):
             raise DatasetError(f'{path}: {describe(found)}: figures against them as they are '
                                'would be wrong; give --align auto to move them first (or '
                                '--align none to score them as they are)')
-        return None
+        return rec, None
     if align_poses == 'auto':
-        found = estimate_pose_alignment(rec)
         why = not_following(found)
         if why:  # no estimate to apply: say so rather than shift the poses by it
             raise DatasetError(f'{path}: align auto: {why}')
-        return {k: found[k] for k in ('time_offset_s', 'time_offset_std_s',
-                                      'imu_from_pose_rotation_xyzw',
-                                      'imu_from_pose_rotation_std_deg')}
+        return rec, {k: found[k] for k in ('time_offset_s', 'time_offset_std_s',
+                                           'imu_from_pose_rotation_xyzw',
+                                           'imu_from_pose_rotation_std_deg')}
     if isinstance(align_poses, dict):
-        return dict(align_poses)
+        return rec, dict(align_poses)
     if align_poses != 'none':
         raise DatasetError('align must be none, check, auto or a mapping, not '
                            f'{align_poses!r}')
-    return None
+    return rec, None

@@ -319,3 +319,43 @@ def apply_pose_alignment(rec: Recording, time_offset_s: float,
     return Recording(rec.name, rec.source, rec.imu_stamp_ns, rec.imu,
                      rec.gt_stamp_ns + int(round(time_offset_s * 1e9)),
                      (Rotation.from_quat(rec.gt_quat) * rot.inv()).as_quat(), rec.gt_pos)
+
+
+def _inverted(rec: Recording) -> Recording:
+    """Return the poses inverted: a file of world-in-body poses read as body-in-world."""
+    inv = Rotation.from_quat(rec.gt_quat).inv()
+    return dataclasses.replace(rec, gt_quat=inv.as_quat(), gt_pos=-inv.apply(rec.gt_pos))
+
+
+def _w_first(rec: Recording) -> Recording:
+    """Return the quaternions of a file that wrote w first, read as x, y, z, w."""
+    quat = rec.gt_quat[:, [1, 2, 3, 0]]
+    return dataclasses.replace(rec, gt_quat=quat / np.linalg.norm(quat, axis=1, keepdims=True))
+
+
+def other_convention(rec: Recording, max_offset_s: float = MAX_OFFSET_S
+                     ) -> tuple[Recording, dict[str, Any], str] | None:
+    """
+    Return the poses read another common way where they follow the gyro, its estimate, how.
+
+    For poses that follow the gyro at no offset as read (:func:`not_following`): a file
+    of world-in-camera poses (T_cw where TUM files hold T_wc), or of quaternions written
+    w first. To a gyro the two look alike (an odd permutation of a quaternion's components
+    is its inverse between two fixed rotations, which the frame rotation and the world
+    absorb); the positions tell them apart: read the right way they trace the smoother
+    path. None when neither way follows.
+    """
+    inverted = _inverted(rec)
+    found = estimate_pose_alignment(inverted, max_offset_s)
+    if not_following(found, max_offset_s):
+        return None
+    if _path_length(inverted) <= _path_length(rec):
+        return inverted, found, 'inverted (world-in-camera poses, T_cw; TUM files hold T_wc)'
+    reordered = _w_first(rec)
+    return (reordered, estimate_pose_alignment(reordered, max_offset_s),
+            'with w first (qw qx qy qz; TUM files hold qx qy qz qw)')
+
+
+def _path_length(rec: Recording) -> float:
+    """Return the length of the path the positions trace (m)."""
+    return float(np.linalg.norm(np.diff(rec.gt_pos, axis=0), axis=1).sum())

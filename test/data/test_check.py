@@ -194,7 +194,7 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
                                   imu=late.imu[:8000]), tmp_path / 'late')
     with pytest.raises(DatasetError, match='late: align auto: the poses do not follow'):
         load_sequence(tmp_path / 'late', align_poses='auto')
-    with pytest.raises(DatasetError, match='late: the poses do not follow .* quaternion order'):
+    with pytest.raises(DatasetError, match=r'late: .* do not follow .* \(nor read inverted'):
         load_sequence(tmp_path / 'late', align_poses='check')  # eval's default: not scored
     # ground truth written x, y, z, w and read as w, x, y, z (a fixed rotation of each pose
     # on both sides): refused by eval's default, not scored as 17 deg
@@ -446,3 +446,34 @@ def test_the_frame_fit_leaves_out_a_few_windows_it_cannot_explain_not_many():
             np.testing.assert_allclose(bias, [0.01, -0.02, 0.03], atol=1e-3)
         else:  # more than a fifth: the poses do not follow, and the residual says so
             assert not out.any() and rms == fit_frame(imu, spoilt)[2] and rms > 0.1
+
+
+@pytest.mark.parametrize('way', ['inverted', 'with w first'])
+def test_poses_written_inverted_or_w_first_are_read_so_by_every_command(euroc, tmp_path, way):
+    from denoise_imu_ros.core.errors import DataWarning
+    from denoise_imu_ros.data.load import load_sequence
+    from denoise_imu_ros.data.trajectory import write_tum
+    rec = read_asl(euroc / 'MH_01_easy')
+    camera = _camera_poses(rec, slice(None, None, 20))  # a camera's 10 Hz poses, 90 ms late
+    rot = Rotation.from_quat(camera.gt_quat)
+    if way == 'inverted':  # world-in-camera poses, as some tools write them
+        quat, pos = rot.inv().as_quat(), -rot.inv().apply(camera.gt_pos)
+    else:  # qw qx qy qz in the columns of qx qy qz qw
+        quat, pos = rot.as_quat()[:, [3, 0, 1, 2]], camera.gt_pos
+    written = dataclasses.replace(camera, gt_quat=quat, gt_pos=pos)
+    base, report = check(camera), check(written)
+    assert base['read_as'] is None and report['read_as'].startswith(way)
+    assert abs(report['time_offset_s'] - base['time_offset_s']) < 1e-3
+    assert abs(report['imu_from_pose_rotation_deg'] - base['imu_from_pose_rotation_deg']) < 0.2
+    assert report['usable'] == 'after alignment' and any(
+        f'only read {way}' in reason for reason in report['reasons'])
+    # training and eval read the file so too, and say it
+    write_tum(tmp_path / 'MH_01_easy.txt', written.gt_stamp_ns, pos, quat)
+    with pytest.warns(DataWarning, match=f'follow the gyro only read {way}'):
+        seq = load_sequence(euroc / 'MH_01_easy', poses=tmp_path, align_poses='auto')
+    truth = load_sequence(euroc / 'MH_01_easy')
+    common = np.intersect1d(seq.stamp_ns, truth.stamp_ns)[::50]
+    ours = Rotation.from_quat(seq.gt_quat[np.searchsorted(seq.stamp_ns, common)])
+    real = Rotation.from_quat(truth.gt_quat[np.searchsorted(truth.stamp_ns, common)])
+    relative = (ours[:-1].inv() * ours[1:]) * (real[:-1].inv() * real[1:]).inv()
+    assert np.degrees(relative.magnitude()).max() < 0.5
