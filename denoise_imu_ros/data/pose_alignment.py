@@ -26,6 +26,7 @@ import warnings
 
 import numpy as np
 from scipy.optimize import minimize_scalar
+from scipy.signal import correlate
 from scipy.spatial.transform import Rotation, Slerp
 
 from .timebase import poses_at
@@ -51,6 +52,7 @@ SIGNIFICANCE = 2.0
 OUTLIER_FACTOR = 6.0       # a window whose residual is beyond this times the median
 OUTLIER_MAX_FRACTION = 0.2  # more than this part of them: the poses do not follow
 MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
+NORM_GRID_S = 0.01         # grid of the rate norms' cross-correlation (a coarse offset)
 
 
 class Rates:
@@ -199,6 +201,32 @@ def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
     return float(found.x) if found.fun < costs.min() - TIE_RAD_S else best
 
 
+def _norm_lag(rates: Rates) -> float:
+    """
+    Return the clock offset (s) at which the poses' rate norms best match the gyro's.
+
+    Norms do not depend on the frames, so one cross-correlation over the whole recording
+    (on a NORM_GRID_S grid) places a clock however far off, where the offset search
+    (max_offset_s) does not reach: a coarse start for it.
+    """
+    start = min(rates.imu_t[0], rates.pose_t[0])
+    grid = np.arange(start, max(rates.imu_t[-1], rates.pose_t[-1]), NORM_GRID_S)
+    pose = np.where(rates.pose_ok, np.linalg.norm(rates.pose, axis=1), np.nan)
+    series = [np.interp(grid, t, v, left=np.nan, right=np.nan) for t, v in (
+        (rates.imu_t, np.linalg.norm(rates.imu, axis=1)), (rates.pose_t, pose))]
+    if not all(np.isfinite(v).any() for v in series):
+        return 0.0  # no pose rate to match (the search then finds nothing either)
+    gyro, poses = (np.nan_to_num(v - np.nanmean(v)) for v in series)
+    match = correlate(gyro, poses, mode='full', method='fft')  # [k]: gyro at t + k, poses at t
+    return float((np.argmax(match) - len(poses) + 1) * NORM_GRID_S)
+
+
+def _residual(rates: Rates, offset_s: float) -> float:
+    """Return the frame-fitted rate residual (rad/s) at a clock offset."""
+    imu, pose = rates.matched(offset_s)
+    return robust_fit(imu, pose)[2] if len(imu) > 100 else math.inf
+
+
 def not_following(found: dict[str, Any], max_offset_s: float = MAX_OFFSET_S) -> str | None:
     """
     Why the poses of an estimate do not follow the gyro at any offset searched, or None.
@@ -208,10 +236,10 @@ def not_following(found: dict[str, Any], max_offset_s: float = MAX_OFFSET_S) -> 
     """
     motion = float(np.sqrt(np.mean(np.square(found['excitation_rms_deg_s']))))
     if found['time_offset_at_search_limit'] or found['rate_residual_rms_deg_s'] > 0.5 * motion:
-        return (f'the poses do not follow the gyro at any clock offset within '
-                f'+-{max_offset_s:g} s (rate residual {found["rate_residual_rms_deg_s"]:.1f} '
-                f'deg/s RMS against {motion:.1f} deg/s of motion): the offset is beyond the '
-                'search range, or the poses are not of this IMU')
+        return (f'the poses do not follow the gyro at any clock offset searched (within '
+                f'+-{max_offset_s:g} s, and of where their rate norms match best; rate residual '
+                f'{found["rate_residual_rms_deg_s"]:.1f} deg/s RMS against {motion:.1f} deg/s of '
+                'motion): the poses are not of this IMU, or their clock is not steady')
     return None
 
 
@@ -245,8 +273,16 @@ def estimate_pose_alignment(rec: Recording,
     """
     period = float(np.median(np.diff(rec.gt_stamp_ns))) * 1e-9
     rates = Rates(rec, max(RATE_WINDOW_S, 2 * period))
-    offset = _best_offset(rates, max_offset_s)
+    offset, center = _best_offset(rates, max_offset_s), 0.0
+    lag = _norm_lag(rates)
+    if abs(lag) > max_offset_s:  # a clock further off than the search: searched there too
+        far = _best_offset(rates, max_offset_s, center=lag)
+        if _residual(rates, far) < _residual(rates, offset):
+            offset, center = far, lag
     imu, pose = rates.matched(offset)
+    if len(imu) < 3:
+        raise DatasetError(f'{rec.source}: no pose rate to compare with the gyro: the poses '
+                           'turn faster than the gyro ever does, or overlap it nowhere')
     rot, bias, rms, out = robust_fit(imu, pose)
     imu, pose = imu[~out], pose[~out]
     aligned = rot.apply(pose)
@@ -266,7 +302,7 @@ def estimate_pose_alignment(rec: Recording,
         # the standard error of their mean: the sample std (ddof 1; of four, ddof 0 is 13 % low)
         'time_offset_std_s': float(np.std(offsets, ddof=1) / math.sqrt(len(offsets))),
         'time_offset_quarters_s': offsets,
-        'time_offset_at_search_limit': bool(abs(offset) > max_offset_s - 2e-3),
+        'time_offset_at_search_limit': bool(abs(offset - center) > max_offset_s - 2e-3),
         'imu_from_pose_rotation_xyzw': rot.as_quat().tolist(),
         'imu_from_pose_rotation_deg': math.degrees(rot.magnitude()),
         'imu_from_pose_rotation_std_deg': float(np.sqrt(np.mean(np.square(angles)))

@@ -171,7 +171,7 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert 'not usable for training: no rotation about the IMU x axis' in err
-    # too short, and poses 2 s off the clock with a 0.5 s search range
+    # too short
     rec = read_asl(euroc / 'MH_01_easy')
     short = dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:4000],
                                 imu=rec.imu[:4000])
@@ -185,17 +185,28 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
     assert json.loads(out.splitlines()[-1])['time_offset_s'] is None
     assert len(err.strip().splitlines()) == 1
     assert "fewer than the network's receptive field (511 samples)" in err
+    # poses 2 s late: beyond the 0.5 s search, found where the rate norms match best
     late = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns - 2_000_000_000)
-    assert 'do not follow the gyro at any clock offset within +-0.5 s' in ' '.join(
-        check(late)['reasons'])
+    report = check(late)
+    assert abs(report['time_offset_s'] - 2.0) < 1e-3 and not report['time_offset_at_search_limit']
+    # another recording's poses: not followed at any offset, nor read another way
+    quat = read_asl(euroc / 'MH_02_easy').gt_quat
+    other = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns[:len(quat)], gt_quat=quat,
+                                gt_pos=rec.gt_pos[:len(quat)])
+    with pytest.raises(DatasetError, match='no pose rate to compare with the gyro'):
+        check(dataclasses.replace(  # poses that jump everywhere: nothing to compare, said
+            rec, imu_stamp_ns=rec.imu_stamp_ns[:8000], imu=rec.imu[:8000],
+            gt_quat=Rotation.random(len(rec.gt_quat), random_state=4).as_quat()))
+    assert 'do not follow the gyro at any clock offset searched (within +-0.5 s' in ' '.join(
+        check(other)['reasons'])
     # and align auto does not apply such an estimate (eval --align auto, training)
     from denoise_imu_ros.data.load import load_sequence
-    write_bag(dataclasses.replace(late, imu_stamp_ns=late.imu_stamp_ns[:8000],
-                                  imu=late.imu[:8000]), tmp_path / 'late')
-    with pytest.raises(DatasetError, match='late: align auto: the poses do not follow'):
-        load_sequence(tmp_path / 'late', align_poses='auto')
-    with pytest.raises(DatasetError, match=r'late: .* do not follow .* \(nor read inverted'):
-        load_sequence(tmp_path / 'late', align_poses='check')  # eval's default: not scored
+    write_bag(dataclasses.replace(other, imu_stamp_ns=other.imu_stamp_ns[:8000],
+                                  imu=other.imu[:8000]), tmp_path / 'other')
+    with pytest.raises(DatasetError, match='other: align auto: the poses do not follow'):
+        load_sequence(tmp_path / 'other', align_poses='auto')
+    with pytest.raises(DatasetError, match=r'other: .* do not follow .* \(nor read inverted'):
+        load_sequence(tmp_path / 'other', align_poses='check')  # eval's default: not scored
     # ground truth written x, y, z, w and read as w, x, y, z (a fixed rotation of each pose
     # on both sides): refused by eval's default, not scored as 17 deg
     write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:8000],
