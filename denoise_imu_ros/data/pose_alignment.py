@@ -14,7 +14,10 @@ millisecond by a parabola. Every fit leaves out the windows it cannot explain (a
 initialising, a relocalisation: :func:`robust_fit`) and is made again. Confidence
 figures are the spread of the same estimates on four consecutive quarters of the
 recording (standard error of their mean). Excitation is the gyro's over the windows
-compared, less its bias: what the poses could see turn, without their own noise.
+compared, less its bias: what the poses could see turn, without their own noise. A
+clock further off than the search is found where the rates' norms (free of any frame)
+match best over the recording; poses that follow the gyro only inverted or with w first
+are read so (:func:`other_convention`).
 """
 
 from __future__ import annotations
@@ -171,6 +174,12 @@ def interpolation_scale_error(rec: Recording) -> list[float | None]:
     return [v if on else None for v, on in zip(_scale_error(truth, sparse.pose[ok]), turns)]
 
 
+def _residual(rates: Rates, offset_s: float, windows: slice = slice(None)) -> float:
+    """Return the frame-fitted rate residual (rad/s) of some windows at a clock offset."""
+    imu, pose = rates.matched(offset_s, windows)
+    return robust_fit(imu, pose)[2] if len(imu) > 100 else math.inf
+
+
 def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
                  center: float = 0.0) -> float:
     """
@@ -181,22 +190,18 @@ def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
     fine grid around its best offset, and the bounded Brent search between the fine
     grid's neighbours of its best point, score every window.
     """
-    def cost(d: float, windows: slice) -> float:
-        imu, pose = rates.matched(d, windows)
-        return robust_fit(imu, pose)[2] if len(imu) > 100 else math.inf
-
     n = len(rates.imu_t[part])
     coarse = slice(part.start, part.stop, max(1, n // COARSE_WINDOWS))
     best = center
     for span, step, windows in ((max_offset_s, COARSE_STEP_S, coarse), (4e-3, 5e-4, part)):
         grid = best + np.arange(-span, span + step / 2, step)
-        costs = np.array([cost(d, windows) for d in grid])
+        costs = np.array([_residual(rates, d, windows) for d in grid])
         # ties (motion that cannot tell offsets apart) go to the offset nearest the centre
         tied = np.flatnonzero(costs <= costs.min() + TIE_RAD_S)
         best = float(grid[tied[np.argmin(np.abs(grid[tied] - center))]])
     if not np.isfinite(costs.min()):
         return best
-    found = minimize_scalar(lambda d: cost(d, part), bounds=(best - step, best + step),
+    found = minimize_scalar(lambda d: _residual(rates, d, part), bounds=(best - step, best + step),
                             method='bounded', options={'xatol': OFFSET_XTOL_S})
     return float(found.x) if found.fun < costs.min() - TIE_RAD_S else best
 
@@ -219,12 +224,6 @@ def _norm_lag(rates: Rates) -> float:
     gyro, poses = (np.nan_to_num(v - np.nanmean(v)) for v in series)
     match = correlate(gyro, poses, mode='full', method='fft')  # [k]: gyro at t + k, poses at t
     return float((np.argmax(match) - len(poses) + 1) * NORM_GRID_S)
-
-
-def _residual(rates: Rates, offset_s: float) -> float:
-    """Return the frame-fitted rate residual (rad/s) at a clock offset."""
-    imu, pose = rates.matched(offset_s)
-    return robust_fit(imu, pose)[2] if len(imu) > 100 else math.inf
 
 
 def not_following(found: dict[str, Any], max_offset_s: float = MAX_OFFSET_S) -> str | None:
