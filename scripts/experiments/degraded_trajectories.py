@@ -11,7 +11,10 @@ files, ``<recording>.txt``), one folder per kind under OUT:
 - ``jumps``: three relocalisations of 5 deg and 0.5 m that persist;
 - ``lost``: two 8 s losses of tracking, each followed by a new world (a VIO's reset);
 - ``short``: from 20 s after the first pose to 20 s before the last;
-- ``init``: the first 5 s wrong by 8 deg per axis and pose (a VIO initialising).
+- ``init``: the first 5 s wrong by 8 deg per axis and pose (a VIO initialising);
+- ``late``: every stamp 1.5 s late (a clock further off than the offset search);
+- ``inverted``: world-in-camera poses (T_cw, where TUM files hold T_wc);
+- ``w_first``: the quaternions written qw qx qy qz.
 Usage: .venv/bin/python scripts/experiments/degraded_trajectories.py SRC OUT [--seed N]
 """
 
@@ -21,6 +24,8 @@ from pathlib import Path
 from denoise_imu_ros.data.trajectory import read_tum, write_tum
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+LATE_NS = 1_500_000_000
 
 
 def spoilt(stamp_ns: np.ndarray, pos: np.ndarray, quat: np.ndarray,
@@ -58,6 +63,10 @@ def spoilt(stamp_ns: np.ndarray, pos: np.ndarray, quat: np.ndarray,
     wrong = Rotation.from_rotvec(rng.normal(0, np.radians(8), (int(first.sum()), 3)))
     kinds['init'] = (stamp_ns, pos, Rotation.concatenate([wrong * rot[first],
                                                           rot[~first]]).as_quat())
+    # written without random draws, so that the kinds above stay as they were drawn
+    kinds['late'] = (stamp_ns + LATE_NS, pos, quat)
+    kinds['inverted'] = (stamp_ns, -rot.inv().apply(pos), rot.inv().as_quat())
+    kinds['w_first'] = (stamp_ns, pos, quat[:, [3, 0, 1, 2]])
     return kinds
 
 
