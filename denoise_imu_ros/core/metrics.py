@@ -97,8 +97,8 @@ def _block_errors(gt_quat: np.ndarray, starts: np.ndarray, ends: np.ndarray,
     """Return the errors (rotation vectors) of the given increments of a trajectory."""
     gt = Rotation.from_quat(gt_quat[np.concatenate([starts, ends])])
     m = len(starts)
-    return ((gt[:m].inv() * gt[m:]).inv() * (est[starts].inv() * est[ends])).as_rotvec(
-    ).reshape(-1, 3)
+    gyro = est[starts].inv() * est[ends]
+    return ((gt[:m].inv() * gt[m:]).inv() * gyro).as_rotvec().reshape(-1, 3)
 
 
 def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
@@ -139,11 +139,11 @@ def fit_constant_bias(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarra
         return None
     est = integrate(gt_quat[0], gyro[:len(dt)], dt) if est is None else est
     res = _block_errors(gt_quat, i, e, est)
-    spans = e - i
-    first = np.cumsum(spans) - spans  # where each increment's steps start among all
-    k = np.repeat(i - first, spans) + np.arange(spans.sum())  # every step of them
-    turn = (est[k + 1].inv() * est[np.repeat(e, spans)]).as_matrix()
-    jac = np.add.reduceat(np.swapaxes(turn, 1, 2) * dt[k, None, None], first, axis=0)
+    # sum_k Q_k^T dt_k = R_e^T sum_k R_{k+1} dt_k: one cumulative sum serves every increment
+    rot = est.as_matrix()
+    after = np.concatenate([np.zeros((1, 3, 3)),
+                            np.cumsum(rot[1:len(dt) + 1] * dt[:, None, None], axis=0)])
+    jac = np.swapaxes(rot[e], 1, 2) @ (after[e] - after[i])
     normal = np.einsum('mji,mjk->ik', jac, jac)
     return np.linalg.solve(normal, np.einsum('mji,mj->i', jac, res))
 

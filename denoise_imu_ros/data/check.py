@@ -33,10 +33,9 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment,
-                             interpolation_scale_error, level, MAX_OFFSET_S,
-                             MIN_EXCITATION_DEG_S, needs_alignment, not_following,
-                             other_convention)
+from .pose_alignment import (apply_pose_alignment, describe, interpolation_scale_error, level,
+                             MAX_OFFSET_S, MIN_EXCITATION_DEG_S, needs_alignment,
+                             not_following, read_and_align)
 from .pose_jumps import describe as describe_jumps, find_jumps, Jump, mask_jumps
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
@@ -115,13 +114,13 @@ def label_noise(seq: Sequence, horizons_s: tuple[float, ...] = (),
     def split(j: int) -> dict[str, float] | None:
         if (len(seq) - 1) // j < 2:
             return None
+        starts, ends = increments(seq.gt_valid, j, pose_at)
+        if pose_at is not None and _covered(starts, ends, len(seq)) < MIN_POSE_COVERAGE:
+            return None  # too few poses that far apart: the loss would see little of it
         res, _ = increment_residuals(seq.gt_quat, seq.gt_valid, gyro - bias, seq.dt, j, est,
                                      pose_at)
         if len(res) == 0:
             return None
-        starts, ends = increments(seq.gt_valid, j, pose_at)
-        if pose_at is not None and _covered(starts, ends, len(seq)) < MIN_POSE_COVERAGE:
-            return None  # too few poses that far apart: the loss would see little of it
         # each residual is in the body frame at its increment's end
         turned = Rotation.from_quat(world[ends]).apply(res)
         return {'residual_mrad': 1e3 * float(np.sqrt(np.mean(res ** 2))),  # per axis
@@ -218,12 +217,10 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
                           f'({report["duration_s"]:.2f} s), fewer than the network\'s '
                           f'receptive field ({field} samples): nothing to estimate or train'])
         return report
-    report.update(estimate_pose_alignment(rec, max_offset_s))
-    other = other_convention(rec, max_offset_s) if not_following(report, max_offset_s) else None
-    report['read_as'] = None
-    if other is not None:  # every command reads them so (data.load)
-        rec, found, report['read_as'] = other
-        report.update(found)
+    rec, found, report['read_as'] = read_and_align(rec, max_offset_s)  # as every command
+    report.update(found)
+    if report['read_as']:  # judged below as read
+        seq = onto_imu_stamps(rec)
     # the poses as training would use them: on the IMU clock and in its frame, when the
     # estimate says they are not and is itself trustworthy (the poses follow the gyro,
     # and rotation about every axis makes the frame observable)
@@ -425,12 +422,10 @@ def markdown(report: dict[str, Any]) -> str:
               *([f'  left out of the alignment: {100 * r["rate_windows_left_out"]:.1f} % of '
                  'its rate windows, which no frame and offset explain (poses that jump or '
                  'glitch)'] if r['rate_windows_left_out'] >= LEFT_OUT_SAID else []),
-              '  increment residual after a constant bias (samples: mrad per axis, as deg/s):']
-    if r['judged_after_alignment']:
-        lines[-1] = ('  with the clock offset and frame rotation applied: increment residual '
-                     'after a constant bias (samples: mrad per axis, as deg/s):')
-    if r['too_sparse']:
-        lines[-1] = lines[-1][:-2] + ', each between pose stamps):'
+              ('  with the clock offset and frame rotation applied: increment residual'
+               if r['judged_after_alignment'] else '  increment residual')
+              + ' after a constant bias (samples: mrad per axis, as deg/s'
+              + (', each between pose stamps):' if r['too_sparse'] else '):')]
     lines += [f'    {j:4d}: {p["residual_mrad"]:7.3f}  {p["noise_rate_deg_s"]:7.3f}'
               for j, p in r['increments'].items()]
     if r['pose_jumps']:

@@ -14,9 +14,8 @@ from pathlib import Path
 import warnings
 
 from .asl import read_asl
-from .pose_alignment import (apply_pose_alignment, describe, estimate_pose_alignment, level,
-                             LEVEL_TOLERANCE_DEG, needs_alignment, not_following,
-                             other_convention)
+from .pose_alignment import (apply_pose_alignment, describe, level, LEVEL_TOLERANCE_DEG,
+                             needs_alignment, not_following, read_and_align)
 from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
 from .timebase import onto_imu_stamps
 from .trajectory import read_tum, trajectory_file, with_trajectory
@@ -77,10 +76,13 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     ``check-data`` does) or ``{time_offset_s, imu_from_pose_rotation_xyzw}``; what was
     applied is kept in :attr:`Sequence.pose_alignment`. ``check``: none, but poses found
     off the IMU's clock or frame are an error (figures against them would be wrong).
-    ``poses``: as for :func:`load_recording`. Pose jumps the gyro cannot explain are
-    masked and said (:mod:`~denoise_imu_ros.data.pose_jumps`); a world whose z is not up
-    is turned level (:func:`~denoise_imu_ros.data.pose_alignment.level`). ``rate_hz``: a model's
-    rate, which the IMU stream must have before anything is judged against its poses.
+    ``poses``: as for :func:`load_recording`. Poses that follow the gyro only read
+    inverted or with w first are read so where they are aligned or checked
+    (:func:`~denoise_imu_ros.data.pose_alignment.read_and_align`). Pose jumps the gyro
+    cannot explain are masked and said (:mod:`~denoise_imu_ros.data.pose_jumps`); a
+    world whose z is not up is turned level
+    (:func:`~denoise_imu_ros.data.pose_alignment.level`). ``rate_hz``: a model's rate,
+    which the IMU stream must have before anything is judged against its poses.
     """
     rec = load_recording(path, imu_topic, pose_topic, poses)
     if rate_hz is not None:
@@ -110,13 +112,11 @@ def _alignment(rec: Recording, align_poses: str | dict,
     Return the poses and the clock offset and frame rotation to apply to them (None: none).
 
     Poses that follow the gyro only read another common way (inverted, w first:
-    :func:`~denoise_imu_ros.data.pose_alignment.other_convention`) are read so, and said.
+    :func:`~denoise_imu_ros.data.pose_alignment.read_and_align`) are read so, and said.
     """
     if align_poses in ('check', 'auto'):
-        found = estimate_pose_alignment(rec)
-        other = other_convention(rec) if not_following(found) else None
-        if other is not None:
-            rec, found, way = other
+        rec, found, way = read_and_align(rec)
+        if way:
             warnings.warn(f'{path}: the poses follow the gyro only read {way}: read so',
                           DataWarning, stacklevel=3)
     if align_poses == 'check':

@@ -55,6 +55,7 @@ OUTLIER_FACTOR = 6.0       # a window whose residual is beyond this times the me
 OUTLIER_MAX_FRACTION = 0.2  # more than this part of them: the poses do not follow
 MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
 NORM_GRID_S = 0.01         # grid of the rate norms' cross-correlation (a coarse offset)
+FAR_MARGIN = 0.5           # an offset beyond the search wins only below this times its residual
 
 
 class Rates:
@@ -279,7 +280,7 @@ def estimate_pose_alignment(rec: Recording,
     lag = _norm_lag(rates)
     if abs(lag) > max_offset_s:  # a clock further off than the search: searched there too
         far = _best_offset(rates, max_offset_s, center=lag)
-        if _residual(rates, far) < _residual(rates, offset):
+        if _residual(rates, far) < FAR_MARGIN * _residual(rates, offset):
             offset, center = far, lag
     imu, pose = rates.matched(offset)
     if len(imu) < 3:
@@ -380,18 +381,36 @@ def other_convention(rec: Recording, max_offset_s: float = MAX_OFFSET_S
     of world-in-camera poses (T_cw where TUM files hold T_wc), or of quaternions written
     w first. To a gyro the two look alike (an odd permutation of a quaternion's components
     is its inverse between two fixed rotations, which the frame rotation and the world
-    absorb); the positions tell them apart: read the right way they trace the smoother
+    absorb); the positions tell them apart: read the right way they trace the shorter
     path. None when neither way follows.
     """
     inverted = _inverted(rec)
     found = estimate_pose_alignment(inverted, max_offset_s)
     if not_following(found, max_offset_s):
         return None
-    if _path_length(inverted) <= _path_length(rec):
+    length, as_written = _path_length(inverted), _path_length(rec)
+    if length < as_written:
         return inverted, found, 'inverted (world-in-camera poses, T_cw; TUM files hold T_wc)'
+    if length == as_written:  # no positions to tell (orientation only): both read alike
+        return inverted, found, 'inverted or with w first (the positions do not tell which)'
     reordered = _w_first(rec)
-    return (reordered, estimate_pose_alignment(reordered, max_offset_s),
-            'with w first (qw qx qy qz; TUM files hold qx qy qz qw)')
+    found = estimate_pose_alignment(reordered, max_offset_s)
+    if not_following(found, max_offset_s):
+        return None
+    return reordered, found, 'with w first (qw qx qy qz; TUM files hold qx qy qz qw)'
+
+
+def read_and_align(rec: Recording, max_offset_s: float = MAX_OFFSET_S
+                   ) -> tuple[Recording, dict[str, Any], str | None]:
+    """
+    Return the poses as every command reads them, their alignment estimate, and how read.
+
+    As written (how: None) unless only another common way follows the gyro
+    (:func:`other_convention`): check-data and every alignment read them alike.
+    """
+    found = estimate_pose_alignment(rec, max_offset_s)
+    other = other_convention(rec, max_offset_s) if not_following(found, max_offset_s) else None
+    return (rec, found, None) if other is None else other
 
 
 def _path_length(rec: Recording) -> float:

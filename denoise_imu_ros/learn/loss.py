@@ -127,8 +127,8 @@ def pose_increments(pose_at: torch.Tensor, gt_valid: torch.Tensor, length: int,
     # the next pose on or after each stamp (t + 1: none), and untrusted stamps up to each
     later = torch.where(pose_at, index, t + 1).flip(-1).cummin(-1).values.flip(-1)
     untrusted = torch.cumsum(~gt_valid, -1)
-    n = t + 1 - length
-    start, end = index[:n], later[:, length:]
+    n = max(0, t + 1 - length)  # a window shorter than the length holds none
+    start, end = index[:n], later[:, length:length + n]
     end_at = end.clamp(max=t)
     ok = (pose_at[:, :n] & (end <= t) & (end - start <= MAX_STRETCH * length)
           & (start >= first) & gt_valid[:, :n]

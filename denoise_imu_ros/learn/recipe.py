@@ -15,7 +15,8 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
   validation tail, in samples a multiple of the longest increment;
 - sigma_g: per axis 1.2 times the largest constant gyro bias against the poses, at
   least 0.2 deg/s (the output scale the paper sets by hand: EuRoC [1, 2, 5], TUM-VI 0.2);
-- align: ``auto`` when a recording's clock or frame is off (check-data), else ``none``;
+- align: ``auto`` when a recording's clock or frame is off, or its poses are read another
+  way than written (check-data's ``read_as``: only alignment reads them so), else ``none``;
 - rest_bias: off under motion capture; the reasons say how many recordings start still
   (VQF's rest detection within their first START_STILL_S). Turning it on removes each
   run's turn-on bias before the model; measured, it lost on EuRoC (one training): a
@@ -123,6 +124,10 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     bias = np.max(np.abs([r['gyro_bias_vs_pose_deg_s'] for r in reports.values()]), axis=0)
     gyro_std = [max(MIN_GYRO_STD_DEG, round(1.2 * float(b), 2)) for b in bias]
     off = [n for n, r in reports.items() if r['usable'] == 'after alignment']
+    # poses read another way than written are read so only where aligned (data.load)
+    other = [n for n, r in reports.items() if r['read_as']]
+    moved = [f'{", ".join(off)} off in clock or frame'] if off else []
+    moved += [f'{", ".join(other)} read another way than written'] if other else []
     recipe = {k: v for k, v in asdict(TrainConfig()).items() if k != 'device'}
     recipe.update(
         # absolute: train, crossval and tune-fusion read them from any working directory
@@ -130,7 +135,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         imu_topic=imu_topic, pose_topic=pose_topic,
         poses=None if poses is None else str(Path(poses).resolve()), increments=increments,
         increment_weights=[1.0, 0.5], window=window, gyro_std_deg=gyro_std,
-        align='auto' if off else 'none', swa_start=1200, select='swa',
+        align='auto' if moved else 'none', swa_start=1200, select='swa',
         rest_bias=False, recording_bias=False, workers='auto', threads='auto')
     sparse = [n for n, r in reports.items() if r['too_sparse']]
     if sparse:
@@ -149,8 +154,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
            f'window {window} samples ({window / rate:.0f} s)',
            f'gyro_std_deg {gyro_std}: 1.2 x the largest gyro bias per axis '
            f'({", ".join(f"{b:.3f}" for b in bias)} deg/s), at least {MIN_GYRO_STD_DEG}',
-           f'align {recipe["align"]}' + (f': {", ".join(off)} off in clock or frame'
-                                         if off else ': clocks and frames agree'),
+           f'align {recipe["align"]}: ' + ('; '.join(moved) or 'clocks and frames agree'),
            (f'rest_bias and recording_bias on: the poses are a trajectory estimate, whose '
             "drift over a recording a model would learn as the gyro's bias; the bias is "
             f'measured from stillness instead ({len(set(still) & set(sequences))} of '

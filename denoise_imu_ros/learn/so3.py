@@ -80,14 +80,14 @@ def tree_product(q: torch.Tensor, levels: int) -> torch.Tensor:
 
 def prefix_product(q: torch.Tensor) -> torch.Tensor:
     """
-    Attitudes from ordered products of quaternions along dim -2, identity first.
+    Return the attitudes of ordered products of quaternions along dim -2, identity first.
 
     (..., T, 4) -> (..., T + 1, 4), element k being q[0] * q[1] * ... * q[k - 1]: the
     attitude at stamp k relative to stamp 0. A work-efficient parallel scan: pairs are
     multiplied (as in :func:`tree_product`), their prefix found recursively, and each
     even element from the prefix before it; about 2T batched products in all.
     """
-    identity = torch.zeros_like(q[..., :1, :])
+    identity = q.new_zeros(q.shape[:-2] + (1, 4))
     identity[..., 3] = 1.0
     return torch.cat((identity, _inclusive(q, identity)), -2)
 
@@ -95,7 +95,7 @@ def prefix_product(q: torch.Tensor) -> torch.Tensor:
 def _inclusive(q: torch.Tensor, identity: torch.Tensor) -> torch.Tensor:
     """Return (..., T, 4): element k the ordered product q[0] * ... * q[k]."""
     n = q.shape[-2]
-    if n == 1:
+    if n <= 1:
         return q
     if n % 2:  # an identity at the end pairs the last element, and is dropped after
         return _inclusive(torch.cat((q, identity), -2), identity)[..., :n, :]

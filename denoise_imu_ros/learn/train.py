@@ -311,16 +311,20 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
         w = s.on_poses(drop_vertical(omega.numpy(), s.stream, s.rate_hz) if drop
                        else omega.numpy())[start:]
         aoes[s.name] = sequence_errors(s.tail(start), w, distances=())[1].aoe
+        # the gyro's error as the loss sees the poses: between their stamps where it does
+        pose_at, length = ((_pose_at(s)[start:], loss_cfg.increments[0])
+                           if loss_cfg.between_poses else (None, RESIDUAL_BLOCK))
         res, duration = increment_residuals(s.gt_quat[start:], s.gt_valid[start:], w,
-                                            s.dt[start:], RESIDUAL_BLOCK)
-        residuals.append(res / duration[:, None])  # mean rate error over each block
+                                            s.dt[start:], length, pose_at=pose_at)
+        # the mean rate error over each increment, whose std a white error's shrinks by
+        # the square root of its samples: that undone, a per-sample std (rad/s)
+        residuals.append(res / duration[:, None] * np.sqrt(duration * s.rate_hz)[:, None])
     model.train(was_training)
     res = np.concatenate(residuals)
     return {'loss': float(np.mean(losses)), 'aoe_deg': aoes,
             'aoe_mean_deg': float(np.mean(list(aoes.values()))),
-            # per-sample gyro error std (rad/s) if the error were white: from the error of
-            # 16-sample increments, whose std shrinks by sqrt(16) over a block
-            'gyro_residual_std': (res.std(axis=0) * math.sqrt(RESIDUAL_BLOCK)).tolist()}
+            # per-sample gyro error std (rad/s) if the error were white
+            'gyro_residual_std': res.std(axis=0).tolist()}
 
 
 def select(candidates: dict[str, dict[str, Any]], rule: str) -> str:

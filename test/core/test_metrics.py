@@ -100,13 +100,18 @@ def test_a_constant_bias_is_recovered_from_increments_between_sparse_poses():
     rate = np.cumsum(rng.normal(scale=0.05, size=(n, 3)), axis=0)  # a body that turns
     truth = integrate(Rotation.random(random_state=2).as_quat(), rate[:-1], dt).as_quat()
     pose_at = np.zeros(n, bool)
-    pose_at[np.cumsum(rng.integers(40, 201, n // 40))[:-1] % n] = True  # keyframes
+    stamps = np.cumsum(rng.integers(40, 201, n // 40))
+    pose_at[stamps[stamps < n]] = True  # keyframes, 40-200 samples apart
     valid = np.ones(n, bool)
     valid[3000:3100] = False  # a hole: no increment spans it
     bias = np.array([0.01, -0.02, 0.005])
     starts, ends = increments(valid, 128, pose_at)
     assert pose_at[starts].all() and pose_at[ends].all()
     assert ((ends - starts >= 128) & (ends - starts <= 256)).all()
+    # a pose whose next one at least 128 samples on is further than 256: none from it
+    stretched = [a for a in np.flatnonzero(pose_at) if (
+        (later := stamps[(stamps >= a + 128) & (stamps < n)]).size and later[0] - a > 256)]
+    assert stretched and not set(stretched) & set(starts)
     assert not ((starts < 3100) & (ends >= 3000)).any()
     # the fit is to first order in the bias: as close as from the blocks of a full grid
     fitted = fit_constant_bias(truth, valid, rate + bias, dt, 128, pose_at=pose_at)
@@ -114,6 +119,6 @@ def test_a_constant_bias_is_recovered_from_increments_between_sparse_poses():
     assert np.abs(fitted - bias).max() < 2e-4 and np.abs(grid - bias).max() < 2e-4
     res, duration = increment_residuals(truth, valid, rate, dt, 128, pose_at=pose_at)
     assert np.abs(res).max() < 1e-9 and np.allclose(duration, (ends - starts) * 0.005)
-    # without pose_at, the non-overlapping blocks as before
+    # without pose_at, the non-overlapping blocks
     blocks = increments(valid, 128)
     assert (blocks[1] - blocks[0] == 128).all() and (blocks[0] % 128 == 0).all()

@@ -488,3 +488,23 @@ def test_poses_written_inverted_or_w_first_are_read_so_by_every_command(euroc, t
     real = Rotation.from_quat(truth.gt_quat[np.searchsorted(truth.stamp_ns, common)])
     relative = (ours[:-1].inv() * ours[1:]) * (real[:-1].inv() * real[1:]).inv()
     assert np.degrees(relative.magnitude()).max() < 0.5
+
+
+def test_inverted_poses_on_the_imu_clock_and_frame_are_judged_and_trained_as_read(
+        euroc, tmp_path):
+    from denoise_imu_ros.data.trajectory import write_tum
+    from denoise_imu_ros.learn.recipe import init_recipe
+    rec = read_asl(euroc / 'MH_01_easy')
+    rot = Rotation.from_quat(rec.gt_quat)
+    quat, pos = rot.inv().as_quat(), -rot.inv().apply(rec.gt_pos)
+    right, report = check(rec), check(dataclasses.replace(rec, gt_quat=quat, gt_pos=pos))
+    # nothing to align once read inverted: judged on the poses as read, not as written
+    assert report['read_as'].startswith('inverted') and not report['judged_after_alignment']
+    assert report['usable'] == 'yes' and report['label_noise'] == right['label_noise']
+    assert report['supervision']['aoe_plain_deg'] == pytest.approx(
+        right['supervision']['aoe_plain_deg'], abs=0.01)
+    # and the recipe aligns them, the only way training reads them so
+    write_tum(tmp_path / 'MH_01_easy.txt', rec.gt_stamp_ns, pos, quat)
+    recipe, said = init_recipe(euroc, ['MH_01_easy'], poses=tmp_path)
+    assert recipe['align'] == 'auto'
+    assert 'align auto: MH_01_easy read another way than written' in said

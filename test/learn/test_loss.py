@@ -143,12 +143,15 @@ def test_between_poses_masks_holes_and_stretches():
     omega = omega + 0.002
     cfg = LossConfig(increments=(32,), weights=(1.0,), skip_blocks=0, between_poses=True)
     pose_at = torch.zeros_like(valid)
-    pose_at[:, [0, 40, 100, 140, 300, 340]] = True  # 100 -> 300 is beyond twice 32 samples
+    pose_at[:, [0, 40, 100, 140, 300, 340]] = True  # 140 -> 300 is beyond twice 32 samples
     base = increment_loss(omega, dt, quat, valid, cfg, pose_at=pose_at)
-    garbage = quat.clone()
-    garbage[:, 150:290] = torch.tensor([1.0, 0.0, 0.0, 0.0], dtype=torch.float64)
-    assert increment_loss(omega, dt, garbage, valid, cfg,
+    wrong = omega.clone()
+    wrong[:, 141:300] += 1.0  # only inside the increment too long to count at 32 (at 128 not)
+    assert increment_loss(wrong, dt, quat, valid, cfg,
                           pose_at=pose_at).item() == pytest.approx(base.item())
+    longer = LossConfig(increments=(128,), weights=(1.0,), skip_blocks=0, between_poses=True)
+    assert increment_loss(wrong, dt, quat, valid, longer, pose_at=pose_at).item() > 10 * (
+        increment_loss(omega, dt, quat, valid, longer, pose_at=pose_at).item())
     valid[:, 20] = False  # inside the first increment: it no longer counts
     assert increment_loss(omega, dt, quat, valid, cfg, pose_at=pose_at).item() != pytest.approx(
         base.item())

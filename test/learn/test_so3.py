@@ -62,3 +62,4 @@ def test_prefix_product_is_every_ordered_product_from_the_first():
                        np.abs(got[row, k] + att.as_quat()).max()) < 1e-12
             if k < 37:
                 att = att * Rotation.from_quat(q[row, k].numpy())
+    assert prefix_product(q[:, :0]).tolist() == [[[0.0, 0.0, 0.0, 1.0]]] * 2  # no step

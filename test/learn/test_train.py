@@ -467,3 +467,26 @@ def test_a_network_learning_recording_biases_keeps_its_output_layer_s_bias_at_ze
     result = train(cfg, progress=False)
     assert torch.equal(result.model.net[-1].bias, torch.zeros(3))
     assert set(result.meta['recording_bias_rad_s']) == {'MH_01_easy', 'V1_02_medium'}
+
+
+def test_the_published_gyro_residual_of_keyframes_is_judged_between_their_stamps(euroc):
+    from denoise_imu_ros.core.architecture import ModelConfig
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.timebase import onto_imu_stamps
+    from denoise_imu_ros.learn.config import LossConfig
+    from denoise_imu_ros.learn.model import GyroNet
+    from denoise_imu_ros.learn.train import validate
+    model = GyroNet(ModelConfig(calibration_only=True))  # the raw gyro, as it is
+    model.set_normalization(torch.zeros(6), torch.ones(6))
+    rec = read_asl(euroc / 'MH_01_easy')
+    t = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
+    wanted = np.cumsum(np.random.default_rng(4).uniform(0.2, 1.0, 1000))
+    keep = np.unique(np.searchsorted(t, wanted[wanted < t[-1]]))  # keyframes
+    keyframes = onto_imu_stamps(dataclasses.replace(
+        rec, gt_stamp_ns=rec.gt_stamp_ns[keep], gt_quat=rec.gt_quat[keep],
+        gt_pos=rec.gt_pos[keep]))
+    grid, between = (validate(model, [keyframes], 20000, LossConfig(
+        increments=(256, 512), between_poses=b))['gyro_residual_std'] for b in (False, True))
+    # on the grid what interpolation misses between keyframes counts as the gyro's error
+    # (the node publishes this as the covariance of imu/corrected)
+    assert all(b < 0.5 * g for b, g in zip(between, grid))
