@@ -91,10 +91,14 @@ def reference_noise_deg(seq: Sequence) -> float:
     against the gyro less its fitted bias holds the noise of their two poses and the
     gyro's own error over that span (small beside a VIO's); over sqrt 2 it is one pose's.
     On EuRoC's VIO and SLAM trajectories it is within 0.05 deg of the same figure taken
-    against the motion capture (docs/results.md). Not the poses' drift, which no gyro
-    can tell from its own.
+    against the motion capture (docs/results.md). Poses further apart than half that
+    span (a SLAM's keyframes) are compared between their stamps, at the length nearest it
+    that spans most of the recording: interpolated, what they miss between stamps would
+    count as their noise. Not the poses' drift, which no gyro can tell from its own.
     """
-    profile = label_noise(seq)['increments']
+    stamps = np.flatnonzero(seq.pose_at) if seq.pose_at is not None else np.zeros(0)
+    sparse = len(stamps) > 1 and np.median(np.diff(stamps)) / seq.rate_hz > JUMP_WINDOW_S / 2
+    profile = label_noise(seq, between_poses=bool(sparse))['increments']
     length = min(profile, key=lambda j: abs(j / seq.rate_hz - JUMP_WINDOW_S))
     return float(np.degrees(profile[length]['residual_mrad'] * 1e-3 * np.sqrt(3.0 / 2.0)))
 

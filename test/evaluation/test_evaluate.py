@@ -160,6 +160,18 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
     said = {name: json.loads((tmp_path / f'e_{name}' / 'results.json').read_text())[
         'reference_noise_deg']['MH_01_easy'] for name in ('clean', 'noisy')}
     assert said['clean'] < 0.1 and 0.25 < said['noisy'] < 0.5  # 0.2 deg per axis: 0.35
+    # the same poses as keyframes, 0.2-1.0 s apart: their noise (and their alignment's
+    # error), not what interpolating between them misses (about 0.85 deg on the grid)
+    t = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
+    wanted = np.cumsum(rng.uniform(0.2, 1.0, 1000))
+    keyframes = np.unique(np.searchsorted(t, wanted[wanted < t[-1]]))
+    write_tum(tmp_path / 'keyframes' / 'MH_01_easy.txt', rec.gt_stamp_ns[keyframes],
+              rec.gt_pos[keyframes], rec.gt_quat[keyframes])
+    assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences',
+                 'MH_01_easy', '--poses', str(tmp_path / 'keyframes'), '--align', 'auto',
+                 '--out', str(tmp_path / 'e_keyframes'), '--no-plots']) == 0
+    assert json.loads((tmp_path / 'e_keyframes' / 'results.json').read_text())[
+        'reference_noise_deg']['MH_01_easy'] < 0.25
     assert 'an estimate, not ground truth' in (tmp_path / 'e_noisy' / 'results.md').read_text()
     assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences', 'MH_01_easy',
                  '--out', str(tmp_path / 'e_mocap'), '--no-plots']) == 0  # its own poses
