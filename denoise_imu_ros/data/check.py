@@ -75,8 +75,7 @@ ESTIMATES = ('gyro_bias_deg_s', 'increments', 'noise_dominated_increments', 'tim
              'gyro_scale_error_percent', 'excitation_rms_deg_s', 'rate_residual_rms_deg_s',
              'rate_window_s', 'rate_windows_left_out', 'judged_after_alignment', 'pose_jumps',
              'drift_increments', 'interpolation_scale_error_percent', 'too_sparse',
-             'read_as',
-             'paper_increments', 'shortest_clean_increment', 'label_noise',
+             'read_as', 'paper_increments', 'shortest_clean_increment', 'label_noise',
              'supervision')
 
 

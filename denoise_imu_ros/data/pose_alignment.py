@@ -222,12 +222,21 @@ def _norm_lag(rates: Rates) -> float:
     if not all(np.isfinite(v).any() for v in series):
         return 0.0  # no pose rate to match (the search then finds nothing either)
     gyro, poses = (np.nan_to_num(v - np.nanmean(v)) for v in series)
-    # match[k] = sum over t of gyro[t + k] poses[t], by FFT (scipy.signal's import alone
-    # would cost every command that reads poses a third of a second)
-    size = 1 << (2 * len(grid) - 2).bit_length()
-    match = np.fft.irfft(np.fft.rfft(gyro, size) * np.conj(np.fft.rfft(poses, size)), size)
-    lags = np.r_[np.arange(len(grid)), np.arange(size - len(grid), size) - size]
-    return float(lags[np.argmax(match[lags])] * NORM_GRID_S)
+    return best_lag(gyro, poses) * NORM_GRID_S
+
+
+def best_lag(a: np.ndarray, b: np.ndarray) -> int:
+    """
+    Return the lag k maximising sum over t of a[t + k] b[t], for series of one length.
+
+    scipy.signal.correlate's ``full`` correlation by numpy's FFT: that module's import
+    alone would cost every command that reads poses a third of a second.
+    """
+    n = len(a)
+    size = 1 << (2 * n - 2).bit_length()
+    match = np.fft.irfft(np.fft.rfft(a, size) * np.conj(np.fft.rfft(b, size)), size)
+    lags = np.r_[np.arange(n), np.arange(size - n, size) - size]
+    return int(lags[np.argmax(match[lags])])
 
 
 def not_following(found: dict[str, Any], max_offset_s: float = MAX_OFFSET_S) -> str | None:

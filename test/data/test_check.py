@@ -508,3 +508,13 @@ def test_inverted_poses_on_the_imu_clock_and_frame_are_judged_and_trained_as_rea
     recipe, said = init_recipe(euroc, ['MH_01_easy'], poses=tmp_path)
     assert recipe['align'] == 'auto'
     assert 'align auto: MH_01_easy read another way than written' in said
+
+
+@pytest.mark.parametrize('n', [1, 2, 100, 1001, 4096])
+def test_the_rate_norms_lag_is_scipys_full_correlation(n):
+    from denoise_imu_ros.data.pose_alignment import best_lag
+    from scipy.signal import correlate
+    rng = np.random.default_rng(n)
+    a = rng.normal(size=n)
+    b = np.roll(a, min(37, n // 3)) + 0.1 * rng.normal(size=n)
+    assert best_lag(a, b) == int(np.argmax(correlate(a, b, mode='full'))) - n + 1
