@@ -31,6 +31,7 @@ from ..core.errors import DatasetError
 from ..core.records import Recording
 
 SUFFIXES = ('.txt', '.tum')   # a folder of trajectories holds <recording><suffix>
+MAX_NAMED = 6                 # trajectory files an error names, where none is a recording's
 UNIT_TOLERANCE = 1e-2         # a quaternion's norm off 1 by more is no pose
 NANOSECOND_STAMPS = 1e11      # a stamp this large is no clock in seconds (the year 5138)
 COLUMNS = {8: 'TUM', 20: "OpenVINS's"}  # OpenVINS: TUM's 8, then 12 of covariance
@@ -143,15 +144,27 @@ def write_tum(path: str | Path, stamp_ns: np.ndarray, pos: np.ndarray,
 
 
 def trajectory_file(poses: str | Path, recording: str) -> Path:
-    """Find the trajectory of ``recording``: ``poses`` itself, or <recording>.txt in it."""
+    """
+    Find the trajectory of ``recording``: ``poses`` itself, or <recording>.txt in it.
+
+    A name differing only in case is taken where it is the only one; where none is the
+    recording's, the error names the files the folder holds.
+    """
     poses = Path(poses)
     if not poses.is_dir():
         return poses
     for suffix in SUFFIXES:
         if (poses / f'{recording}{suffix}').is_file():
             return poses / f'{recording}{suffix}'
+    files = sorted(p for p in poses.iterdir() if p.suffix.lower() in SUFFIXES and p.is_file())
+    alike = [p for p in files if p.stem.lower() == recording.lower()]  # MH_01_EASY.TXT
+    if len(alike) == 1:
+        return alike[0]
+    held = ', '.join(p.name for p in files[:MAX_NAMED]) + (', ...' if len(files) > MAX_NAMED
+                                                           else '')
     raise DatasetError(f'{poses}: no trajectory of {recording} '
-                       f'({" or ".join(recording + s for s in SUFFIXES)})')
+                       f'({" or ".join(recording + s for s in SUFFIXES)}'
+                       f'{"; it holds " + held if files else "; it holds none"})')
 
 
 def with_trajectory(rec: Recording, trajectory: Trajectory) -> Recording:

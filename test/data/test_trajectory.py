@@ -101,8 +101,17 @@ def test_a_folder_of_trajectories_is_looked_up_by_recording_name(tmp_path):
     assert trajectory_file(tmp_path, 'a') == tmp_path / 'a.txt'
     assert trajectory_file(tmp_path, 'b') == tmp_path / 'b.tum'
     assert trajectory_file(tmp_path / 'a.txt', 'anything') == tmp_path / 'a.txt'
-    with pytest.raises(DatasetError, match=r'no trajectory of c \(c.txt or c.tum\)'):
+    with pytest.raises(DatasetError, match=r'no trajectory of c \(c.txt or c.tum; it holds '
+                                           r'a.txt, b.tum\)'):
         trajectory_file(tmp_path, 'c')
+    _write(tmp_path / 'MH_01.TXT', [f'1.0 {POSE}', f'2.0 {POSE}'])
+    assert trajectory_file(tmp_path, 'mh_01') == tmp_path / 'MH_01.TXT'
+    _write(tmp_path / 'mh_01.tum', [f'1.0 {POSE}', f'2.0 {POSE}'])  # two alike: neither
+    with pytest.raises(DatasetError, match=r'no trajectory of Mh_01 .*MH_01.TXT'):
+        trajectory_file(tmp_path, 'Mh_01')
+    (tmp_path / 'vio').mkdir()
+    with pytest.raises(DatasetError, match='it holds none'):
+        trajectory_file(tmp_path / 'vio', 'a')
 
 
 def _yawing_trajectory(path: Path, rate_hz: float = 20.0, yaw_rate: float = 0.3) -> Path:
