@@ -35,7 +35,7 @@ from scipy.spatial.transform import Rotation
 
 from .pose_alignment import (apply_pose_alignment, describe, interpolation_scale_error, level,
                              MAX_OFFSET_S, MIN_EXCITATION_DEG_S, needs_alignment,
-                             not_following, read_and_align)
+                             not_following, offset_text, on_imu_clock, read_and_align)
 from .pose_jumps import describe as describe_jumps, find_jumps, Jump, mask_jumps
 from .timebase import onto_imu_stamps
 from ..core.architecture import ModelConfig
@@ -206,7 +206,7 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     are significant: :func:`~denoise_imu_ros.data.pose_alignment.needs_alignment`)
     or ``no``; a clock offset that is not constant along the recording is a reason too.
     """
-    seq = onto_imu_stamps(rec)
+    seq = onto_imu_stamps(on_imu_clock(rec)[0])
     report = _streams(rec, seq)
     field = ModelConfig().receptive_field
     if len(seq) < field:  # too little for any estimate below, and for the network
@@ -218,8 +218,6 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
         return report
     rec, found, report['read_as'] = read_and_align(rec, max_offset_s)  # as every command
     report.update(found)
-    if report['read_as']:  # judged below as read
-        seq = onto_imu_stamps(rec)
     # the poses as training would use them: on the IMU clock and in its frame, when the
     # estimate says they are not and is itself trustworthy (the poses follow the gyro,
     # and rotation about every axis makes the frame observable)
@@ -227,8 +225,10 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
         needs_alignment(report) and not not_following(report, max_offset_s)
         and min(report['excitation_rms_deg_s']) >= MIN_EXCITATION_DEG_S)
     if report['judged_after_alignment']:
-        seq = onto_imu_stamps(apply_pose_alignment(rec, report['time_offset_s'],
-                                                   report['imu_from_pose_rotation_xyzw']))
+        rec = apply_pose_alignment(rec, report['time_offset_s'],
+                                   report['imu_from_pose_rotation_xyzw'])
+    rec = on_imu_clock(rec)[0]  # judged as read and aligned, or placed where not aligned
+    seq = onto_imu_stamps(rec)
     jumps = find_jumps(seq)
     seq = mask_jumps(seq, jumps)
     report['pose_jumps'] = [j._asdict() for j in jumps]
@@ -248,7 +248,7 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     if not units and max(quarters) - min(quarters) > spread_limit:
         report['reasons'].append(
             'the clock offset is not constant: '
-            f'{", ".join(f"{1e3 * q:+.1f}" for q in quarters)} ms on the four quarters of the '
+            f'{", ".join(offset_text(q) for q in quarters)} on the four quarters of the '
             'recording (pose latency varies, or a clock drifts): alignment applies one '
             'offset, their mean, and increments not much longer than the spread are '
             'blurred by it')
@@ -403,7 +403,7 @@ def markdown(report: dict[str, Any]) -> str:
         lines.append(f'  verdict: {r["verdict"]}: ' + '; '.join(r['reasons']))
         return '\n'.join(lines) + '\n'
     rot = Rotation.from_quat(r['imu_from_pose_rotation_xyzw']).as_rotvec(degrees=True)
-    lines += [f'  clock offset (t_imu = t_pose + offset): {1e3 * r["time_offset_s"]:+.2f} '
+    lines += [f'  clock offset (t_imu = t_pose + offset): {offset_text(r["time_offset_s"], 2)} '
               f'+- {1e3 * r["time_offset_std_s"]:.2f} ms',
               f'  rotation pose body -> IMU: {r["imu_from_pose_rotation_deg"]:.3f} +- '
               f'{r["imu_from_pose_rotation_std_deg"]:.3f} deg (rotation vector '

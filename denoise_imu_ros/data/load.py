@@ -15,7 +15,7 @@ import warnings
 
 from .asl import read_asl
 from .pose_alignment import (apply_pose_alignment, describe, level, LEVEL_TOLERANCE_DEG,
-                             needs_alignment, not_following, read_and_align)
+                             needs_alignment, not_following, on_imu_clock, read_and_align)
 from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
 from .timebase import onto_imu_stamps
 from .trajectory import read_tum, trajectory_file, with_trajectory
@@ -88,7 +88,8 @@ def load_sequence(path: str | Path, imu_topic: str | None = None,
     if rate_hz is not None:
         check_rate(rec.imu_stamp_ns, rate_hz, path)
     # a gyro in deg/s follows no poses at any clock or frame: said before any alignment
-    raw = onto_imu_stamps(rec, max_gt_gap_s=max_gt_gap_s)
+    raw = onto_imu_stamps(on_imu_clock(rec)[0] if align_poses in ('check', 'auto') else rec,
+                          max_gt_gap_s=max_gt_gap_s)
     check_gyro_against_poses(raw.imu[:, :3], raw.gt_quat, raw.gt_valid, raw.dt, path)
     rec, used = _alignment(rec, align_poses, path)
     if used is not None:

@@ -31,7 +31,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.spatial.transform import Rotation, Slerp
 
-from .timebase import poses_at
+from .timebase import poses_at, spans
 from ..core.errors import DatasetError
 from ..core.metrics import integrate
 from ..core.records import Recording, Sequence
@@ -56,6 +56,7 @@ OUTLIER_MAX_FRACTION = 0.2  # more than this part of them: the poses do not foll
 MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
 NORM_GRID_S = 0.01         # grid of the rate norms' cross-correlation (a coarse offset)
 FAR_MARGIN = 0.5           # an offset beyond the search wins only below this times its residual
+OTHER_CLOCK_S = 10.0       # offsets said in s from this on (a clock since the poses' start)
 
 
 class Rates:
@@ -257,8 +258,15 @@ def not_following(found: dict[str, Any], max_offset_s: float = MAX_OFFSET_S) -> 
 
 def describe(found: dict[str, Any]) -> str:
     """Return the clock offset and frame rotation of an estimate, in words."""
-    return (f'poses {1e3 * found["time_offset_s"]:+.1f} ms off the IMU clock and in a frame '
+    return (f'poses {offset_text(found["time_offset_s"])} off the IMU clock and in a frame '
             f'{found["imu_from_pose_rotation_deg"]:.2f} deg from the IMU\'s')
+
+
+def offset_text(offset_s: float, decimals: int = 1) -> str:
+    """Say a clock offset in ms, or in s where it is one of another clock (10 s or more)."""
+    if abs(offset_s) >= OTHER_CLOCK_S:
+        return f'{offset_s:+.{decimals + 3}f} s'
+    return f'{1e3 * offset_s:+.{decimals}f} ms'
 
 
 def needs_alignment(report: dict[str, Any]) -> bool:
@@ -415,11 +423,43 @@ def read_and_align(rec: Recording, max_offset_s: float = MAX_OFFSET_S
     Return the poses as every command reads them, their alignment estimate, and how read.
 
     As written (how: None) unless only another common way follows the gyro
-    (:func:`other_convention`): check-data and every alignment read them alike.
+    (:func:`other_convention`): check-data and every alignment read them alike. Poses on
+    a clock the IMU's overlaps nowhere are searched for from the IMU's start
+    (:func:`on_imu_clock`); the offset found is from their stamps as written.
     """
-    found = estimate_pose_alignment(rec, max_offset_s)
-    other = other_convention(rec, max_offset_s) if not_following(found, max_offset_s) else None
-    return (rec, found, None) if other is None else other
+    placed, shift_ns = on_imu_clock(rec)
+    found = estimate_pose_alignment(placed, max_offset_s)
+    other = None
+    if not_following(found, max_offset_s):
+        other = other_convention(placed, max_offset_s)
+    read, how = (placed, None) if other is None else (other[0], other[2])
+    found = found if other is None else other[1]
+    if not shift_ns:
+        return read, found, how
+    if not_following(found, max_offset_s):
+        raise DatasetError(f'{rec.source}: IMU and poses do not overlap in time ({spans(rec)}), '
+                           "and placed at the IMU's start the poses follow the gyro at no "
+                           "offset: another recording's poses?")
+    moved = {**found, 'time_offset_s': found['time_offset_s'] + shift_ns * 1e-9,
+             'time_offset_quarters_s': [q + shift_ns * 1e-9
+                                        for q in found['time_offset_quarters_s']]}
+    return dataclasses.replace(read, gt_stamp_ns=rec.gt_stamp_ns), moved, how
+
+
+def on_imu_clock(rec: Recording) -> tuple[Recording, int]:
+    """
+    Return poses the IMU's stamps overlap nowhere placed to start with it, and the shift (ns).
+
+    A trajectory stamped in time since its own start, or by the clock of the computer that
+    replayed the recording, overlaps the IMU's stamps nowhere. Placed start to start, the
+    rates' norms (:func:`_norm_lag`) find where it lies in the recording. Poses that
+    overlap the IMU's stamps are returned as they are, shift 0.
+    """
+    t_imu, t_gt = rec.imu_stamp_ns, rec.gt_stamp_ns
+    if len(t_gt) < 2 or len(t_imu) < 2 or (t_gt[0] < t_imu[-1] and t_gt[-1] > t_imu[0]):
+        return rec, 0
+    shift_ns = int(t_imu[0]) - int(t_gt[0])
+    return dataclasses.replace(rec, gt_stamp_ns=t_gt + shift_ns), shift_ns
 
 
 def _path_length(rec: Recording) -> float:

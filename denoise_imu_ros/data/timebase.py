@@ -49,6 +49,12 @@ def overlap(rec: Recording) -> Recording:
                     min(rec.imu_stamp_ns[-1], rec.gt_stamp_ns[-1]))
 
 
+def spans(rec: Recording) -> str:
+    """Say the time spans of the IMU's stamps and of the poses' (s), for an error."""
+    return ', '.join(f'{what} {t[0] * 1e-9:.3f} to {t[-1] * 1e-9:.3f} s'
+                     for what, t in (('IMU', rec.imu_stamp_ns), ('poses', rec.gt_stamp_ns)))
+
+
 def gt_gap_limit(gt_stamp_ns: np.ndarray, max_gt_gap_s: float | None = None) -> float:
     """Spacing (s) above which two ground-truth samples bracket a hole, not a step."""
     if max_gt_gap_s is not None:
@@ -118,7 +124,8 @@ def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
                            'least)')
     start, end = max(t_imu[0], t_gt[0]), min(t_imu[-1], t_gt[-1])
     if start >= end:
-        raise DatasetError(f'{rec.source}: IMU and ground truth do not overlap in time')
+        raise DatasetError(f'{rec.source}: IMU and ground truth do not overlap in time '
+                           f'({spans(rec)}; align auto finds poses on another clock)')
     keep = (t_imu >= start) & (t_imu <= end)
     if keep.sum() < max(min_samples, 2):
         raise DatasetError(f'{rec.source}: {keep.sum()} IMU samples overlap the ground '

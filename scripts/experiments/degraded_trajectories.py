@@ -13,6 +13,7 @@ files, ``<recording>.txt``), one folder per kind under OUT:
 - ``short``: from 20 s after the first pose to 20 s before the last;
 - ``init``: the first 5 s wrong by 8 deg per axis and pose (a VIO initialising);
 - ``late``: every stamp 1.5 s late (a clock further off than the offset search);
+- ``since_start``: stamps in time since the first pose (a clock the IMU's overlaps nowhere);
 - ``inverted``: world-in-camera poses (T_cw, where TUM files hold T_wc);
 - ``w_first``: the quaternions written qw qx qy qz.
 Usage: .venv/bin/python scripts/experiments/degraded_trajectories.py SRC OUT [--seed N]
@@ -65,6 +66,7 @@ def spoilt(stamp_ns: np.ndarray, pos: np.ndarray, quat: np.ndarray,
                                                           rot[~first]]).as_quat())
     # written without random draws, so that the kinds above stay as they were drawn
     kinds['late'] = (stamp_ns + LATE_NS, pos, quat)
+    kinds['since_start'] = (stamp_ns - stamp_ns[0], pos, quat)
     kinds['inverted'] = (stamp_ns, -rot.inv().apply(pos), rot.inv().as_quat())
     kinds['w_first'] = (stamp_ns, pos, quat[:, [3, 0, 1, 2]])
     return kinds

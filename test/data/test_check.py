@@ -12,7 +12,8 @@ from denoise_imu_ros.core.errors import DatasetError
 from denoise_imu_ros.data.asl import read_asl
 from denoise_imu_ros.data.check import check, ESTIMATES, label_noise, markdown
 from denoise_imu_ros.data.check import paper_increments, supervision
-from denoise_imu_ros.data.pose_alignment import estimate_pose_alignment
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.data.pose_alignment import apply_pose_alignment, estimate_pose_alignment
 from denoise_imu_ros.data.timebase import onto_imu_stamps
 from helpers import ROOT, write_asl
 import numpy as np
@@ -200,7 +201,6 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
     assert 'do not follow the gyro at any clock offset searched (within +-0.5 s' in ' '.join(
         check(other)['reasons'])
     # and align auto does not apply such an estimate (eval --align auto, training)
-    from denoise_imu_ros.data.load import load_sequence
     write_bag(dataclasses.replace(other, imu_stamp_ns=other.imu_stamp_ns[:8000],
                                   imu=other.imu[:8000]), tmp_path / 'other')
     with pytest.raises(DatasetError, match='other: align auto: the poses do not follow'):
@@ -215,10 +215,45 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
     with pytest.raises(DatasetError, match=r'order: poses .* in a frame 155\.\d\d deg from the '
                                            "IMU's: figures against them as they are would be"):
         load_sequence(tmp_path / 'order', align_poses='check')
-    # no overlap at all
+    # no overlap at all: scored as they are, refused in one line that says the spans
     away = write_asl(tmp_path / 'away', n_imu=2000, gt_offset_s=20.0)
-    assert main(['check-data', str(away)]) == 1
-    assert 'do not overlap in time' in capsys.readouterr().err
+    with pytest.raises(DatasetError, match=r'do not overlap in time \(IMU .* to .* s, poses .* '
+                                           'to .* s; align auto finds poses on another clock'):
+        load_sequence(away)
+
+
+def test_poses_stamped_on_a_clock_the_imus_overlaps_nowhere_are_found(euroc, tmp_path):
+    rec = read_asl(euroc / 'MH_01_easy')
+    part = dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:12000], imu=rec.imu[:12000])
+    start = int(rec.gt_stamp_ns[0])
+    # stamped in time since the poses' start (a tool's own clock): found, from the file's
+    since = dataclasses.replace(part, gt_stamp_ns=part.gt_stamp_ns - start)
+    report = check(since)
+    assert abs(report['time_offset_s'] - start * 1e-9) < 1e-3
+    assert report['imu_from_pose_rotation_deg'] < 0.2 and report['usable'] == 'after alignment'
+    assert re.match(r'poses \+\d{10}\.\d{4} s off the IMU clock', report['reasons'][0])
+    aligned = apply_pose_alignment(since, report['time_offset_s'],
+                                   report['imu_from_pose_rotation_xyzw'])
+    assert np.abs(aligned.gt_stamp_ns - part.gt_stamp_ns).max() < 1_000_000
+    # as a trajectory file: training and eval (align auto) read the poses on the IMU's clock
+    from denoise_imu_ros.data.bags import write_bag
+    from denoise_imu_ros.data.trajectory import write_tum
+    write_bag(part, tmp_path / 'part')
+    write_tum(tmp_path / 'part.txt', since.gt_stamp_ns, since.gt_pos, since.gt_quat)
+    seq = load_sequence(tmp_path / 'part', poses=tmp_path, align_poses='auto')
+    truth = load_sequence(tmp_path / 'part')
+    assert abs(seq.pose_alignment['time_offset_s'] - start * 1e-9) < 1e-3
+    ours, real = (Rotation.from_quat(one.gt_quat[np.isin(one.stamp_ns, seq.stamp_ns)])
+                  for one in (seq, truth))
+    assert np.degrees((ours[:-1].inv() * ours[1:] * (real[:-1].inv() * real[1:]).inv())
+                      .magnitude()).max() < 0.5
+    # another recording's poses so stamped: one line, not an alignment
+    quat = read_asl(euroc / 'MH_02_easy').gt_quat[:len(since.gt_quat)]
+    other = dataclasses.replace(since, gt_stamp_ns=since.gt_stamp_ns[:len(quat)], gt_quat=quat,
+                                gt_pos=since.gt_pos[:len(quat)])
+    with pytest.raises(DatasetError, match=r'do not overlap in time \(IMU .*\), and placed at '
+                                           "the IMU's start .* another recording's poses"):
+        check(other)
 
 
 def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
@@ -462,7 +497,6 @@ def test_the_frame_fit_leaves_out_a_few_windows_it_cannot_explain_not_many():
 @pytest.mark.parametrize('way', ['inverted', 'with w first'])
 def test_poses_written_inverted_or_w_first_are_read_so_by_every_command(euroc, tmp_path, way):
     from denoise_imu_ros.core.errors import DataWarning
-    from denoise_imu_ros.data.load import load_sequence
     from denoise_imu_ros.data.trajectory import write_tum
     rec = read_asl(euroc / 'MH_01_easy')
     camera = _camera_poses(rec, slice(None, None, 20))  # a camera's 10 Hz poses, 90 ms late
