@@ -33,8 +33,8 @@ ALIGN_OPTION = {  # the poses against the IMU's clock and frame, for the scoring
             'they are'}
 POSES_OPTION = {  # a VIO's or SLAM's trajectories in place of the recordings' poses
     'metavar': 'DIR', 'help': 'trajectories (TUM format: t x y z qx qy qz qw, as VIO and SLAM '
-                              'tools write them), <recording>.txt in DIR, in place of the '
-                              "recordings' own poses"}
+                              "tools write them; ASL's state CSV), <recording>.txt (.tum, .csv) "
+                              "in DIR, in place of the recordings' own poses"}
 REST_BIAS_OPTION = {  # the node's rest_bias parameter, for the offline tools
     'choices': ('model', 'on', 'off'), 'default': 'model',
     'help': "remove the gyro's turn-on bias, estimated from stillness, before the model, "

@@ -8,9 +8,12 @@ tracked (often a camera: ``align: auto`` finds its frame and clock). Lines start
 with ``#`` are comments. As tools write it: t in seconds, or in nanoseconds (ORB-SLAM3's
 EuRoC files, a ROS stamp's integer) where every stamp is at least NANOSECOND_STAMPS,
 which no clock in seconds reaches (a clock counting nanoseconds from 0 is not told
-apart: its stamps would be read as seconds, and miss the IMU's), and
-OpenVINS's 20 columns (the 8 followed by the rotation's and the position's covariance,
-which is not used). Both are said. Tools write duplicate stamps (a pose written twice),
+apart: its stamps would be read as seconds, and miss the IMU's); commas between values;
+the same 8 followed by more columns that are not used (COLUMNS: ASL's state CSV as
+EuRoC, OKVIS and Kimera write it, velocity and biases; OpenVINS's covariance); a header
+line (the last comment before the first pose, or a first line that is not a number)
+whose names put the quaternion's w first (ASL's ``q_RS_w``, Kimera's ``qw``): read so.
+Each is said. Tools write duplicate stamps (a pose written twice),
 stamps that step back (a re-initialisation rewriting its past) and rows that are not
 poses (NaN, a zero quaternion): those rows are dropped and counted, and a file with
 nothing left is an error.
@@ -22,6 +25,7 @@ import dataclasses
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation, ROUND_HALF_EVEN
 from pathlib import Path
+import re
 
 import numpy as np
 
@@ -30,11 +34,14 @@ from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
 from ..core.records import Recording
 
-SUFFIXES = ('.txt', '.tum')   # a folder of trajectories holds <recording><suffix>
+SUFFIXES = ('.txt', '.tum', '.csv')  # a folder of trajectories holds <recording><suffix>
 MAX_NAMED = 6                 # trajectory files an error names, where none is a recording's
 UNIT_TOLERANCE = 1e-2         # a quaternion's norm off 1 by more is no pose
 NANOSECOND_STAMPS = 1e11      # a stamp this large is no clock in seconds (the year 5138)
-COLUMNS = {8: 'TUM', 20: "OpenVINS's"}  # OpenVINS: TUM's 8, then 12 of covariance
+COLUMNS = {  # TUM's 8, then columns not used
+    8: '', 11: "ASL's state columns (velocity unused)",
+    17: "ASL's state columns (velocity and biases unused)",
+    20: "OpenVINS's columns (covariance unused)"}
 
 
 @dataclass(frozen=True)
@@ -64,15 +71,15 @@ def read_tum(path: str | Path) -> Trajectory:
     if not path.is_file():
         raise DatasetError(f'{path}: trajectory file not found')
     with path.open(encoding='utf-8-sig', errors='strict') as f:
-        lines = [line for line in text_lines(f, path)
-                 if line.strip() and not line.lstrip().startswith('#')]
+        header, lines = _header_and_poses(text_lines(f, path))
     if not lines:
         raise DatasetError(f'{path}: no poses')
     width = len(lines[0].replace(',', ' ').split())
     if width not in COLUMNS:
         raise DatasetError(
             f'{path}: line "{lines[0].strip()[:60]}" has {width} values, not the 8 of a '
-            "TUM pose (t x y z qx qy qz qw) or OpenVINS's 20 (those, then the covariance)")
+            "TUM pose (t x y z qx qy qz qw), nor 11, 17 or 20 (those 8, then ASL's velocity "
+            "and biases or OpenVINS's covariance)")
     rows = np.full((len(lines), width), np.nan)
     stamps = np.empty(len(lines), dtype=object)  # exact: a float64 of seconds misses ns
     for i, line in enumerate(lines):
@@ -85,8 +92,11 @@ def read_tum(path: str | Path) -> Trajectory:
             stamps[i] = Decimal(parts[0])
         except (ValueError, InvalidOperation):
             raise DatasetError(f'{path}: unparsable line "{line.strip()[:60]}"') from None
-    read_as = [] if width == 8 else [f'read as {COLUMNS[width]} columns (covariance unused)']
+    read_as = [f'read as {COLUMNS[width]}'] if COLUMNS[width] else []
     rows = rows[:, :8]
+    if _w_first(header, width):
+        rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
+        read_as.append('quaternions read w first, as its header names them')
     dropped: dict[str, int] = {}
 
     def drop(bad: np.ndarray, why: str) -> None:
@@ -124,6 +134,45 @@ def read_tum(path: str | Path) -> Trajectory:
         raise DatasetError(f'{path}: fewer than two usable poses')
     quat = rows[:, 4:] / np.linalg.norm(rows[:, 4:], axis=1, keepdims=True)
     return Trajectory(path, stamp_ns, quat, rows[:, 1:4], dropped, tuple(read_as))
+
+
+def _header_and_poses(lines: list[str]) -> tuple[list[str], list[str]]:
+    """
+    Split a file's lines into its header's column names and its pose lines.
+
+    The header is the last comment before the first pose, or a first line whose first
+    value is not a number (OKVIS writes its names so).
+    """
+    text = [line.strip() for line in lines if line.strip()]
+    header: list[str] = []
+    if text and not text[0].startswith('#') and not _is_number(
+            text[0].replace(',', ' ').split()[0]):
+        header, text = _names(text[0]), text[1:]
+    poses = [line for line in text if not line.startswith('#')]
+    if poses and not header:
+        before = [line for line in text[:text.index(poses[0])] if line.startswith('#')]
+        header = _names(before[-1].lstrip('#')) if before else []
+    return header, poses
+
+
+def _names(text: str) -> list[str]:
+    """Return a header's column names, their units (``[m]``, ``(s)``) left out."""
+    names = text.split(',') if ',' in text else text.split()
+    return [re.sub(r'\[.*?\]|\(.*?\)', '', n).strip() for n in names]
+
+
+def _is_number(text: str) -> bool:
+    """Whether a value reads as a number."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _w_first(header: list[str], width: int) -> bool:
+    """Whether a header naming every column puts the quaternion's w first (qw qx qy qz)."""
+    return len(header) == width and [n[-1:].lower() for n in header[4:8]] == list('wxyz')
 
 
 def write_tum(path: str | Path, stamp_ns: np.ndarray, pos: np.ndarray,

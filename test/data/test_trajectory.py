@@ -55,6 +55,41 @@ def test_nanosecond_stamps_and_openvins_columns_read_as_the_same_poses(data_dir,
     assert tum.summary() == ''
 
 
+def test_asl_state_csvs_read_as_evo_reads_them_and_their_header_says_w_first(data_dir, tmp_path):
+    from evo.tools import file_interface
+    # EuRoC's motion capture: ns stamps, commas, qw first as its header names it
+    path = data_dir / 'euroc' / 'MH_01_easy' / 'mav0' / 'state_groundtruth_estimate0' / 'data.csv'
+    ours, theirs = read_tum(path), file_interface.read_euroc_csv_trajectory(str(path))
+    np.testing.assert_allclose(ours.stamp_ns * 1e-9, theirs.timestamps, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(ours.pos, theirs.positions_xyz, rtol=0, atol=1e-12)
+    quat = theirs.orientations_quat_wxyz[:, [1, 2, 3, 0]]  # ours made unit, as written
+    np.testing.assert_allclose(ours.quat, quat / np.linalg.norm(quat, axis=1, keepdims=True),
+                               rtol=0, atol=1e-12)
+    assert ours.read_as == ("read as ASL's state columns (velocity unused)",
+                            'quaternions read w first, as its header names them',
+                            'stamps read as nanoseconds')
+    # 17 columns as Kimera (w first, named in a comment) and OKVIS (x first, a bare header
+    # line) write them: the same poses
+    rows = np.column_stack([ours.stamp_ns, ours.pos, np.zeros((len(ours.pos), 4)),
+                            np.full((len(ours.pos), 9), 0.01)]).astype(object)
+    rows[:, 0] = ours.stamp_ns
+    for header, quat, said in (
+            ('#timestamp,x,y,z,qw,qx,qy,qz,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz',
+             ours.quat[:, [3, 0, 1, 2]], True),
+            ('timestamp, p_WS_W_x, p_WS_W_y, p_WS_W_z, q_WS_x, q_WS_y, q_WS_z, q_WS_w, '
+             'v_WS_W_x, v_WS_W_y, v_WS_W_z, b_g_x, b_g_y, b_g_z, b_a_x, b_a_y, b_a_z',
+             ours.quat, False)):
+        rows[:, 4:8] = quat
+        other = read_tum(_write(tmp_path / 'estimate.csv', [header] + [
+            ','.join(f'{v:.12g}' if isinstance(v, float) else str(v) for v in row)
+            for row in rows]))
+        np.testing.assert_array_equal(other.stamp_ns, ours.stamp_ns)
+        np.testing.assert_allclose(other.quat, ours.quat, rtol=0, atol=1e-11)
+        assert ("read as ASL's state columns (velocity and biases unused)" in other.read_as
+                and ('quaternions read w first, as its header names them' in other.read_as)
+                == said)
+
+
 def test_written_poses_read_back_exactly(data_dir, tmp_path):
     tum = read_tum(data_dir / 'euroc_vio' / 'vins_mono' / 'MH_01_easy.txt')
     back = read_tum(write_tum(tmp_path / 'a' / 't.txt', tum.stamp_ns, tum.pos, tum.quat))
@@ -82,7 +117,8 @@ def test_duplicate_backward_non_finite_and_non_unit_rows_are_dropped_and_counted
 
 @pytest.mark.parametrize('rows, message', [
     (['1.0 0 0 0 0 0 1'], 'has 7 values, not the 8 of a TUM pose'),
-    ([f'1.0 {POSE} 0'], r"has 9 values, not the 8 .* or OpenVINS's 20"),
+    ([f'1.0 {POSE} 0'], r'has 9 values, not the 8 .*, nor 11, 17 or 20 \(those 8, then'),
+    ([f'1.0 {POSE}'] * 2 + [f'abc {POSE}'], 'unparsable line "abc'),  # a header only first
     ([f'1.0 {POSE}', f'1.1 {POSE} 0'], 'has 9 values where the first pose has 8'),
     ([f'1.0 {POSE}', f'1e12 {POSE}'], 'stamps from 1 to 1e[+]12: neither all in seconds'),
     ([f'1e20 {POSE}', f'2e20 {POSE}'], 'stamps up to 2e[+]20: no clock in nanoseconds'),
@@ -101,8 +137,8 @@ def test_a_folder_of_trajectories_is_looked_up_by_recording_name(tmp_path):
     assert trajectory_file(tmp_path, 'a') == tmp_path / 'a.txt'
     assert trajectory_file(tmp_path, 'b') == tmp_path / 'b.tum'
     assert trajectory_file(tmp_path / 'a.txt', 'anything') == tmp_path / 'a.txt'
-    with pytest.raises(DatasetError, match=r'no trajectory of c \(c.txt or c.tum; it holds '
-                                           r'a.txt, b.tum\)'):
+    with pytest.raises(DatasetError, match=r'no trajectory of c \(c.txt or c.tum or c.csv; it '
+                                           r'holds a.txt, b.tum\)'):
         trajectory_file(tmp_path, 'c')
     _write(tmp_path / 'MH_01.TXT', [f'1.0 {POSE}', f'2.0 {POSE}'])
     assert trajectory_file(tmp_path, 'mh_01') == tmp_path / 'MH_01.TXT'
