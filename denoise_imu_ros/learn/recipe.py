@@ -39,7 +39,8 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
   the gyro's scale by more than 1 %, e.g. a SLAM's keyframes), so that each increment
   runs between two poses' stamps, where the poses are right.
 A recording the poses cannot supervise is left out of the recipe and named, and the
-rules above apply to the others: one with no increment up to 512 samples free of
+rules above apply to the others: one check-data finds not usable or cannot read (an error
+only when no recording is left), one with no increment up to 512 samples free of
 ground-truth noise (poses too noisy for its motion, e.g. a fast trial under slow motion
 capture: an error only when every recording is so), and one whose poses do not lower its
 own attitude error even with a constant bias fitted on them (check-data's
@@ -81,16 +82,26 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                 pose_topic: str | None = None,
                 poses: str | Path | None = None) -> tuple[dict[str, Any], list[str]]:
     """Return the recipe (a mapping of TrainConfig keys) and the reasons for each choice."""
-    reports, still = {}, []
+    reports, still, unusable = {}, [], {}
     for name in sequences:
-        rec = load_recording(Path(data) / name, imu_topic, pose_topic, poses)
-        report = check(rec)
+        try:
+            rec = load_recording(Path(data) / name, imu_topic, pose_topic, poses)
+            report = check(rec)
+        except DatasetError as err:  # unreadable, or poses of no clock or frame of its IMU
+            unusable[name] = str(err)
+            continue
         if report['usable'] == 'no':
-            raise DatasetError(f'{Path(data) / name}: not usable for training: '
-                               + '; '.join(report['reasons']))
+            unusable[name] = (f'{Path(data) / name}: not usable for training: '
+                              + '; '.join(report['reasons']))
+            continue
         reports[name] = report
         if _starts_still(rec.imu, report['imu_rate_hz']):
             still.append(name)
+    if not reports:
+        first, *more = unusable.values()
+        raise DatasetError(first + (f' (nor any other: {", ".join(list(unusable)[1:])})'
+                                    if more else ''))
+    sequences = [n for n in sequences if n in reports]
     rate = common_rate({n: r['imu_rate_hz'] for n, r in reports.items()}, data)
     noise = [n for n, r in reports.items() if r['shortest_clean_increment'] is None]
     if len(noise) == len(reports):
@@ -175,6 +186,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
             "a heading gravity does not hold would teach the model the trajectory's "
             'drift: learnt from the tilt alone' if recipe['heading_weight'] == 0 else
             f'not above {HEADING_RATIO:g}x: both taught'))
+    why += [f'left out: {said}' for said in unusable.values()]
     if noise:
         why.append(f'left out: {", ".join(noise)}: no increment up to 512 samples is free '
                    'of ground-truth noise there (poses too noisy for the motion), so '

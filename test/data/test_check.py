@@ -306,6 +306,20 @@ def test_init_recipe_leaves_out_what_the_poses_cannot_supervise_and_says_so(
     assert 'rest_bias off: 2 of 2 recordings are still within 5 s of their start' in said
 
 
+def test_init_recipe_leaves_out_a_recording_it_cannot_use_and_names_it(euroc, tmp_path):
+    from denoise_imu_ros.learn.recipe import init_recipe
+    (tmp_path / 'MH_01_easy').symlink_to(euroc / 'MH_01_easy')
+    write_asl(tmp_path / 'flat', n_imu=8000)  # yaw only: no rotation about x
+    recipe, said = init_recipe(tmp_path, ['flat', 'MH_01_easy', 'missing'])
+    assert recipe['sequences'] == ['MH_01_easy']
+    assert any(s.startswith(f'left out: {tmp_path / "flat"}: not usable for training: no '
+                            'rotation about the IMU x axis') for s in said)
+    assert any(s.startswith(f'left out: {tmp_path / "missing"}: no such') for s in said)
+    with pytest.raises(DatasetError, match=r'flat: not usable for training: no rotation .* '
+                                           r'\(nor any other: missing\)$'):
+        init_recipe(tmp_path, ['flat', 'missing'])
+
+
 def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_path, capsys):
     """Stamps in microseconds, and a --max-offset below the search's resolution: one line."""
     root = write_asl(tmp_path / 's', n_imu=2000)
