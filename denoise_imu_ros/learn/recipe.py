@@ -84,6 +84,8 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     """Return the recipe (a mapping of TrainConfig keys) and the reasons for each choice."""
     reports, still, unusable = {}, [], {}
     for name in sequences:
+        if not (Path(data) / name).exists():  # a name mistyped: not a recording to leave out
+            raise DatasetError(f'{Path(data) / name}: no such sequence folder or bag')
         try:
             rec = load_recording(Path(data) / name, imu_topic, pose_topic, poses)
             report = check(rec)

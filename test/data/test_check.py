@@ -310,14 +310,18 @@ def test_init_recipe_leaves_out_a_recording_it_cannot_use_and_names_it(euroc, tm
     from denoise_imu_ros.learn.recipe import init_recipe
     (tmp_path / 'MH_01_easy').symlink_to(euroc / 'MH_01_easy')
     write_asl(tmp_path / 'flat', n_imu=8000)  # yaw only: no rotation about x
-    recipe, said = init_recipe(tmp_path, ['flat', 'MH_01_easy', 'missing'])
+    csv = write_asl(tmp_path / 'broken', n_imu=8000) / 'mav0' / 'imu0' / 'data.csv'
+    csv.write_text(csv.read_text().replace('\n', '\nnot a row\n', 1))
+    recipe, said = init_recipe(tmp_path, ['flat', 'MH_01_easy', 'broken'])
     assert recipe['sequences'] == ['MH_01_easy']
     assert any(s.startswith(f'left out: {tmp_path / "flat"}: not usable for training: no '
                             'rotation about the IMU x axis') for s in said)
-    assert any(s.startswith(f'left out: {tmp_path / "missing"}: no such') for s in said)
+    assert any(s.startswith(f'left out: {csv}:2: expected 7 columns') for s in said)
     with pytest.raises(DatasetError, match=r'flat: not usable for training: no rotation .* '
-                                           r'\(nor any other: missing\)$'):
-        init_recipe(tmp_path, ['flat', 'missing'])
+                                           r'\(nor any other: broken\)$'):
+        init_recipe(tmp_path, ['flat', 'broken'])
+    with pytest.raises(DatasetError, match='mistyped: no such sequence folder or bag'):
+        init_recipe(tmp_path, ['MH_01_easy', 'mistyped'])  # said, not left out
 
 
 def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_path, capsys):
