@@ -206,16 +206,11 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     are significant: :func:`~denoise_imu_ros.data.pose_alignment.needs_alignment`)
     or ``no``; a clock offset that is not constant along the recording is a reason too.
     """
-    seq = onto_imu_stamps(on_imu_clock(rec)[0])
+    placed, shift_ns = on_imu_clock(rec)  # poses on another clock: where they overlap most
+    seq = onto_imu_stamps(placed)
     report = _streams(rec, seq)
-    field = ModelConfig().receptive_field
-    if len(seq) < field:  # too little for any estimate below, and for the network
-        report.update(dict.fromkeys(ESTIMATES), usable='no',
-                      verdict='not usable for training', reasons=[
-                          f'too short: {len(seq)} IMU samples with poses '
-                          f'({report["duration_s"]:.2f} s), fewer than the network\'s '
-                          f'receptive field ({field} samples): nothing to estimate or train'])
-        return report
+    if len(seq) < ModelConfig().receptive_field:
+        return _too_short(report, seq)
     rec, found, report['read_as'] = read_and_align(rec, max_offset_s)  # as every command
     report.update(found)
     # the poses as training would use them: on the IMU clock and in its frame, when the
@@ -227,8 +222,13 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     if report['judged_after_alignment']:
         rec = apply_pose_alignment(rec, report['time_offset_s'],
                                    report['imu_from_pose_rotation_xyzw'])
-    rec = on_imu_clock(rec)[0]  # judged as read and aligned, or placed where not aligned
+    elif shift_ns:  # a frame too little turned to trust: on the clock found, at least
+        rec = apply_pose_alignment(rec, report['time_offset_s'], [0.0, 0.0, 0.0, 1.0])
     seq = onto_imu_stamps(rec)
+    if shift_ns:  # the streams where the poses lie, not where they were placed
+        report.update(_streams(rec, seq))
+        if len(seq) < ModelConfig().receptive_field:
+            return _too_short(report, seq)
     jumps = find_jumps(seq)
     seq = mask_jumps(seq, jumps)
     report['pose_jumps'] = [j._asdict() for j in jumps]
@@ -257,6 +257,17 @@ def check(rec: Recording, max_offset_s: float = MAX_OFFSET_S) -> dict[str, Any]:
     report['verdict'] = {'yes': 'usable for training', 'after alignment':
                          'usable for training with alignment applied',
                          'no': 'not usable for training'}[report['usable']]
+    return report
+
+
+def _too_short(report: dict[str, Any], seq: Sequence) -> dict[str, Any]:
+    """Return the report of a recording too short for any estimate, and for the network."""
+    field = ModelConfig().receptive_field
+    report.update(dict.fromkeys(ESTIMATES), usable='no',
+                  verdict='not usable for training', reasons=[
+                      f'too short: {len(seq)} IMU samples with poses '
+                      f'({report["duration_s"]:.2f} s), fewer than the network\'s '
+                      f'receptive field ({field} samples): nothing to estimate or train'])
     return report
 
 

@@ -8,7 +8,8 @@ tracked (often a camera: ``align: auto`` finds its frame and clock). Lines start
 with ``#`` are comments. As tools write it: t in seconds, or in nanoseconds (ORB-SLAM3's
 EuRoC files, a ROS stamp's integer) where every stamp is at least NANOSECOND_STAMPS,
 which no clock in seconds reaches (a clock counting nanoseconds from 0 is not told
-apart: its stamps would be read as seconds, and miss the IMU's); commas between values;
+apart: its stamps would be read as seconds, a pose every few million seconds, and
+refused as too sparse); commas between values;
 the same 8 followed by more columns that are not used (COLUMNS: ASL's state CSV as
 EuRoC, OKVIS and Kimera write it, velocity and biases; OpenVINS's covariance); a header
 line (the last comment before the first pose, or a first line that is not a number)
@@ -94,7 +95,7 @@ def read_tum(path: str | Path) -> Trajectory:
             raise DatasetError(f'{path}: unparsable line "{line.strip()[:60]}"') from None
     read_as = [f'read as {COLUMNS[width]}'] if COLUMNS[width] else []
     rows = rows[:, :8]
-    if _w_first(header, width):
+    if _names_w_first(header, width):
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
         read_as.append('quaternions read w first, as its header names them')
     dropped: dict[str, int] = {}
@@ -140,13 +141,13 @@ def _header_and_poses(lines: list[str]) -> tuple[list[str], list[str]]:
     """
     Split a file's lines into its header's column names and its pose lines.
 
-    The header is the last comment before the first pose, or a first line whose first
-    value is not a number (OKVIS writes its names so).
+    The header is the last comment before the first pose, or a first line none of whose
+    values is a number (OKVIS writes its names so).
     """
     text = [line.strip() for line in lines if line.strip()]
     header: list[str] = []
-    if text and not text[0].startswith('#') and not _is_number(
-            text[0].replace(',', ' ').split()[0]):
+    if text and not text[0].startswith('#') and not any(
+            map(_is_number, text[0].replace(',', ' ').split())):
         header, text = _names(text[0]), text[1:]
     poses = [line for line in text if not line.startswith('#')]
     if poses and not header:
@@ -158,7 +159,8 @@ def _header_and_poses(lines: list[str]) -> tuple[list[str], list[str]]:
 def _names(text: str) -> list[str]:
     """Return a header's column names, their units (``[m]``, ``(s)``) left out."""
     names = text.split(',') if ',' in text else text.split()
-    return [re.sub(r'\[.*?\]|\(.*?\)', '', n).strip() for n in names]
+    names = [re.sub(r'\[.*?\]|\(.*?\)', '', n).strip() for n in names]
+    return [n for n in names if n]  # units written apart (t [s]), a trailing comma
 
 
 def _is_number(text: str) -> bool:
@@ -170,7 +172,7 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def _w_first(header: list[str], width: int) -> bool:
+def _names_w_first(header: list[str], width: int) -> bool:
     """Whether a header naming every column puts the quaternion's w first (qw qx qy qz)."""
     return len(header) == width and [n[-1:].lower() for n in header[4:8]] == list('wxyz')
 
@@ -195,6 +197,8 @@ def write_tum(path: str | Path, stamp_ns: np.ndarray, pos: np.ndarray,
 def trajectory_file(poses: str | Path, recording: str) -> Path:
     """
     Find the trajectory of ``recording``: ``poses`` itself, or <recording>.txt in it.
+
+    Or .tum, .csv (SUFFIXES).
 
     A name differing only in case is taken where it is the only one; where none is the
     recording's, the error names the files the folder holds.

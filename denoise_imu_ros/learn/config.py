@@ -80,8 +80,8 @@ class TrainConfig:
     sequences: list[str] = field(default_factory=list)  # ASL folders or bags in `data`
     imu_topic: str | None = None       # bags only; None = the only Imu topic
     pose_topic: str | None = None      # bags only; None = the only pose topic
-    # a folder of TUM trajectories, <recording>.txt, as VIO/SLAM tools write them, whose
-    # poses replace the recordings' own; None: the recordings' poses
+    # a folder of trajectories, <recording>.txt (.tum, .csv), as VIO/SLAM tools write them
+    # (data.trajectory), whose poses replace the recordings' own; None: the recordings' poses
     poses: str | None = None
     # ground-truth holes longer than this (s) are masked; None: 2.5 of its own periods
     max_gt_gap_s: float | None = None
@@ -190,7 +190,11 @@ def _is(value: Any, kind: str) -> bool:
 
 
 def _alignment(value: Any) -> bool:
-    """Whether a recipe's ``align`` mapping is one check-data could have written."""
+    """
+    Whether a recipe's ``align`` mapping is one offset and frame for every recording.
+
+    Within a minute: poses on another clock each have their own offset (``align: auto``).
+    """
     if not isinstance(value, dict) or set(value) != {'time_offset_s',
                                                      'imu_from_pose_rotation_xyzw'}:
         return False

@@ -13,7 +13,7 @@ from denoise_imu_ros.data.asl import read_asl
 from denoise_imu_ros.data.check import check, ESTIMATES, label_noise, markdown
 from denoise_imu_ros.data.check import paper_increments, supervision
 from denoise_imu_ros.data.load import load_sequence
-from denoise_imu_ros.data.pose_alignment import apply_pose_alignment, estimate_pose_alignment
+from denoise_imu_ros.data.pose_alignment import estimate_pose_alignment
 from denoise_imu_ros.data.timebase import onto_imu_stamps
 from helpers import ROOT, write_asl
 import numpy as np
@@ -225,16 +225,30 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
 def test_poses_stamped_on_a_clock_the_imus_overlaps_nowhere_are_found(euroc, tmp_path):
     rec = read_asl(euroc / 'MH_01_easy')
     part = dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:12000], imu=rec.imu[:12000])
-    start = int(rec.gt_stamp_ns[0])
-    # stamped in time since the poses' start (a tool's own clock): found, from the file's
-    since = dataclasses.replace(part, gt_stamp_ns=part.gt_stamp_ns - start)
-    report = check(since)
-    assert abs(report['time_offset_s'] - start * 1e-9) < 1e-3
-    assert report['imu_from_pose_rotation_deg'] < 0.2 and report['usable'] == 'after alignment'
+    camera = _camera_poses(part, slice(None, None, 20))  # 10 Hz, 90 ms late, 90 deg off
+    start = int(camera.gt_stamp_ns[0])
+    # stamped in time since their start (a tool's own clock): judged where they lie
+    since = dataclasses.replace(camera, gt_stamp_ns=camera.gt_stamp_ns - start)
+    base, report = check(camera), check(since)
+    assert abs(report['time_offset_s'] - start * 1e-9 - base['time_offset_s']) < 1e-3
+    turn = Rotation.from_quat(report['imu_from_pose_rotation_xyzw']).inv() * Rotation.from_quat(
+        base['imu_from_pose_rotation_xyzw'])
+    assert math.degrees(turn.magnitude()) < 0.2 and report['usable'] == base['usable']
+    assert report['duration_s'] == pytest.approx(base['duration_s'], abs=0.1)  # the 90 ms
+    assert report['label_noise'] == base['label_noise']
+    np.testing.assert_allclose(report['interpolation_scale_error_percent'],
+                               base['interpolation_scale_error_percent'], atol=0.02)
     assert re.match(r'poses \+\d{10}\.\d{4} s off the IMU clock', report['reasons'][0])
-    aligned = apply_pose_alignment(since, report['time_offset_s'],
-                                   report['imu_from_pose_rotation_xyzw'])
-    assert np.abs(aligned.gt_stamp_ns - part.gt_stamp_ns).max() < 1_000_000
+    # poses from 45 s on (in flight), an IMU hole where they lie, not where placing them at
+    # the IMU's start puts them: said, and not usable
+    t = (rec.imu_stamp_ns - rec.imu_stamp_ns[0]) * 1e-9
+    keep = (t < 90) | ((t > 90.2) & (t < 100))
+    span = (since.gt_stamp_ns >= 45e9) & (since.gt_stamp_ns < 95e9)
+    late = dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[keep], imu=rec.imu[keep],
+                               gt_stamp_ns=since.gt_stamp_ns[span] - int(45e9),
+                               gt_quat=since.gt_quat[span], gt_pos=since.gt_pos[span])
+    holed = check(late)
+    assert holed['imu_holes'] == 1 and holed['usable'] == 'no'
     # as a trajectory file: training and eval (align auto) read the poses on the IMU's clock
     from denoise_imu_ros.data.bags import write_bag
     from denoise_imu_ros.data.trajectory import write_tum
@@ -242,15 +256,18 @@ def test_poses_stamped_on_a_clock_the_imus_overlaps_nowhere_are_found(euroc, tmp
     write_tum(tmp_path / 'part.txt', since.gt_stamp_ns, since.gt_pos, since.gt_quat)
     seq = load_sequence(tmp_path / 'part', poses=tmp_path, align_poses='auto')
     truth = load_sequence(tmp_path / 'part')
-    assert abs(seq.pose_alignment['time_offset_s'] - start * 1e-9) < 1e-3
+    assert abs(seq.pose_alignment['time_offset_s'] - report['time_offset_s']) < 1e-3
     ours, real = (Rotation.from_quat(one.gt_quat[np.isin(one.stamp_ns, seq.stamp_ns)])
                   for one in (seq, truth))
     assert np.degrees((ours[:-1].inv() * ours[1:] * (real[:-1].inv() * real[1:]).inv())
                       .magnitude()).max() < 0.5
+    with pytest.raises(DatasetError, match=r'poses \+\d+\.\d{4} s off the IMU clock .* give '
+                                           '--align auto'):  # eval's default: not scored
+        load_sequence(tmp_path / 'part', poses=tmp_path, align_poses='check')
     # another recording's poses so stamped: one line, not an alignment
-    quat = read_asl(euroc / 'MH_02_easy').gt_quat[:len(since.gt_quat)]
-    other = dataclasses.replace(since, gt_stamp_ns=since.gt_stamp_ns[:len(quat)], gt_quat=quat,
-                                gt_pos=since.gt_pos[:len(quat)])
+    quat = read_asl(euroc / 'MH_02_easy').gt_quat[:len(part.gt_quat)]
+    other = dataclasses.replace(part, gt_stamp_ns=part.gt_stamp_ns[:len(quat)] - start,
+                                gt_quat=quat, gt_pos=part.gt_pos[:len(quat)])
     with pytest.raises(DatasetError, match=r'do not overlap in time \(IMU .*\), and placed at '
                                            "the IMU's start .* another recording's poses"):
         check(other)

@@ -88,6 +88,11 @@ def test_asl_state_csvs_read_as_evo_reads_them_and_their_header_says_w_first(dat
         assert ("read as ASL's state columns (velocity and biases unused)" in other.read_as
                 and ('quaternions read w first, as its header names them' in other.read_as)
                 == said)
+    # units written apart from their names; a spreadsheet's empty first row
+    tum = read_tum(_write(tmp_path / 'units.txt', [
+        ',,,,,,,', '# t [s] x [m] y [m] z [m] qw qx qy qz', '1.0 0 0 0 0.5 0.5 0.5 0.5',
+        '2.0 0 0 0 1 0 0 0']))
+    np.testing.assert_allclose(tum.quat, [[0.5, 0.5, 0.5, 0.5], [0, 0, 0, 1]])
 
 
 def test_written_poses_read_back_exactly(data_dir, tmp_path):
@@ -119,6 +124,7 @@ def test_duplicate_backward_non_finite_and_non_unit_rows_are_dropped_and_counted
     (['1.0 0 0 0 0 0 1'], 'has 7 values, not the 8 of a TUM pose'),
     ([f'1.0 {POSE} 0'], r'has 9 values, not the 8 .*, nor 11, 17 or 20 \(those 8, then'),
     ([f'1.0 {POSE}'] * 2 + [f'abc {POSE}'], 'unparsable line "abc'),  # a header only first
+    ([f'abc {POSE}', f'1.0 {POSE}'], 'unparsable line "abc'),  # no header: it holds numbers
     ([f'1.0 {POSE}', f'1.1 {POSE} 0'], 'has 9 values where the first pose has 8'),
     ([f'1.0 {POSE}', f'1e12 {POSE}'], 'stamps from 1 to 1e[+]12: neither all in seconds'),
     ([f'1e20 {POSE}', f'2e20 {POSE}'], 'stamps up to 2e[+]20: no clock in nanoseconds'),
