@@ -7,9 +7,9 @@ One pose a line, ``t x y z qx qy qz qw``: the body-to-world pose of whatever the
 tracked (often a camera: ``align: auto`` finds its frame and clock). Lines starting
 with ``#`` are comments. As tools write it: t in seconds, or in nanoseconds (ORB-SLAM3's
 EuRoC files, a ROS stamp's integer) where every stamp is at least NANOSECOND_STAMPS,
-which no clock in seconds reaches (a clock counting nanoseconds from 0 is not told
-apart: its stamps would be read as seconds, a pose every few million seconds, and
-refused as too sparse); commas between values;
+which no clock in seconds reaches, or where consecutive poses are NANOSECOND_SPACING
+apart or more (median), which no trajectory in seconds is (nanoseconds since the tool's
+start); commas between values;
 the same 8 followed by more columns that are not used (COLUMNS: ASL's state CSV as
 EuRoC, OKVIS and Kimera write it, velocity and biases; OpenVINS's covariance); a header
 line (the last comment before the first pose, or a first line that is not a number)
@@ -39,6 +39,7 @@ SUFFIXES = ('.txt', '.tum', '.csv')  # a folder of trajectories holds <recording
 MAX_NAMED = 6                 # trajectory files an error names, where none is a recording's
 UNIT_TOLERANCE = 1e-2         # a quaternion's norm off 1 by more is no pose
 NANOSECOND_STAMPS = 1e11      # a stamp this large is no clock in seconds (the year 5138)
+NANOSECOND_SPACING = 1e3      # nor poses this far apart (median): 17 min in seconds
 COLUMNS = {  # TUM's 8, then columns not used
     8: '', 11: "ASL's state columns (velocity unused)",
     17: "ASL's state columns (velocity and biases unused)",
@@ -111,13 +112,14 @@ def read_tum(path: str | Path) -> Trajectory:
     if len(rows) < 2:
         raise DatasetError(f'{path}: fewer than two usable poses')
     large = np.abs(rows[:, 0]) >= NANOSECOND_STAMPS
-    if large.any() and not large.all():
+    nano = large.all() or float(np.median(np.abs(np.diff(rows[:, 0])))) >= NANOSECOND_SPACING
+    if large.any() and not nano:
         raise DatasetError(f'{path}: stamps from {rows[:, 0].min():.6g} to '
                            f'{rows[:, 0].max():.6g}: neither all in seconds nor all in '
                            f'nanoseconds (a clock in seconds stays below {NANOSECOND_STAMPS:g})')
-    if large.all():
+    if nano:
         read_as.append('stamps read as nanoseconds')
-    scale = 1 if large.all() else 1_000_000_000
+    scale = 1 if nano else 1_000_000_000
     exact = [int((t * scale).to_integral_value(ROUND_HALF_EVEN)) for t in stamps]
     if max(map(abs, exact)) >= 2 ** 63:
         raise DatasetError(f'{path}: stamps up to {np.abs(rows[:, 0]).max():.6g}: no clock '

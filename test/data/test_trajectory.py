@@ -45,6 +45,11 @@ def test_nanosecond_stamps_and_openvins_columns_read_as_the_same_poses(data_dir,
     np.savetxt(ov, np.column_stack([rows, np.full((len(rows), 12), 1e-4)]), fmt='%.9f',
                header='timestamp(s) tx ty tz qx qy qz qw Pr11 Pr12 Pr13 Pr22 Pr23 Pr33 '
                       'Pt11 Pt12 Pt13 Pt22 Pt23 Pt33')
+    # nanoseconds since the tool's start: told apart by the poses' spacing
+    since = _write(tmp_path / 'since.txt', [f'{t - tum.stamp_ns[0]} ' + ' '.join(map(str, r))
+                                            for t, r in zip(tum.stamp_ns, rows[:, 1:])])
+    np.testing.assert_array_equal(read_tum(since).stamp_ns, tum.stamp_ns - tum.stamp_ns[0])
+    assert 'stamps read as nanoseconds' in read_tum(since).read_as
     for other, said in ((read_tum(nano), 'stamps read as nanoseconds'),
                         (read_tum(ov), "read as OpenVINS's columns (covariance unused)")):
         np.testing.assert_array_equal(other.stamp_ns, tum.stamp_ns)
@@ -126,7 +131,8 @@ def test_duplicate_backward_non_finite_and_non_unit_rows_are_dropped_and_counted
     ([f'1.0 {POSE}'] * 2 + [f'abc {POSE}'], 'unparsable line "abc'),  # a header only first
     ([f'abc {POSE}', f'1.0 {POSE}'], 'unparsable line "abc'),  # no header: it holds numbers
     ([f'1.0 {POSE}', f'1.1 {POSE} 0'], 'has 9 values where the first pose has 8'),
-    ([f'1.0 {POSE}', f'1e12 {POSE}'], 'stamps from 1 to 1e[+]12: neither all in seconds'),
+    ([f'1.0 {POSE}', f'1.1 {POSE}', f'1.2 {POSE}', f'1e12 {POSE}'],
+     'stamps from 1 to 1e[+]12: neither all in seconds'),
     ([f'1e20 {POSE}', f'2e20 {POSE}'], 'stamps up to 2e[+]20: no clock in nanoseconds'),
     ([f'nan {POSE}', f'nan {POSE}'], 'fewer than two usable poses'),
     (['1.0 0 0 zero 0 0 0 1'], 'unparsable line "1.0 0 0 zero'),
