@@ -448,12 +448,12 @@ def read_and_align(rec: Recording, max_offset_s: float = MAX_OFFSET_S
 
 def on_imu_clock(rec: Recording) -> tuple[Recording, int]:
     """
-    Return poses the IMU's stamps overlap nowhere placed to start with it, and the shift (ns).
+    Return the poses, moved to start with the IMU where it overlaps them nowhere; the shift.
 
     A trajectory stamped in time since its own start, or by the clock of the computer that
     replayed the recording, overlaps the IMU's stamps nowhere. Placed start to start, the
     rates' norms (:func:`_norm_lag`) find where it lies in the recording. Poses that
-    overlap the IMU's stamps are returned as they are, shift 0.
+    overlap the IMU's stamps are returned as they are, shift 0 (ns).
     """
     t_imu, t_gt = rec.imu_stamp_ns, rec.gt_stamp_ns
     if len(t_gt) < 2 or len(t_imu) < 2 or (t_gt[0] < t_imu[-1] and t_gt[-1] > t_imu[0]):

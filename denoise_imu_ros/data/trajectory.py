@@ -12,7 +12,7 @@ apart or more (median), which no trajectory in seconds is (nanoseconds since the
 start); commas between values;
 the same 8 followed by more columns that are not used (COLUMNS: ASL's state CSV as
 EuRoC, OKVIS and Kimera write it, velocity and biases; OpenVINS's covariance); a header
-line (the last comment before the first pose, or a first line that is not a number)
+line (the last comment before the first pose, or a first line holding no number)
 whose names put the quaternion's w first (ASL's ``q_RS_w``, Kimera's ``qw``): read so.
 Each is said. Tools write duplicate stamps (a pose written twice),
 stamps that step back (a re-initialisation rewriting its past) and rows that are not
@@ -200,7 +200,7 @@ def trajectory_file(poses: str | Path, recording: str) -> Path:
     """
     Find the trajectory of ``recording``: ``poses`` itself, or <recording>.txt in it.
 
-    Or .tum, .csv (SUFFIXES).
+    Or <recording>.tum, <recording>.csv (SUFFIXES, in that order).
 
     A name differing only in case is taken where it is the only one; where none is the
     recording's, the error names the files the folder holds.
