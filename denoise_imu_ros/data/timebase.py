@@ -24,6 +24,7 @@ from ..core.records import Recording, Sequence
 # 250 ms for a 10 Hz VIO trajectory. Interpolating across a hole would invent ground truth.
 GT_GAP_FACTOR = 2.5
 MAX_POSE_PERIOD_S = 1.0  # sparser poses cannot score an attitude between them (two, 45 s apart)
+MS_HINT_S = 10.0  # poses this far apart (median) are more likely stamped in ms than seconds
 
 
 def _between(rec: Recording, t0: int, t1: int) -> Recording:
@@ -121,7 +122,8 @@ def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,
     if period > MAX_POSE_PERIOD_S:
         raise DatasetError(f'{rec.source}: its poses come every {period:.1f} s (median): too '
                            'sparse to take an attitude between them from (one a second at '
-                           'least)')
+                           'least)' + ('; stamps in milliseconds?' if period >= MS_HINT_S
+                                       else ''))
     start, end = max(t_imu[0], t_gt[0]), min(t_imu[-1], t_gt[-1])
     if start >= end:
         raise DatasetError(f'{rec.source}: IMU and ground truth do not overlap in time '

@@ -184,6 +184,15 @@ def test_trajectory_poses_replace_the_recordings_own_and_the_drop_is_said(tmp_pa
     np.testing.assert_allclose(seq.gt_quat[:, 2], np.sin(yaw / 2), atol=1e-4)
 
 
+def test_a_trajectory_in_milliseconds_since_its_start_is_named_so(tmp_path):
+    rec_dir = write_asl(tmp_path / 'rec', n_imu=1000, yaw_rate=0.3)
+    (tmp_path / 'vio').mkdir()
+    _write(tmp_path / 'vio' / 'rec.txt', [f'{50.0 * i:.1f} {POSE}' for i in range(100)])
+    for align in ('none', 'auto'):
+        with pytest.raises(DatasetError, match=r'every 50\.0 s .*; stamps in milliseconds\?$'):
+            load_sequence(rec_dir, poses=tmp_path / 'vio', align_poses=align)
+
+
 def test_check_data_reads_a_trajectory_and_says_what_it_dropped_in_one_line(tmp_path, capsys):
     rec_dir = write_asl(tmp_path / 'rec', n_imu=1000, yaw_rate=0.3)
     traj = _yawing_trajectory(tmp_path / 'rec.txt')
