@@ -437,9 +437,9 @@ def read_and_align(rec: Recording, max_offset_s: float = MAX_OFFSET_S
     if not shift_ns:
         return read, found, how
     if not_following(found, max_offset_s):
-        raise DatasetError(f'{rec.source}: IMU and poses do not overlap in time ({spans(rec)}), '
-                           "and placed at the IMU's start the poses follow the gyro at no "
-                           "offset: another recording's poses?")
+        raise DatasetError(f'{rec.source}: the poses are on another clock than the IMU\'s '
+                           f'({spans(rec)}) and do not follow the gyro at any clock offset over '
+                           "the whole recording: another recording's trajectory?")
     moved = {**found, 'time_offset_s': found['time_offset_s'] + shift_ns * 1e-9,
              'time_offset_quarters_s': [q + shift_ns * 1e-9
                                         for q in found['time_offset_quarters_s']]}

@@ -40,10 +40,7 @@ MAX_NAMED = 6                 # trajectory files an error names, where none is a
 UNIT_TOLERANCE = 1e-2         # a quaternion's norm off 1 by more is no pose
 NANOSECOND_STAMPS = 1e11      # a stamp this large is no clock in seconds (the year 5138)
 NANOSECOND_SPACING = 1e3      # nor poses this far apart (median): 17 min in seconds
-COLUMNS = {  # TUM's 8, then columns not used
-    8: '', 11: "ASL's state columns (velocity unused)",
-    17: "ASL's state columns (velocity and biases unused)",
-    20: "OpenVINS's columns (covariance unused)"}
+COLUMNS = (8, 11, 17, 20)  # TUM's 8, then ASL's velocity and biases, OpenVINS's covariance
 
 
 @dataclass(frozen=True)
@@ -71,7 +68,7 @@ def read_tum(path: str | Path) -> Trajectory:
     """Read a TUM trajectory file; a file that is not one is a one-line error."""
     path = Path(path)
     if not path.is_file():
-        raise DatasetError(f'{path}: trajectory file not found')
+        raise DatasetError(f'{path}: no such trajectory file or folder')
     with path.open(encoding='utf-8-sig', errors='strict') as f:
         header, lines = _header_and_poses(text_lines(f, path))
     if not lines:
@@ -94,7 +91,8 @@ def read_tum(path: str | Path) -> Trajectory:
             stamps[i] = Decimal(parts[0])
         except (ValueError, InvalidOperation):
             raise DatasetError(f'{path}: unparsable line "{line.strip()[:60]}"') from None
-    read_as = [f'read as {COLUMNS[width]}'] if COLUMNS[width] else []
+    read_as = [f'the first 8 of its {width} columns read (t x y z and a quaternion), the '
+               'rest unused'] if width > 8 else []
     rows = rows[:, :8]
     if _names_w_first(header, width):
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
@@ -202,19 +200,21 @@ def trajectory_file(poses: str | Path, recording: str) -> Path:
 
     Or <recording>.tum, <recording>.csv (SUFFIXES, in that order).
 
-    A name differing only in case is taken where it is the only one; where none is the
-    recording's, the error names the files the folder holds.
+    A name differing only in case is taken where it is the only one; two for one
+    recording are an error, and where none is the recording's the error names the files
+    the folder holds.
     """
     poses = Path(poses)
     if not poses.is_dir():
         return poses
-    for suffix in SUFFIXES:
-        if (poses / f'{recording}{suffix}').is_file():
-            return poses / f'{recording}{suffix}'
     files = sorted(p for p in poses.iterdir() if p.suffix.lower() in SUFFIXES and p.is_file())
-    alike = [p for p in files if p.stem.lower() == recording.lower()]  # MH_01_EASY.TXT
+    named = [p for p in files if p.stem == recording]
+    alike = named or [p for p in files if p.stem.lower() == recording.lower()]  # MH_01_EASY
     if len(alike) == 1:
         return alike[0]
+    if alike:  # a stale file beside the right one: which is meant is the user's to say
+        raise DatasetError(f'{poses}: {len(alike)} trajectories of {recording} '
+                           f'({", ".join(p.name for p in alike)}): keep one')
     held = ', '.join(p.name for p in files[:MAX_NAMED]) + (', ...' if len(files) > MAX_NAMED
                                                            else '')
     raise DatasetError(f'{poses}: no trajectory of {recording} '

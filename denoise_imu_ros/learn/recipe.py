@@ -82,7 +82,10 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                 pose_topic: str | None = None,
                 poses: str | Path | None = None) -> tuple[dict[str, Any], list[str]]:
     """Return the recipe (a mapping of TrainConfig keys) and the reasons for each choice."""
-    reports, still, unusable = {}, [], {}
+    reports, still, unusable, asked = {}, [], {}, list(sequences)
+    if poses is not None and Path(poses).is_file() and len(sequences) > 1:
+        raise DatasetError(f'--poses {poses}: one trajectory file for {len(sequences)} '
+                           'recordings; give a folder of <recording>.txt')
     for name in sequences:
         if not (Path(data) / name).exists():  # a name mistyped: not a recording to leave out
             raise DatasetError(f'{Path(data) / name}: no such sequence folder or bag')
@@ -100,9 +103,9 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
         if _starts_still(rec.imu, report['imu_rate_hz']):
             still.append(name)
     if not reports:
-        first, *more = unusable.values()
-        raise DatasetError(first + (f' (nor any other: {", ".join(list(unusable)[1:])})'
-                                    if more else ''))
+        raise DatasetError('; '.join(unusable.values()) if len(unusable) == 1 else
+                           'no recording is usable for training: ' + '; '.join(
+                               unusable.values()))
     sequences = [n for n in sequences if n in reports]
     rate = common_rate({n: r['imu_rate_hz'] for n, r in reports.items()}, data)
     noise = [n for n, r in reports.items() if r['shortest_clean_increment'] is None]
@@ -138,9 +141,12 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     gyro_std = [max(MIN_GYRO_STD_DEG, round(1.2 * float(b), 2)) for b in bias]
     off = [n for n, r in reports.items() if r['usable'] == 'after alignment']
     # poses read another way than written are read so only where aligned (data.load)
-    other = [n for n, r in reports.items() if r['read_as']]
+    ways: dict[str, list[str]] = {}
+    for n, r in reports.items():
+        if r['read_as']:
+            ways.setdefault(r['read_as'], []).append(n)
     moved = [f'{", ".join(off)} off in clock or frame'] if off else []
-    moved += [f'{", ".join(other)} read another way than written'] if other else []
+    moved += [f'{", ".join(names)} read {way}' for way, names in ways.items()]
     recipe = {k: v for k, v in asdict(TrainConfig()).items() if k != 'device'}
     recipe.update(
         # absolute: train, crossval and tune-fusion read them from any working directory
@@ -224,6 +230,9 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     if len(sequences) < 2:
         why.append('one recording: train works, crossval (whether the network beats plain '
                    'integration on a recording it never saw) needs at least two')
+    if len(sequences) < len(asked):
+        why.append(f'the recipe uses {len(sequences)} of the {len(asked)} recordings given '
+                   f'(left out: {", ".join(n for n in asked if n not in sequences)}; above)')
     return recipe, why
 
 

@@ -51,7 +51,8 @@ def test_nanosecond_stamps_and_openvins_columns_read_as_the_same_poses(data_dir,
     np.testing.assert_array_equal(read_tum(since).stamp_ns, tum.stamp_ns - tum.stamp_ns[0])
     assert 'stamps read as nanoseconds' in read_tum(since).read_as
     for other, said in ((read_tum(nano), 'stamps read as nanoseconds'),
-                        (read_tum(ov), "read as OpenVINS's columns (covariance unused)")):
+                        (read_tum(ov), 'the first 8 of its 20 columns read (t x y z and a '
+                                       'quaternion), the rest unused')):
         np.testing.assert_array_equal(other.stamp_ns, tum.stamp_ns)
         np.testing.assert_allclose(other.quat, tum.quat, rtol=0, atol=1e-8)
         np.testing.assert_allclose(other.pos, tum.pos, rtol=0, atol=1e-8)
@@ -70,7 +71,8 @@ def test_asl_state_csvs_read_as_evo_reads_them_and_their_header_says_w_first(dat
     quat = theirs.orientations_quat_wxyz[:, [1, 2, 3, 0]]  # ours made unit, as written
     np.testing.assert_allclose(ours.quat, quat / np.linalg.norm(quat, axis=1, keepdims=True),
                                rtol=0, atol=1e-12)
-    assert ours.read_as == ("read as ASL's state columns (velocity unused)",
+    assert ours.read_as == ('the first 8 of its 11 columns read (t x y z and a quaternion), '
+                            'the rest unused',
                             'quaternions read w first, as its header names them',
                             'stamps read as nanoseconds')
     # 17 columns as Kimera (w first, named in a comment) and OKVIS (x first, a bare header
@@ -90,7 +92,7 @@ def test_asl_state_csvs_read_as_evo_reads_them_and_their_header_says_w_first(dat
             for row in rows]))
         np.testing.assert_array_equal(other.stamp_ns, ours.stamp_ns)
         np.testing.assert_allclose(other.quat, ours.quat, rtol=0, atol=1e-11)
-        assert ("read as ASL's state columns (velocity and biases unused)" in other.read_as
+        assert (other.read_as[0].startswith('the first 8 of its 17 columns read')
                 and ('quaternions read w first, as its header names them' in other.read_as)
                 == said)
     # units written apart from their names; a spreadsheet's empty first row
@@ -155,8 +157,12 @@ def test_a_folder_of_trajectories_is_looked_up_by_recording_name(tmp_path):
     _write(tmp_path / 'MH_01.TXT', [f'1.0 {POSE}', f'2.0 {POSE}'])
     assert trajectory_file(tmp_path, 'mh_01') == tmp_path / 'MH_01.TXT'
     _write(tmp_path / 'mh_01.tum', [f'1.0 {POSE}', f'2.0 {POSE}'])  # two alike: neither
-    with pytest.raises(DatasetError, match=r'no trajectory of Mh_01 .*MH_01.TXT'):
+    with pytest.raises(DatasetError, match=r'2 trajectories of Mh_01 \(MH_01.TXT, mh_01.tum\): '
+                                           'keep one'):
         trajectory_file(tmp_path, 'Mh_01')
+    _write(tmp_path / 'a.csv', [f'1.0 {POSE}', f'2.0 {POSE}'])  # a stale file beside: neither
+    with pytest.raises(DatasetError, match=r'2 trajectories of a \(a.csv, a.txt\): keep one'):
+        trajectory_file(tmp_path, 'a')
     (tmp_path / 'vio').mkdir()
     with pytest.raises(DatasetError, match='it holds none'):
         trajectory_file(tmp_path / 'vio', 'a')
