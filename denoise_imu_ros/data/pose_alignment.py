@@ -437,7 +437,7 @@ def read_and_align(rec: Recording, max_offset_s: float = MAX_OFFSET_S
     if not shift_ns:
         return read, found, how
     if not_following(found, max_offset_s):
-        raise DatasetError(f'{rec.source}: the poses are on another clock than the IMU\'s '
+        raise DatasetError(f"{rec.source}: the poses are on another clock than the IMU's "
                            f'({spans(rec)}) and do not follow the gyro at any clock offset over '
                            "the whole recording: another recording's trajectory?")
     moved = {**found, 'time_offset_s': found['time_offset_s'] + shift_ns * 1e-9,
