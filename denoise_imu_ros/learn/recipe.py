@@ -184,7 +184,11 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
             f'rest_bias off: {len(set(still) & set(sequences))} of {len(sequences)} '
             f'recordings are still within {START_STILL_S:g} s of their start; whether '
             "removing each run's turn-on bias first helps is measured with crossval "
-            '--sessions, not assumed; with it, set recording_bias too (docs/method.md)')]
+            '--sessions, not assumed; with it, set recording_bias too (docs/method.md)'
+            + ('; the poses are a trajectory estimate, whose drift over a recording the '
+               "model will learn as the gyro's bias: record a few still seconds at the "
+               'start of each run, and stillness measures the bias instead'
+               if poses is not None else ''))]
     if poses is not None:
         measured = ('not measured (no increment of that length with trusted poses)'
                     if heading is None else

@@ -231,6 +231,11 @@ def test_the_recordings_own_poses_as_tum_files_give_the_same_recipe(euroc, tmp_p
     assert any(line.startswith('rest_bias and recording_bias on: the poses are a trajectory '
                                'estimate') and '1 of 2 recordings are still' in line
                for line in said)
+    # none starting still: nothing measures the bias apart from the drift, and it is said
+    _, said = init_recipe(euroc, names[:1], poses=tmp_path)
+    assert any(line.startswith('rest_bias off: 0 of 1') and line.endswith(
+        'record a few still seconds at the start of each run, and stillness measures the bias '
+        'instead') for line in said)
     (tmp_path / 'r.yaml').write_text(f'sequences: {names}\ndata: {euroc}\n'
                                      f'poses: {tmp_path}\n')
     seen = []
