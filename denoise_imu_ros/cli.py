@@ -19,7 +19,7 @@ import threading
 from typing import Any
 import warnings
 
-from .core.errors import DataWarning, DenoiseError, OptionError, OutputError
+from .core.errors import DataNote, DataWarning, DenoiseError, OptionError, OutputError
 
 # Commands that run the torch network; the others (process-bag, play, check-data,
 # convert, init-recipe, correct --engine streaming) never import torch.
@@ -550,9 +550,10 @@ def _on_sigterm(_signum: int, _frame: object) -> None:
 
 def _data_warning(message: Warning | str, category: type[Warning], *args: Any,
                   **kwargs: Any) -> None:
-    """Say a DataWarning in one line; leave any other warning to Python's own format."""
+    """Say a DataWarning (a DataNote: a note) in one line; leave others to Python's format."""
     if issubclass(category, DataWarning):
-        print(f'warning: {message}', file=sys.stderr)
+        print(f'{"note" if issubclass(category, DataNote) else "warning"}: {message}',
+              file=sys.stderr)
     else:
         PYTHON_SHOW_WARNING(message, category, *args, **kwargs)
 

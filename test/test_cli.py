@@ -19,7 +19,7 @@ SAMPLE_DIR = SAMPLE.parent
 def _error(capsys):
     """Return the error line, which is one (after any warnings, each a line of its own)."""
     lines = capsys.readouterr().err.strip().splitlines()
-    errors = [line for line in lines if not line.startswith('warning: ')]
+    errors = [line for line in lines if not line.startswith(('warning: ', 'note: '))]
     assert len(errors) == 1, lines
     return errors[0]
 

@@ -29,3 +29,7 @@ class OptionError(DenoiseError):
 
 class DataWarning(UserWarning):
     """Something in the input was left out or is doubtful; the work goes on (said once)."""
+
+
+class DataNote(DataWarning):
+    """How an input was read where nothing was left out (nanoseconds, a header): a note."""

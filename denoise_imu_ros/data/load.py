@@ -19,7 +19,7 @@ from .pose_alignment import (apply_pose_alignment, describe, level, LEVEL_TOLERA
 from .pose_jumps import describe as describe_jumps, find_jumps, mask_jumps
 from .timebase import onto_imu_stamps
 from .trajectory import read_tum, trajectory_file, with_trajectory
-from ..core.errors import DatasetError, DataWarning
+from ..core.errors import DataNote, DatasetError, DataWarning
 from ..core.limits import check_gyro_against_poses, check_rate
 from ..core.records import check_recording, Recording, Sequence
 
@@ -52,7 +52,8 @@ def load_recording(path: str | Path, imu_topic: str | None = None,
         rec = load_imu(path, imu_topic)
         trajectory = read_tum(trajectory_file(poses, Path(path).name))
         if trajectory.summary():
-            warnings.warn(trajectory.summary(), DataWarning, stacklevel=2)
+            warnings.warn(trajectory.summary(), DataWarning if trajectory.dropped else DataNote,
+                          stacklevel=2)
         rec = with_trajectory(rec, trajectory)
         check_recording(rec, gt_file=trajectory.path)
         return rec

@@ -206,6 +206,13 @@ def test_check_data_reads_a_trajectory_and_says_what_it_dropped_in_one_line(tmp_
     out = capsys.readouterr()
     assert 'poses 20.0 Hz' in out.out
     assert out.err.startswith(f'warning: {traj}: 100 poses kept; dropped 1 duplicate stamps')
+    # read another way, nothing dropped: a note, not a warning
+    nano = _write(tmp_path / 'nano.txt', [line.split(' ', 1)[0].replace('.', '') + ' '
+                                          + line.split(' ', 1)[1] for line in
+                                          traj.read_text().splitlines()[10:]])
+    main(['check-data', str(rec_dir), '--poses', str(nano)])
+    assert re.match(rf'note: {nano}: \d+ poses kept; stamps read as nanoseconds\n',
+                    capsys.readouterr().err)
 
 
 def test_the_recordings_own_poses_as_tum_files_give_the_same_recipe(euroc, tmp_path,

@@ -65,7 +65,8 @@ def test_a_full_disk_ends_every_writing_command_with_one_line_and_nothing_half_w
     assert child.returncode == 0, child.stderr
     for name, (code, err) in zip(commands, json.loads(child.stdout)):
         assert code == 1, (name, err)
-        errors = [x for x in err.strip().splitlines() if not x.startswith('warning: ')]
+        errors = [x for x in err.strip().splitlines()
+                  if not x.startswith(('warning: ', 'note: '))]
         assert len(errors) == 1, (name, err)
         assert 'File too large' in err and str(out) in err, (name, err)
     # nothing half-written: no scratch folder, no output file but eval's complete reports
