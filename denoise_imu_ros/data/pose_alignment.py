@@ -55,6 +55,7 @@ OUTLIER_FACTOR = 6.0       # a window whose residual is beyond this times the me
 OUTLIER_MAX_FRACTION = 0.2  # more than this part of them: the poses do not follow
 MIN_EXCITATION_DEG_S = 2.0  # RMS rate about an axis below which it is not observed
 NORM_GRID_S = 0.01         # grid of the rate norms' cross-correlation (a coarse offset)
+NORM_DETREND_S = 2.0       # the norms less their moving mean over this: changes matched
 FAR_MARGIN = 0.5           # an offset beyond the search wins only below this times its residual
 OTHER_CLOCK_S = 10.0       # offsets said in s from this on (a clock since the poses' start)
 
@@ -222,8 +223,22 @@ def _norm_lag(rates: Rates) -> float:
         (rates.imu_t, np.linalg.norm(rates.imu, axis=1)), (rates.pose_t, pose))]
     if not all(np.isfinite(v).any() for v in series):
         return 0.0  # no pose rate to match (the search then finds nothing either)
-    gyro, poses = (np.nan_to_num(v - np.nanmean(v)) for v in series)
+    gyro, poses = (_detrended(v, round(NORM_DETREND_S / NORM_GRID_S)) for v in series)
     return best_lag(gyro, poses) * NORM_GRID_S
+
+
+def _detrended(values: np.ndarray, n: int) -> np.ndarray:
+    """
+    Return the values less their moving mean over n points, 0 where they are NaN.
+
+    The gyro's norm holds its bias (still: its norm, where the poses' is 0): only what
+    changes within a few seconds is matched.
+    """
+    known = np.isfinite(values)
+    window = np.ones(n)
+    total = np.convolve(np.where(known, values, 0.0), window, 'same')
+    count = np.convolve(known.astype(float), window, 'same')
+    return np.where(known, values - total / np.maximum(count, 1.0), 0.0)
 
 
 def best_lag(a: np.ndarray, b: np.ndarray) -> int:
