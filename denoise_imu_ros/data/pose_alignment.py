@@ -235,7 +235,7 @@ def _detrended(values: np.ndarray, n: int) -> np.ndarray:
     changes within a few seconds is matched.
     """
     known = np.isfinite(values)
-    window = np.ones(n)
+    window = np.ones(min(n, len(values)))  # 'same' keeps the longer of the two
     total = np.convolve(np.where(known, values, 0.0), window, 'same')
     count = np.convolve(known.astype(float), window, 'same')
     return np.where(known, values - total / np.maximum(count, 1.0), 0.0)

@@ -198,11 +198,9 @@ def trajectory_file(poses: str | Path, recording: str) -> Path:
     """
     Find the trajectory of ``recording``: ``poses`` itself, or <recording>.txt in it.
 
-    Or <recording>.tum, <recording>.csv (SUFFIXES, in that order).
-
-    A name differing only in case is taken where it is the only one; two for one
-    recording are an error, and where none is the recording's the error names the files
-    the folder holds.
+    Or <recording>.tum, <recording>.csv (SUFFIXES): two of them are an error. Where none
+    has the recording's name, one differing only in case is taken if it is the only one;
+    where none is the recording's, the error names the files the folder holds.
     """
     poses = Path(poses)
     if not poses.is_dir():

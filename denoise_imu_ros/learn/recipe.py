@@ -83,6 +83,8 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                 poses: str | Path | None = None) -> tuple[dict[str, Any], list[str]]:
     """Return the recipe (a mapping of TrainConfig keys) and the reasons for each choice."""
     reports, still, unusable, asked = {}, [], {}, list(sequences)
+    if poses is not None and not Path(poses).exists():  # said once, not per recording
+        raise DatasetError(f'--poses {poses}: no such trajectory file or folder')
     if poses is not None and Path(poses).is_file() and len(sequences) > 1:
         raise DatasetError(f'--poses {poses}: one trajectory file for {len(sequences)} '
                            'recordings; give a folder of <recording>.txt')

@@ -244,7 +244,7 @@ def test_poses_stamped_on_a_clock_the_imus_overlaps_nowhere_are_found(euroc, tmp
     still = dataclasses.replace(since, gt_stamp_ns=since.gt_stamp_ns[span] - int(20e9),
                                 gt_quat=since.gt_quat[span], gt_pos=since.gt_pos[span])
     found = read_and_align(still)[1]['time_offset_s'] - (start * 1e-9 + 20)
-    assert abs(found - base['time_offset_s']) < 0.01
+    assert abs(found - base['time_offset_s']) < 0.02  # 10 Hz: 7.5 ms here
     # poses from 45 s on (in flight), an IMU hole where they lie, not where placing them at
     # the IMU's start puts them: said, and not usable
     t = (rec.imu_stamp_ns - rec.imu_stamp_ns[0]) * 1e-9
@@ -350,6 +350,9 @@ def test_init_recipe_leaves_out_a_recording_it_cannot_use_and_names_it(euroc, tm
         init_recipe(tmp_path, ['MH_01_easy', 'mistyped'])  # said, not left out
     with pytest.raises(DatasetError, match='one trajectory file for 2 recordings; give a folder'):
         init_recipe(tmp_path, ['MH_01_easy', 'flat'], poses=csv)
+    with pytest.raises(DatasetError, match='^--poses .*vio_typo: no such trajectory file or '
+                                           'folder$'):
+        init_recipe(tmp_path, ['MH_01_easy', 'flat'], poses=tmp_path / 'vio_typo')
 
 
 def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_path, capsys):

@@ -190,6 +190,13 @@ def test_trajectory_poses_replace_the_recordings_own_and_the_drop_is_said(tmp_pa
     np.testing.assert_allclose(seq.gt_quat[:, 2], np.sin(yaw / 2), atol=1e-4)
 
 
+def test_poses_and_imu_spanning_less_than_the_norms_moving_mean_are_aligned(tmp_path):
+    from denoise_imu_ros.data.pose_alignment import _detrended
+    assert _detrended(np.ones(5), 200).tolist() == [0.0] * 5
+    seq = load_sequence(write_asl(tmp_path / 'rec', n_imu=300, yaw_rate=0.5), align_poses='auto')
+    assert len(seq) > 250  # 1.5 s: aligned (nothing to move), not a traceback
+
+
 def test_a_trajectory_in_milliseconds_since_its_start_is_named_so(tmp_path):
     rec_dir = write_asl(tmp_path / 'rec', n_imu=1000, yaw_rate=0.3)
     (tmp_path / 'vio').mkdir()
