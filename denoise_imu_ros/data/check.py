@@ -49,8 +49,9 @@ LENGTHS = (1, 2, 4, 8, 16, 32, 64, 128, 256, 512)  # increment lengths profiled 
 # are compared there too (init-recipe's heading_weight)
 DRIFT_HORIZONS_S = (5.0, 10.0, 20.0)
 # the scale error interpolating between the pose stamps makes beyond this (%): poses too
-# sparse for the motion (EuRoC: 5-10 Hz trajectories 0.9 at most, a pose every 0.2-1.0 s
-# 1.1-11 and 40 on V2_03; motion capture 0.01 at most, BROAD's and TUM-VI's too)
+# sparse for the motion (EuRoC, at VINS-Mono's aligned stamps: 10 Hz 0.4 at most, 5 Hz
+# 0.5 but 1.05 on V2_03, a pose every 0.2-1.0 s 1.6-12 and 43 on V2_03; motion capture
+# 0.01 at most, BROAD's and TUM-VI's too)
 INTERPOLATION_LIMIT_PERCENT = 1.0
 # between pose stamps, a length counts only where its increments span this much of the
 # recording (keyframes 0.2-1.0 s apart: 32 samples span almost nothing, 128 most of it)

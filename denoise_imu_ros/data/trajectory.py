@@ -4,20 +4,19 @@
 Trajectory files as VIO and SLAM tools write them (TUM format), as a recording's poses.
 
 One pose a line, ``t x y z qx qy qz qw``: the body-to-world pose of whatever the tool
-tracked (often a camera: ``align: auto`` finds its frame and clock). Lines starting
-with ``#`` are comments. As tools write it: t in seconds, or in nanoseconds (ORB-SLAM3's
+tracked (often a camera: ``align: auto`` finds its frame and clock). Lines starting with
+``#`` are comments. As tools write it: t in seconds, or in nanoseconds (ORB-SLAM3's
 EuRoC files, a ROS stamp's integer) where every stamp is at least NANOSECOND_STAMPS,
 which no clock in seconds reaches, or where consecutive poses are NANOSECOND_SPACING
 apart or more (median), which no trajectory in seconds is (nanoseconds since the tool's
-start); commas between values;
-the same 8 followed by more columns that are not used (COLUMNS: ASL's state CSV as
-EuRoC, OKVIS and Kimera write it, velocity and biases; OpenVINS's covariance); a header
-line (the last comment before the first pose, or a first line holding no number)
-whose names put the quaternion's w first (ASL's ``q_RS_w``, Kimera's ``qw``): read so.
-Each is said. Tools write duplicate stamps (a pose written twice),
-stamps that step back (a re-initialisation rewriting its past) and rows that are not
-poses (NaN, a zero quaternion): those rows are dropped and counted, and a file with
-nothing left is an error.
+start); commas between values; the same 8 followed by more columns that are not used
+(COLUMNS: ASL's state CSV as EuRoC, OKVIS and Kimera write it, velocity and biases;
+OpenVINS's covariance); a header line (the last comment before the first pose, or a
+first line holding no number) whose names put the quaternion's w first (ASL's
+``q_RS_w``, Kimera's ``qw``): read so. Each is said. Tools write duplicate stamps (a
+pose written twice), stamps that step back (a re-initialisation rewriting its past) and
+rows that are not poses (NaN, a zero quaternion): those rows are dropped and counted,
+and a file with nothing left is an error.
 """
 
 from __future__ import annotations
