@@ -340,8 +340,9 @@ def estimate_pose_alignment(rec: Recording,
         'time_offset_at_search_limit': bool(abs(offset - center) > max_offset_s - 2e-3),
         'imu_from_pose_rotation_xyzw': rot.as_quat().tolist(),
         'imu_from_pose_rotation_deg': math.degrees(rot.magnitude()),
+        # no quarter long enough to judge (a recording of seconds): no noise to weigh against
         'imu_from_pose_rotation_std_deg': float(np.sqrt(np.mean(np.square(angles)))
-                                                / math.sqrt(max(len(angles), 1))),
+                                                / math.sqrt(len(angles))) if angles else 0.0,
         'gyro_bias_vs_pose_deg_s': np.degrees(bias).tolist(),
         'gyro_scale_error_percent': _scale_error(imu - bias, aligned),
         'excitation_rms_deg_s': np.degrees(excitation).tolist(),
