@@ -35,6 +35,10 @@ POSES_OPTION = {  # a VIO's or SLAM's trajectories in place of the recordings' p
     'metavar': 'DIR', 'help': 'trajectories (TUM format: t x y z qx qy qz qw, as VIO and SLAM '
                               "tools write them; ASL's state CSV), <recording>.txt (.tum, .csv) "
                               "in DIR, in place of the recordings' own poses"}
+ESTIMATED_OPTION = {  # a bag's pose topic that is a VIO's or SLAM's, as --poses's files are
+    'action': 'store_true',
+    'help': "the recordings' poses are a VIO's or SLAM's estimate, not motion capture (a "
+            "bag's odometry topic; trajectory files given with --poses are)"}
 REST_BIAS_OPTION = {  # the node's rest_bias parameter, for the offline tools
     'choices': ('model', 'on', 'off'), 'default': 'model',
     'help': "remove the gyro's turn-on bias, estimated from stillness, before the model, "
@@ -178,7 +182,7 @@ def _init_recipe(args: argparse.Namespace) -> None:
     from .learn.recipe import init_recipe, write_recipe
     _guard_output(args.out, [Path(args.data) / s for s in args.sequences], args.overwrite)
     recipe, why = init_recipe(args.data, args.sequences, args.imu_topic, args.pose_topic,
-                              args.poses)
+                              args.poses, args.estimated_poses)
     write_recipe(args.out, recipe, why)
     print(f'wrote {args.out}:\n' + ''.join(f'  {line}\n' for line in why), end='')
 
@@ -240,7 +244,8 @@ def _eval(args: argparse.Namespace) -> None:
     _not_an_input(args.out, _report_inputs(args))  # its reports beside a recording's files
     evaluate(args.model, args.data, args.sequences, args.out, baseline=args.baseline,
              imu_topic=args.imu_topic, pose_topic=args.pose_topic, plots=not args.no_plots,
-             start_sample=args.start_sample, align_poses=args.align, poses=args.poses)
+             start_sample=args.start_sample, align_poses=args.align, poses=args.poses,
+             estimated=args.estimated_poses)
 
 
 def _noise(args: argparse.Namespace) -> None:
@@ -432,6 +437,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--align', **ALIGN_OPTION)
     p.add_argument('--no-plots', action='store_true')
     p.add_argument('--poses', **POSES_OPTION)
+    p.add_argument('--estimated-poses', **ESTIMATED_OPTION)
     p.set_defaults(func=_eval)
 
     p = sub.add_parser('noise', parents=[topics],
@@ -465,6 +471,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--out', default='recipe.yaml', help='recipe to write')
     p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.add_argument('--poses', **POSES_OPTION)
+    p.add_argument('--estimated-poses', **ESTIMATED_OPTION)
     p.set_defaults(func=_init_recipe)
 
     p = sub.add_parser('correct', parents=[topics],

@@ -135,8 +135,10 @@ def bag_messages(ts, pose_type, ros1=False):
                 twist=t['geometry_msgs/msg/Twist'](linear=vec(x=0.0, y=0.0, z=0.0),
                                                    angular=vec(x=0.0, y=0.0, z=0.0)),
                 covariance=np.zeros(36))
-            pose = t[pose_type](header=header(stamp, 'world'), child_frame_id='body',
-                                pose=cov, twist=twist)
+            pose = (t[pose_type](header=header(stamp, 'world'), pose=cov)
+                    if pose_type.endswith('PoseWithCovarianceStamped') else
+                    t[pose_type](header=header(stamp, 'world'), child_frame_id='body',
+                                 pose=cov, twist=twist))
         yield '/vicon/body', pose_type, stamp, pose
 
 

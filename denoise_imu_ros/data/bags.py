@@ -17,21 +17,23 @@ from pathlib import Path
 import struct
 import tempfile
 from typing import Any
+import warnings
 
 import numpy as np
 from rosbags.highlevel import AnyReader, AnyReaderError
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer, WriterError
 from rosbags.typesys import get_typestore, Stores
 
+from .trajectory import drop_rows, dropped_text, not_poses, out_of_order
 from ..core import msgs
 from ..core.atomic import atomic_output
-from ..core.errors import DatasetError
+from ..core.errors import DatasetError, DataWarning
 from ..core.msgs import stamp_ns
 from ..core.records import check_recording, Recording
 
 IMU_TYPE = 'sensor_msgs/msg/Imu'
 POSE_TYPES = ('geometry_msgs/msg/PoseStamped', 'geometry_msgs/msg/TransformStamped',
-              'nav_msgs/msg/Odometry')
+              'nav_msgs/msg/Odometry', 'geometry_msgs/msg/PoseWithCovarianceStamped')
 # Topic names `denoise-imu convert` writes (EuRoC's bags also call the IMU /imu0).
 IMU_TOPIC = '/imu0'
 POSE_TOPIC = '/groundtruth/pose'
@@ -44,7 +46,7 @@ def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
     """(position, orientation) of any supported pose message."""
     if msgtype == 'geometry_msgs/msg/TransformStamped':
         return msg.transform.translation, msg.transform.rotation
-    if msgtype == 'nav_msgs/msg/Odometry':
+    if msgtype in ('nav_msgs/msg/Odometry', 'geometry_msgs/msg/PoseWithCovarianceStamped'):
         return msg.pose.pose.position, msg.pose.pose.orientation
     return msg.pose.position, msg.pose.orientation
 
@@ -129,7 +131,9 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
     With ``with_pose=False`` only the IMU is read (the ground-truth arrays are empty).
     Samples are taken in header-stamp order: a recorder's transport latency reorders
     the receive order by a few milliseconds, and the stamps, not the arrival, are the
-    measurement times (process-bag runs its pipeline in the same order).
+    measurement times (process-bag runs its pipeline in the same order). Poses that are
+    none (non-finite, a quaternion off unit) or share a stamp, as a VIO's odometry can
+    hold, are dropped and counted as in a trajectory file (:mod:`.trajectory`).
     """
     path = Path(path)
     try:
@@ -150,19 +154,27 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
                     gt.append((q.x, q.y, q.z, q.w, p.x, p.y, p.z))
     except CORRUPT as err:
         raise DatasetError(f'{path}: cannot read bag: {" ".join(str(err).split())}') from err
-    if with_pose and (not imu or not gt):
-        raise DatasetError(f'{path}: {len(imu)} IMU and {len(gt)} pose messages, need both')
+    gt_order = np.argsort(np.array(gt_t, dtype=np.int64), kind='stable')
+    gt_stamps = np.array(gt_t, dtype=np.int64)[gt_order]
+    gt_arr = np.array(gt, dtype=np.float64).reshape(-1, 7)[gt_order]
+    dropped: dict[str, int] = {}
+    tum = np.column_stack([gt_stamps, gt_arr[:, 4:], gt_arr[:, :4]])  # t x y z qx qy qz qw
+    gt_stamps, gt_arr = drop_rows(not_poses(tum), dropped, gt_stamps, gt_arr)
+    gt_stamps, gt_arr = drop_rows(out_of_order(gt_stamps), dropped, gt_stamps, gt_arr)
+    if dropped:
+        warnings.warn(f'{path}: {pose_conns[0].topic}: {len(gt_stamps)} poses kept; '
+                      f'{dropped_text(dropped)}', DataWarning, stacklevel=2)
+    if with_pose and (not imu or not len(gt_stamps)):
+        raise DatasetError(f'{path}: {len(imu)} IMU and {len(gt_stamps)} pose messages'
+                           f'{" kept" if dropped else ""}, need both')
     if not imu:
         raise DatasetError(f'{path}: no IMU messages on {imu_conns[0].topic}')
     imu_order = np.argsort(np.array(imu_t, dtype=np.int64), kind='stable')
-    gt_order = np.argsort(np.array(gt_t, dtype=np.int64), kind='stable')
-    gt_arr = np.array(gt, dtype=np.float64).reshape(-1, 7)[gt_order]
     name = path.stem if path.is_file() else path.name
     rec = Recording(name=name, source=str(path),
                     imu_stamp_ns=np.array(imu_t, dtype=np.int64)[imu_order],
                     imu=np.array(imu, dtype=np.float64)[imu_order],
-                    gt_stamp_ns=np.array(gt_t, dtype=np.int64)[gt_order],
-                    gt_quat=gt_arr[:, :4], gt_pos=gt_arr[:, 4:])
+                    gt_stamp_ns=gt_stamps, gt_quat=gt_arr[:, :4], gt_pos=gt_arr[:, 4:])
     check_recording(rec)
     return rec
 

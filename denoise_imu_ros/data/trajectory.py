@@ -59,7 +59,7 @@ class Trajectory:
             return ''
         said = [f'{len(self.stamp_ns)} poses kept', *self.read_as]
         if self.dropped:
-            said.append('dropped ' + ', '.join(f'{n} {why}' for why, n in self.dropped.items()))
+            said.append(dropped_text(self.dropped))
         return f'{self.path}: ' + '; '.join(said)
 
 
@@ -97,15 +97,7 @@ def read_tum(path: str | Path) -> Trajectory:
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
         read_as.append('quaternions read w first, as its header names them')
     dropped: dict[str, int] = {}
-
-    def drop(bad: np.ndarray, why: str) -> None:
-        nonlocal rows, stamps
-        if bad.any():
-            dropped[why] = int(bad.sum())
-            rows, stamps = rows[~bad], stamps[~bad]
-    drop(~np.isfinite(rows).all(axis=1), 'non-finite rows')
-    drop(np.abs(np.linalg.norm(rows[:, 4:], axis=1) - 1) > UNIT_TOLERANCE,
-         'rows whose quaternion is not a unit one')
+    rows, stamps = drop_rows(not_poses(rows), dropped, rows, stamps)
     if len(rows) < 2:
         raise DatasetError(f'{path}: fewer than two usable poses')
     large = np.abs(rows[:, 0]) >= NANOSECOND_STAMPS
@@ -122,18 +114,49 @@ def read_tum(path: str | Path) -> Trajectory:
         raise DatasetError(f'{path}: stamps up to {np.abs(rows[:, 0]).max():.6g}: no clock '
                            'in nanoseconds')
     stamp_ns = np.array(exact, dtype=np.int64)
-    # keep each stamp above every earlier kept one: duplicates and steps back go
-    later = np.concatenate([[True], stamp_ns[1:] > np.maximum.accumulate(stamp_ns)[:-1]])
-    duplicate = ~later & np.isin(stamp_ns, stamp_ns[later])
-    if duplicate.any():
-        dropped['duplicate stamps'] = int(duplicate.sum())
-    if (~later & ~duplicate).any():
-        dropped['stamps earlier than a previous one'] = int((~later & ~duplicate).sum())
-    rows, stamp_ns = rows[later], stamp_ns[later]
+    rows, stamp_ns = drop_rows(out_of_order(stamp_ns), dropped, rows, stamp_ns)
     if len(rows) < 2:
         raise DatasetError(f'{path}: fewer than two usable poses')
     quat = rows[:, 4:] / np.linalg.norm(rows[:, 4:], axis=1, keepdims=True)
     return Trajectory(path, stamp_ns, quat, rows[:, 1:4], dropped, tuple(read_as))
+
+
+def not_poses(rows: np.ndarray) -> dict[str, np.ndarray]:
+    """Rows ``t x y z qx qy qz qw`` that are no pose, by reason: non-finite, not a unit one."""
+    finite = np.isfinite(rows).all(axis=1)
+    unit = np.abs(np.linalg.norm(np.where(finite[:, None], rows[:, 4:8], 1.0), axis=1) - 1)
+    return {'non-finite rows': ~finite,
+            'rows whose quaternion is not a unit one': finite & (unit > UNIT_TOLERANCE)}
+
+
+def out_of_order(stamp_ns: np.ndarray) -> dict[str, np.ndarray]:
+    """
+    Stamps not above every earlier kept one, by reason: a duplicate, or a step back.
+
+    Tools write a pose twice, and a re-initialisation rewrites its past: the first
+    written is kept.
+    """
+    later = np.ones(len(stamp_ns), dtype=bool)
+    later[1:] = stamp_ns[1:] > np.maximum.accumulate(stamp_ns)[:-1]
+    duplicate = ~later & np.isin(stamp_ns, stamp_ns[later])
+    return {'duplicate stamps': duplicate,
+            'stamps earlier than a previous one': ~later & ~duplicate}
+
+
+def drop_rows(bad: dict[str, np.ndarray], dropped: dict[str, int],
+              *arrays: np.ndarray) -> list[np.ndarray]:
+    """Return ``arrays`` less the rows ``bad`` marks, counting them by reason in ``dropped``."""
+    drop = np.zeros(len(arrays[0]), dtype=bool)
+    for why, rows in bad.items():
+        if rows.any():
+            dropped[why] = int(rows.sum())
+            drop |= rows
+    return [a[~drop] for a in arrays]
+
+
+def dropped_text(dropped: dict[str, int]) -> str:
+    """Say the rows :func:`drop_rows` counted."""
+    return 'dropped ' + ', '.join(f'{n} {why}' for why, n in dropped.items())
 
 
 def _header_and_poses(lines: list[str]) -> tuple[list[str], list[str]]:

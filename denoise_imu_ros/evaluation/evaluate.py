@@ -106,7 +106,8 @@ def reference_noise_deg(seq: Sequence) -> float:
 def estimate_note(noise_deg: dict[str, float]) -> str:
     """Say what figures against a VIO's or SLAM's poses can and cannot say."""
     each = ', '.join(f'{name} {v:.2f}' for name, v in noise_deg.items())
-    return ('\nReference: trajectory files (--poses), an estimate, not ground truth. Its own '
+    return ("\nReference: a VIO's or SLAM's poses (--poses, --estimated-poses), an estimate, "
+            'not ground truth. Its own '
             f'rotation noise per pose, about (against the gyro over {JUMP_WINDOW_S:g} s): '
             f'{each} deg; differences between methods below that are not resolved. Its '
             'drift over a recording is in '
@@ -125,7 +126,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
              baseline: str | None = None, imu_topic: str | None = None,
              pose_topic: str | None = None, plots: bool = True,
              start_sample: int = 0, align_poses: str = 'none',
-             poses: str | None = None) -> dict[str, Any]:
+             poses: str | None = None, estimated: bool = False) -> dict[str, Any]:
     """
     Evaluate raw, calibrated and corrected gyro; write JSON, Markdown and PNG files.
 
@@ -134,7 +135,9 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
     it, and integration starts from the ground truth at ``start_sample``. ``align_poses``
     ``auto`` moves each recording's poses onto the IMU clock and frame first (as
     ``check-data`` estimates them); what was applied is in the report. ``check`` refuses
-    poses found off them (the command line's default).
+    poses found off them (the command line's default). Where the poses are an estimate
+    (trajectory files, ``poses``, or ``estimated``: a bag's odometry topic, say), their
+    own noise is printed beside the figures.
     """
     names = recording_names(sequences)
     models, baseline = _models(model_spec, baseline)
@@ -164,7 +167,7 @@ def evaluate(model_spec: str, data: str, sequences: list[str], out: str,
         check_inputs(seq, loaded, name)
         if start_sample >= len(seq) - 1:
             raise OptionError(f'{name}: {len(seq)} samples, cannot start at {start_sample}')
-        if poses is not None:
+        if poses is not None or estimated:
             noise[name] = reference_noise_deg(seq)
         gyros = gyros_of(seq, models)
         seq = seq.tail(start_sample)

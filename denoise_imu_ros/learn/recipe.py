@@ -23,17 +23,22 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
   choice to measure with ``crossval --sessions``, not to make by rule. recording_bias
   goes with it (each recording's constant learnt apart from the model; BROAD's other
   power-on, docs/results.md).
-- under trajectory files (``poses``: a VIO's or SLAM's estimate) with a recording that
-  starts still: rest_bias and recording_bias on. The trajectory's drift over a recording
+- under a VIO's or SLAM's estimate (trajectory files, ``poses``, or ``estimated``: a
+  bag's odometry topic, say) with a recording that starts still: rest_bias and
+  recording_bias on. The trajectory's drift over a recording
   is what a model learns as the gyro's bias from it (VINS-Mono on EuRoC); the bias is
   then measured from stillness, and what each recording's trajectory adds stays apart
   from the model (docs/results.md).
-- heading_weight: 0 under trajectory files whose heading disagrees with the gyro more
+- heading_weight: 0 under an estimate whose heading disagrees with the gyro more
   than HEADING_RATIO times their tilt does (check-data's label noise at the first
   increment and over its drift horizons, 5-20 s, the largest, pooled over the
   recordings): a VIO's heading is not held by gravity, and a model taught it learns its
   drift (VINS-Mono on EuRoC: heading 2.1x tilt at 256 samples, 2.8x over 20 s; a model
-  then learns from the tilt alone); else 1.
+  then learns from the tilt alone); else 1. Not under motion capture, whose heading can
+  disagree as much where the gyro's own drift about the vertical is the larger (TUM-VI's
+  rooms pooled: 1.67 over 10 s): no figure here tells an estimate from motion capture
+  (their noise against the gyro overlaps too), so the user says which; a ratio above the
+  limit is said with the question.
 - increments_between_poses: on where the poses are too sparse for the motion on any
   recording (check-data's ``too_sparse``: interpolated between their stamps, they are off
   the gyro's scale by more than 1 %, e.g. a SLAM's keyframes), so that each increment
@@ -79,9 +84,15 @@ MIN_DRIFT_BLOCKS = 10  # a drift horizon's ratio from fewer increments, pooled, 
 
 
 def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = None,
-                pose_topic: str | None = None,
-                poses: str | Path | None = None) -> tuple[dict[str, Any], list[str]]:
-    """Return the recipe (a mapping of TrainConfig keys) and the reasons for each choice."""
+                pose_topic: str | None = None, poses: str | Path | None = None,
+                estimated: bool = False) -> tuple[dict[str, Any], list[str]]:
+    """
+    Return the recipe (a mapping of TrainConfig keys) and the reasons for each choice.
+
+    ``estimated``: the recordings' own poses are a VIO's or SLAM's estimate, as trajectory
+    files (``poses``) are.
+    """
+    estimated = estimated or poses is not None
     reports, still, unusable, asked = {}, [], {}, list(sequences)
     if poses is not None and not Path(poses).exists():  # said once, not per recording
         raise DatasetError(f'--poses {poses}: no such trajectory file or folder')
@@ -161,12 +172,12 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
     sparse = [n for n, r in reports.items() if r['too_sparse']]
     if sparse:
         recipe.update(increments_between_poses=True)
-    estimate = poses is not None and bool(set(still) & set(sequences))
+    estimate = estimated and bool(set(still) & set(sequences))
     if estimate:  # a trajectory's drift is not the gyro's bias: stillness measures that
         recipe.update(rest_bias=True, recording_bias=True)
     found = _heading_ratio(reports.values(), increments[0])
     heading, where = found if found else (None, '')
-    if poses is not None and heading is not None and heading > HEADING_RATIO:
+    if estimated and heading is not None and heading > HEADING_RATIO:
         recipe.update(heading_weight=0.0)
     why = [f'IMU rate {rate:.1f} Hz (the model is for this rate only; receptive field '
            f'511 samples = {511 / rate:.2f} s)',
@@ -190,16 +201,21 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
             + ('; the poses are a trajectory estimate, whose drift over a recording the '
                "model will learn as the gyro's bias: record a few still seconds at the "
                'start of each run, and stillness measures the bias instead'
-               if poses is not None else ''))]
-    if poses is not None:
-        measured = ('not measured (no increment of that length with trusted poses)'
-                    if heading is None else
-                    f"the poses' heading disagrees with the gyro {heading:.2f}x as much as "
-                    f'their tilt ({where})')
+               if estimated else ''))]
+    measured = ('not measured (no increment of that length with trusted poses)'
+                if heading is None else
+                f"the poses' heading disagrees with the gyro {heading:.2f}x as much as "
+                f'their tilt ({where})')
+    if estimated:
         why.append(f"heading_weight {recipe['heading_weight']:g}: {measured}; " + (
             "a heading gravity does not hold would teach the model the trajectory's "
             'drift: learnt from the tilt alone' if recipe['heading_weight'] == 0 else
             f'not above {HEADING_RATIO:g}x: both taught'))
+    elif heading is not None and heading > HEADING_RATIO:
+        why.append('heading_weight 1: the poses are taken as motion capture (not said to be '
+                   f"an estimate); {measured}, above {HEADING_RATIO:g}x, as a VIO's or "
+                   "SLAM's drifting heading does (or a gyro drifting about the vertical): if "
+                   'they are an estimate, give --estimated-poses')
     why += [f'left out: {said}' for said in unusable.values()]
     if noise:
         why.append(f'left out: {", ".join(noise)}: no increment up to 512 samples is free '
@@ -228,8 +244,8 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                'denoise-imu crossval before deploying it' if weak else
                "supervision: a constant bias fitted on each recording's poses lowers its "
                'attitude error')
-    if poses is not None:
-        why.append('poses from trajectory files, an estimate: train --calibration-only too '
+    if estimated:
+        why.append("the poses are a VIO's or SLAM's estimate: train --calibration-only too "
                    'and let crossval (recordings held out whole) choose between the two; '
                    "a recording's own tail shares its trajectory's error and chose the "
                    'network where unseen recordings did not (EuRoC, docs/results.md)')

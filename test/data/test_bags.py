@@ -3,8 +3,8 @@
 """Bags through rosbags: convert round trip, ROS 1 and ROS 2 inputs, topic errors."""
 
 from denoise_imu_ros.cli import main
-from denoise_imu_ros.core.errors import DatasetError
-from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.core.errors import DatasetError, DataWarning
+from denoise_imu_ros.data.load import load_recording, load_sequence
 from denoise_imu_ros.learn.config import load_config
 from denoise_imu_ros.learn.train import training_split
 from helpers import bag_messages, N, ROOT, ROS2, write_ros1_bag
@@ -25,14 +25,16 @@ def test_ros1_bag_with_transform_stamped_ground_truth(tmp_path):
     _check(load_sequence(write_ros1_bag(tmp_path / 'euroc_like.bag')))
 
 
-@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
-def test_ros2_bag_with_odometry_ground_truth_and_explicit_topics(tmp_path, storage):
+@pytest.mark.parametrize('storage, pose_type', [
+    ('mcap', 'nav_msgs/msg/Odometry'), ('sqlite3', 'nav_msgs/msg/Odometry'),
+    ('mcap', 'geometry_msgs/msg/PoseWithCovarianceStamped')])  # a VIO's: OpenVINS, SVO
+def test_ros2_bag_with_odometry_ground_truth_and_explicit_topics(tmp_path, storage, pose_type):
     from rosbags.rosbag2 import StoragePlugin
     path = tmp_path / 'odom'
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with Writer2(path, version=9, storage_plugin=plugin) as writer:
         conns = {}
-        for topic, msgtype, stamp, msg in bag_messages(ROS2, 'nav_msgs/msg/Odometry'):
+        for topic, msgtype, stamp, msg in bag_messages(ROS2, pose_type):
             if topic not in conns:
                 conns[topic] = writer.add_connection(topic, msgtype, typestore=ROS2)
             writer.write(conns[topic], stamp, ROS2.serialize_cdr(msg, msgtype))
@@ -137,6 +139,87 @@ def test_every_reader_takes_a_bag_in_header_stamp_order(tmp_path):
     for field in ('imu_stamp_ns', 'imu', 'gt_stamp_ns', 'gt_quat', 'gt_pos'):
         np.testing.assert_array_equal(getattr(got, field), getattr(rec, field), err_msg=field)
     assert main(['check-data', str(tmp_path / 'jittered')]) in (0, 1)  # judged, not refused
+
+
+def test_a_pose_topic_drops_and_counts_the_rows_a_trajectory_file_does(tmp_path):
+    """A VIO's odometry in a bag: a pose written twice, NaN on divergence, a bad quaternion."""
+    from denoise_imu_ros.data.trajectory import read_tum, write_tum
+    from helpers import write_asl
+    rec_dir = write_asl(tmp_path / 'asl', n_imu=1000, yaw_rate=0.3)
+    bag = tmp_path / 'bag'
+    assert main(['convert', str(rec_dir), str(bag)]) == 0
+    good = read_bag_poses(bag)
+    stamps, rows = good[0].copy(), good[1].copy()
+    rows[10, 0] = np.nan                        # x
+    rows[20, 3:] = [0.0, 0.0, 0.0, 0.5]         # a quaternion of norm 0.5
+    stamps, rows = np.insert(stamps, 31, stamps[30]), np.insert(rows, 31, rows[30], axis=0)
+    spoilt = tmp_path / 'spoilt'
+    _write_poses(rec_dir, spoilt, stamps, rows)
+    with pytest.warns(DataWarning) as said:
+        got = load_recording(spoilt)
+    (warning,) = [str(w.message) for w in said]
+    kept = len(stamps) - 3
+    assert warning == (f'{spoilt}: /groundtruth/pose: {kept} poses kept; dropped 1 non-finite '
+                       'rows, 1 rows whose quaternion is not a unit one, 1 duplicate stamps')
+    # the same rows written as a trajectory file: the same poses kept
+    traj = read_tum(write_tum(tmp_path / 'asl.txt', stamps, rows[:, 4:], rows[:, :4]))
+    assert traj.dropped == {'non-finite rows': 1, 'rows whose quaternion is not a unit one': 1,
+                            'duplicate stamps': 1}
+    np.testing.assert_array_equal(got.gt_stamp_ns, traj.stamp_ns)
+    np.testing.assert_allclose(got.gt_quat, traj.quat, atol=1e-12)
+    np.testing.assert_allclose(got.gt_pos, traj.pos, atol=1e-12)
+
+
+def read_bag_poses(bag):
+    """Return (stamps, rows qx qy qz qw x y z) of a converted bag's pose topic."""
+    from denoise_imu_ros.data.bags import read_bag
+    rec = read_bag(bag)
+    return rec.gt_stamp_ns, np.hstack([rec.gt_quat, rec.gt_pos])
+
+
+def _write_poses(rec_dir, out, stamps, rows):
+    """Write a bag of the ASL folder's IMU and these poses, as given (no check)."""
+    from denoise_imu_ros.core import msgs
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import (BAG_TYPES, imu_message, IMU_TYPE, POSE_TYPES,
+                                           TYPESTORE)
+    rec = read_asl(rec_dir, with_gt=False)
+    t = TYPESTORE.types
+    with Writer2(out, version=9) as w:
+        imu = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        pose = w.add_connection('/groundtruth/pose', POSE_TYPES[0], typestore=TYPESTORE)
+        for stamp, row in zip(rec.imu_stamp_ns.tolist(), rec.imu):
+            w.write(imu, stamp, TYPESTORE.serialize_cdr(imu_message(stamp, row[:3], row[3:]),
+                                                        IMU_TYPE))
+        for stamp, r in zip(stamps.tolist(), rows.tolist()):
+            msg = t[POSE_TYPES[0]](header=msgs.header(BAG_TYPES, stamp, 'world'), pose=t[
+                'geometry_msgs/msg/Pose'](position=t['geometry_msgs/msg/Point'](*r[4:]),
+                                          orientation=t['geometry_msgs/msg/Quaternion'](*r[:4])))
+            w.write(pose, stamp, TYPESTORE.serialize_cdr(msg, POSE_TYPES[0]))
+
+
+def test_a_vios_pose_topic_said_to_be_an_estimate_gets_its_trajectory_files_recipe(
+        data_dir, euroc, tmp_path):
+    """VINS-Mono's poses in the bag beside the IMU, as a ROS user records a VIO's run."""
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import write_bag
+    from denoise_imu_ros.data.trajectory import read_tum, with_trajectory
+    from denoise_imu_ros.learn.recipe import init_recipe
+    name, vins = 'V2_01_easy', data_dir / 'euroc_vio' / 'vins_mono'
+    rec = with_trajectory(read_asl(euroc / name, with_gt=False), read_tum(vins / f'{name}.txt'))
+    write_bag(rec, tmp_path / name, pose_topic='/vins_estimator/odometry')
+    from_files, _ = init_recipe(euroc, [name], poses=vins)
+    from_bag, said = init_recipe(tmp_path, [name], estimated=True)
+    differ = [k for k in from_files if from_files[k] != from_bag[k]]
+    assert differ == ['dataset', 'data', 'poses']
+    assert from_bag['heading_weight'] == 0.0 and from_bag['rest_bias']
+    assert any(line.startswith("the poses are a VIO's or SLAM's estimate") for line in said)
+    # not said to be one: motion capture's recipe, and the heading's figure asks
+    as_mocap, said = init_recipe(tmp_path, [name])
+    assert as_mocap['heading_weight'] == 1.0 and not as_mocap['rest_bias']
+    assert any(line.startswith('heading_weight 1: the poses are taken as motion capture')
+               and line.endswith('if they are an estimate, give --estimated-poses')
+               for line in said)
 
 
 def test_an_empty_imu_topic_or_no_pose_topic_is_named(tmp_path):

@@ -294,7 +294,11 @@ def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
     assert out.read_text().splitlines()[6].startswith('# rest_bias off: 0 of 2 recordings '
                                                       'are still within 5 s of their start')
     assert not cfg.rest_bias  # TUM-VI's rooms start moving
-    assert out.read_text().splitlines()[7].startswith(
+    # its heading disagrees as a VIO's does (the gyro's drift): taught, and the user asked
+    assert cfg.heading_weight == 1.0 and out.read_text().splitlines()[7].startswith(
+        '# heading_weight 1: the poses are taken as motion capture (not said to be an '
+        "estimate); the poses' heading disagrees with the gyro 1.75x")
+    assert out.read_text().splitlines()[8].startswith(
         '# supervision: the poses of dataset-room5_512_16 do not lower their own attitude')
     assert 'one recording' not in capsys.readouterr().out  # two: crossval can hold one out
     one = tmp_path / 'one.yaml'

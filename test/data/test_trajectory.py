@@ -237,7 +237,7 @@ def test_the_recordings_own_poses_as_tum_files_give_the_same_recipe(euroc, tmp_p
     own, _ = init_recipe(euroc, names)
     from_files, said = init_recipe(euroc, names, poses=tmp_path)
     assert from_files.pop('poses') == str(tmp_path) and own.pop('poses') is None
-    assert any(line.startswith('poses from trajectory files, an estimate: train '
+    assert any(line.startswith("the poses are a VIO's or SLAM's estimate: train "
                                '--calibration-only too') for line in said)
     # the trajectory's drift is kept out of the model; the bias comes from stillness
     assert [k for k in own if own[k] != from_files[k]] == ['rest_bias', 'recording_bias']

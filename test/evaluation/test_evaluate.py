@@ -177,6 +177,11 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
                  '--out', str(tmp_path / 'e_mocap'), '--no-plots']) == 0  # its own poses
     assert json.loads((tmp_path / 'e_mocap' / 'results.json').read_text())[
         'reference_noise_deg'] is None
+    # said to be an estimate (a bag's odometry topic): its noise beside the figures too
+    assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences', 'MH_01_easy',
+                 '--out', str(tmp_path / 'e_said'), '--no-plots', '--estimated-poses']) == 0
+    assert json.loads((tmp_path / 'e_said' / 'results.json').read_text())[
+        'reference_noise_deg']['MH_01_easy'] < 0.1
 
 
 def test_poses_that_start_after_the_stillness_score_what_the_node_publishes(tmp_path):
