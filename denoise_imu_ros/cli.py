@@ -37,8 +37,8 @@ POSES_OPTION = {  # a VIO's or SLAM's trajectories in place of the recordings' p
                               "in DIR, in place of the recordings' own poses"}
 ESTIMATED_OPTION = {  # a bag's pose topic that is a VIO's or SLAM's, as --poses's files are
     'action': 'store_true',
-    'help': "the recordings' poses are a VIO's or SLAM's estimate, not motion capture (a "
-            "bag's odometry topic; trajectory files given with --poses are)"}
+    'help': "the recordings' own poses (a bag's pose topic, an ASL folder's) are a VIO's or "
+            "SLAM's estimate, not motion capture, as trajectory files (--poses) always are"}
 REST_BIAS_OPTION = {  # the node's rest_bias parameter, for the offline tools
     'choices': ('model', 'on', 'off'), 'default': 'model',
     'help': "remove the gyro's turn-on bias, estimated from stillness, before the model, "

@@ -34,6 +34,13 @@ from ..core.records import check_recording, Recording
 IMU_TYPE = 'sensor_msgs/msg/Imu'
 POSE_TYPES = ('geometry_msgs/msg/PoseStamped', 'geometry_msgs/msg/TransformStamped',
               'nav_msgs/msg/Odometry', 'geometry_msgs/msg/PoseWithCovarianceStamped')
+# taken unnamed only where the bag holds no other pose type: RViz's /initialpose and a
+# localiser's pose (AMCL's) are of this type beside the pose source
+NAMED_POSE_TYPES = ('geometry_msgs/msg/PoseWithCovarianceStamped',)
+TF_TYPE = 'tf2_msgs/msg/TFMessage'
+# a bag's quaternions off unit by more are no pose (check_recording's band: a float32
+# publisher's, or one that never normalises, are further off than a text file's digits)
+BAG_UNIT_TOLERANCE = 0.5
 # Topic names `denoise-imu convert` writes (EuRoC's bags also call the IMU /imu0).
 IMU_TOPIC = '/imu0'
 POSE_TOPIC = '/groundtruth/pose'
@@ -52,19 +59,28 @@ def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
 
 
 def pick_connections(reader: AnyReader, topic: str | None, types: tuple[str, ...],
-                     what: str, path: Path) -> Any:
-    """Return the connections of ``topic``, checked against ``types``, or the only candidate."""
+                     what: str, path: Path, named: tuple[str, ...] = ()) -> Any:
+    """
+    Return the connections of ``topic``, checked against ``types``, or the only candidate.
+
+    A topic of a ``named`` type is a candidate only where none of another type is.
+    """
     conns = reader.connections
     listing = ', '.join(sorted({f'{c.topic} [{c.msgtype}]' for c in conns})) or 'none'
     if topic is None:
-        cands = {c.topic for c in conns if c.msgtype in types}
+        cands = ({c.topic for c in conns if c.msgtype in types and c.msgtype not in named}
+                 or {c.topic for c in conns if c.msgtype in named})
         if not cands:  # nothing to name: the bag lacks what the command needs
+            tf = any(c.msgtype == TF_TYPE for c in conns) and what == 'pose'
             raise DatasetError(f'{path}: no {what} topic ({" or ".join(types)}) in this bag'
                                + (': this command needs ground-truth poses' if what == 'pose'
-                                  else '') + f' (topics: {listing})')
+                                  else '') + f' (topics: {listing})'
+                               + ("; /tf is not read: record the pose source's own topic, or "
+                                  'give its poses as trajectory files (--poses)' if tf else ''))
         if len(cands) > 1:
-            raise DatasetError(f'{path}: {len(cands)} candidate {what} topics, pass the '
-                               f'topic name explicitly (topics: {listing})')
+            raise DatasetError(f'{path}: {len(cands)} candidate {what} topics, pass one with '
+                               f'--{what.lower()}-topic ({what.lower()}_topic in a recipe) '
+                               f'(topics: {listing})')
         topic = cands.pop()
     norm = '/' + topic.lstrip('/')  # 'imu0' and '/imu0' name the same topic
     chosen = [c for c in conns if '/' + c.topic.lstrip('/') == norm]
@@ -132,15 +148,16 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
     Samples are taken in header-stamp order: a recorder's transport latency reorders
     the receive order by a few milliseconds, and the stamps, not the arrival, are the
     measurement times (process-bag runs its pipeline in the same order). Poses that are
-    none (non-finite, a quaternion off unit) or share a stamp, as a VIO's odometry can
-    hold, are dropped and counted as in a trajectory file (:mod:`.trajectory`).
+    not poses (non-finite, a quaternion off unit by more than BAG_UNIT_TOLERANCE) or that
+    repeat a stamp, as a VIO's odometry can hold, are dropped and counted as in a
+    trajectory file (:mod:`.trajectory`); taken in stamp order, none steps back.
     """
     path = Path(path)
     try:
         with open_bag(path) as reader:
             imu_conns = pick_connections(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
-            pose_conns = (pick_connections(reader, pose_topic, POSE_TYPES, 'pose', path)
-                          if with_pose else [])
+            pose_conns = (pick_connections(reader, pose_topic, POSE_TYPES, 'pose', path,
+                                           NAMED_POSE_TYPES) if with_pose else [])
             imu_t, imu, gt_t, gt = [], [], [], []
             for conn, _, raw in reader.messages(connections=imu_conns + pose_conns):
                 msg = reader.deserialize(raw, conn.msgtype)
@@ -154,19 +171,23 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
                     gt.append((q.x, q.y, q.z, q.w, p.x, p.y, p.z))
     except CORRUPT as err:
         raise DatasetError(f'{path}: cannot read bag: {" ".join(str(err).split())}') from err
-    gt_order = np.argsort(np.array(gt_t, dtype=np.int64), kind='stable')
-    gt_stamps = np.array(gt_t, dtype=np.int64)[gt_order]
-    gt_arr = np.array(gt, dtype=np.float64).reshape(-1, 7)[gt_order]
+    gt_stamps = np.array(gt_t, dtype=np.int64)
+    gt_order = np.argsort(gt_stamps, kind='stable')
+    gt_stamps, gt_arr = gt_stamps[gt_order], np.array(gt, dtype=np.float64).reshape(-1, 7)[
+        gt_order]
     dropped: dict[str, int] = {}
-    tum = np.column_stack([gt_stamps, gt_arr[:, 4:], gt_arr[:, :4]])  # t x y z qx qy qz qw
-    gt_stamps, gt_arr = drop_rows(not_poses(tum), dropped, gt_stamps, gt_arr)
+    gt_stamps, gt_arr = drop_rows(not_poses(gt_arr, gt_arr[:, :4], BAG_UNIT_TOLERANCE),
+                                  dropped, gt_stamps, gt_arr)
     gt_stamps, gt_arr = drop_rows(out_of_order(gt_stamps), dropped, gt_stamps, gt_arr)
     if dropped:
+        unset = dropped.get('duplicate stamps', 0) > len(gt_stamps)  # most share one stamp
         warnings.warn(f'{path}: {pose_conns[0].topic}: {len(gt_stamps)} poses kept; '
-                      f'{dropped_text(dropped)}', DataWarning, stacklevel=2)
-    if with_pose and (not imu or not len(gt_stamps)):
-        raise DatasetError(f'{path}: {len(imu)} IMU and {len(gt_stamps)} pose messages'
-                           f'{" kept" if dropped else ""}, need both')
+                      f'{dropped_text(dropped)}' + (' (header stamps not set?)' if unset else ''),
+                      DataWarning, stacklevel=2)
+    if with_pose and (not imu or len(gt_stamps) < 2):
+        raise DatasetError(f'{path}: {len(imu)} IMU messages and {len(gt_stamps)} '
+                           f'{"usable " if dropped else ""}poses: need IMU messages and two '
+                           'poses at least')
     if not imu:
         raise DatasetError(f'{path}: no IMU messages on {imu_conns[0].topic}')
     imu_order = np.argsort(np.array(imu_t, dtype=np.int64), kind='stable')

@@ -417,9 +417,11 @@ def markdown(report: dict[str, Any]) -> str:
     rot = Rotation.from_quat(r['imu_from_pose_rotation_xyzw']).as_rotvec(degrees=True)
     lines += [f'  clock offset (t_imu = t_pose + offset): {offset_text(r["time_offset_s"], 2)} '
               f'+- {1e3 * r["time_offset_std_s"]:.2f} ms',
-              f'  rotation pose body -> IMU: {r["imu_from_pose_rotation_deg"]:.3f} +- '
-              f'{r["imu_from_pose_rotation_std_deg"]:.3f} deg (rotation vector '
-              + ', '.join(f'{v:+.3f}' for v in rot) + ' deg)',
+              f'  rotation pose body -> IMU: {r["imu_from_pose_rotation_deg"]:.3f} '
+              + ('deg, its spread not measured (too few poses)' if r[
+                  'imu_from_pose_rotation_std_deg'] is None else
+                 f'+- {r["imu_from_pose_rotation_std_deg"]:.3f} deg')
+              + ' (rotation vector ' + ', '.join(f'{v:+.3f}' for v in rot) + ' deg)',
               '  gyro bias against the poses (deg/s): '
               + ', '.join(f'{b:+.3f}' for b in r['gyro_bias_vs_pose_deg_s']),
               '  gyro scale error (%): '

@@ -292,9 +292,13 @@ def needs_alignment(report: dict[str, Any]) -> bool:
         ROTATION_TOLERANCE_DEG)
 
 
-def _significant(value: float, std: float, tolerance: float) -> bool:
-    """Whether an estimate is both beyond the tolerance and clear of its own noise."""
-    return abs(value) > tolerance and abs(value) > SIGNIFICANCE * std
+def _significant(value: float, std: float | None, tolerance: float) -> bool:
+    """
+    Whether an estimate is both beyond the tolerance and clear of its own noise.
+
+    An estimate whose noise was not measured (None) is not: seconds of poses.
+    """
+    return std is not None and abs(value) > tolerance and abs(value) > SIGNIFICANCE * std
 
 
 def estimate_pose_alignment(rec: Recording,
@@ -340,9 +344,9 @@ def estimate_pose_alignment(rec: Recording,
         'time_offset_at_search_limit': bool(abs(offset - center) > max_offset_s - 2e-3),
         'imu_from_pose_rotation_xyzw': rot.as_quat().tolist(),
         'imu_from_pose_rotation_deg': math.degrees(rot.magnitude()),
-        # no quarter long enough to judge (a recording of seconds): no noise to weigh against
+        # None where no quarter is long enough to judge (seconds of poses): not measured
         'imu_from_pose_rotation_std_deg': float(np.sqrt(np.mean(np.square(angles)))
-                                                / math.sqrt(len(angles))) if angles else 0.0,
+                                                / math.sqrt(len(angles))) if angles else None,
         'gyro_bias_vs_pose_deg_s': np.degrees(bias).tolist(),
         'gyro_scale_error_percent': _scale_error(imu - bias, aligned),
         'excitation_rms_deg_s': np.degrees(excitation).tolist(),

@@ -97,7 +97,7 @@ def read_tum(path: str | Path) -> Trajectory:
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
         read_as.append('quaternions read w first, as its header names them')
     dropped: dict[str, int] = {}
-    rows, stamps = drop_rows(not_poses(rows), dropped, rows, stamps)
+    rows, stamps = drop_rows(not_poses(rows, rows[:, 4:8]), dropped, rows, stamps)
     if len(rows) < 2:
         raise DatasetError(f'{path}: fewer than two usable poses')
     large = np.abs(rows[:, 0]) >= NANOSECOND_STAMPS
@@ -121,12 +121,13 @@ def read_tum(path: str | Path) -> Trajectory:
     return Trajectory(path, stamp_ns, quat, rows[:, 1:4], dropped, tuple(read_as))
 
 
-def not_poses(rows: np.ndarray) -> dict[str, np.ndarray]:
-    """Rows ``t x y z qx qy qz qw`` that are no pose, by reason: non-finite, not a unit one."""
+def not_poses(rows: np.ndarray, quat: np.ndarray,
+              tolerance: float = UNIT_TOLERANCE) -> dict[str, np.ndarray]:
+    """Rows that are no pose, by reason: non-finite, or ``quat`` off unit beyond ``tolerance``."""
     finite = np.isfinite(rows).all(axis=1)
-    unit = np.abs(np.linalg.norm(np.where(finite[:, None], rows[:, 4:8], 1.0), axis=1) - 1)
+    unit = np.abs(np.linalg.norm(np.where(finite[:, None], quat, 1.0), axis=1) - 1)
     return {'non-finite rows': ~finite,
-            'rows whose quaternion is not a unit one': finite & (unit > UNIT_TOLERANCE)}
+            'rows whose quaternion is not a unit one': finite & (unit > tolerance)}
 
 
 def out_of_order(stamp_ns: np.ndarray) -> dict[str, np.ndarray]:

@@ -2,6 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """Bags through rosbags: convert round trip, ROS 1 and ROS 2 inputs, topic errors."""
 
+import dataclasses
+
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError, DataWarning
 from denoise_imu_ros.data.load import load_recording, load_sequence
@@ -151,7 +153,8 @@ def test_a_pose_topic_drops_and_counts_the_rows_a_trajectory_file_does(tmp_path)
     good = read_bag_poses(bag)
     stamps, rows = good[0].copy(), good[1].copy()
     rows[10, 0] = np.nan                        # x
-    rows[20, 3:] = [0.0, 0.0, 0.0, 0.5]         # a quaternion of norm 0.5
+    rows[20, :4] = 0.0                          # a zero quaternion (unset)
+    rows[40, :4] *= 1.02  # off unit beyond a text file's digits, not beyond a publisher's
     stamps, rows = np.insert(stamps, 31, stamps[30]), np.insert(rows, 31, rows[30], axis=0)
     spoilt = tmp_path / 'spoilt'
     _write_poses(rec_dir, spoilt, stamps, rows)
@@ -161,10 +164,14 @@ def test_a_pose_topic_drops_and_counts_the_rows_a_trajectory_file_does(tmp_path)
     kept = len(stamps) - 3
     assert warning == (f'{spoilt}: /groundtruth/pose: {kept} poses kept; dropped 1 non-finite '
                        'rows, 1 rows whose quaternion is not a unit one, 1 duplicate stamps')
-    # the same rows written as a trajectory file: the same poses kept
+    # the same rows written as a trajectory file: the same poses kept, but the one a
+    # float32 publisher could write (a file's digits do not excuse it)
     traj = read_tum(write_tum(tmp_path / 'asl.txt', stamps, rows[:, 4:], rows[:, :4]))
-    assert traj.dropped == {'non-finite rows': 1, 'rows whose quaternion is not a unit one': 1,
+    assert traj.dropped == {'non-finite rows': 1, 'rows whose quaternion is not a unit one': 2,
                             'duplicate stamps': 1}
+    got = dataclasses.replace(got, gt_stamp_ns=np.delete(got.gt_stamp_ns, 38),
+                              gt_quat=np.delete(got.gt_quat, 38, axis=0),
+                              gt_pos=np.delete(got.gt_pos, 38, axis=0))
     np.testing.assert_array_equal(got.gt_stamp_ns, traj.stamp_ns)
     np.testing.assert_allclose(got.gt_quat, traj.quat, atol=1e-12)
     np.testing.assert_allclose(got.gt_pos, traj.pos, atol=1e-12)
@@ -229,10 +236,39 @@ def test_an_empty_imu_topic_or_no_pose_topic_is_named(tmp_path):
         w.add_connection('/pose', POSE_TYPES[0], typestore=TYPESTORE)
     with pytest.raises(DatasetError, match='no IMU messages on /imu0$'):
         read_bag(tmp_path / 'empty', with_pose=False)
-    with pytest.raises(DatasetError, match='0 IMU and 0 pose messages, need both'):
+    with pytest.raises(DatasetError, match='0 IMU messages and 0 poses: need IMU messages '
+                                           'and two poses at least'):
         read_bag(tmp_path / 'empty')
     with Writer2(tmp_path / 'imu_only', version=9) as w:
         w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
     with pytest.raises(DatasetError, match='no pose topic .* in this bag: this command needs '
                                            r'ground-truth poses \(topics: /imu0 '):
         read_bag(tmp_path / 'imu_only')
+
+
+def test_a_pose_with_covariance_topic_is_taken_unnamed_only_where_it_is_the_only_pose(tmp_path):
+    """A pose of RViz's (/initialpose) or a localiser's beside the pose source: not a second."""
+    from denoise_imu_ros.data.bags import read_bag
+    pwc = 'geometry_msgs/msg/PoseWithCovarianceStamped'
+    vicon = 'geometry_msgs/msg/TransformStamped'
+    for name, pose, others in (('beside', vicon, [pwc]), ('only', pwc, []),
+                               ('two', vicon, ['nav_msgs/msg/Odometry']),
+                               ('tf', None, ['tf2_msgs/msg/TFMessage'])):
+        with Writer2(tmp_path / name, version=9) as writer:
+            conns = {}
+            for topic, msgtype, stamp, msg in bag_messages(ROS2, pose or pwc):
+                if pose is None and topic != '/imu0':
+                    continue
+                if topic not in conns:
+                    conns[topic] = writer.add_connection(topic, msgtype, typestore=ROS2)
+                writer.write(conns[topic], stamp, ROS2.serialize_cdr(msg, msgtype))
+            for k, other in enumerate(others):
+                writer.add_connection(f'/other{k}', other, typestore=ROS2)
+    assert len(read_bag(tmp_path / 'beside').gt_stamp_ns) == N
+    assert len(read_bag(tmp_path / 'only').gt_stamp_ns) == N
+    with pytest.raises(DatasetError, match=r'2 candidate pose topics, pass one with '
+                                           r'--pose-topic \(pose_topic in a recipe\)'):
+        read_bag(tmp_path / 'two')
+    with pytest.raises(DatasetError, match=r"/tf is not read: record the pose source's own "
+                                           r'topic, or give its poses as trajectory files'):
+        read_bag(tmp_path / 'tf')

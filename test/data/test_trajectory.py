@@ -195,8 +195,13 @@ def test_poses_and_imu_spanning_less_than_the_norms_moving_mean_are_aligned(tmp_
     assert _detrended(np.ones(5), 200).tolist() == [0.0] * 5
     seq = load_sequence(write_asl(tmp_path / 'rec', n_imu=300, yaw_rate=0.5), align_poses='auto')
     assert len(seq) > 250  # 1.5 s: aligned (nothing to move), not a traceback
-    # no quarter long enough to weigh the frame's noise: none, not NaN (a JSON report's)
-    assert seq.pose_alignment['imu_from_pose_rotation_std_deg'] == 0.0
+    # no quarter long enough to weigh the frame's noise: not measured (None), not NaN (a
+    # JSON report's), and so no frame found significant, as for NaN before
+    assert seq.pose_alignment['imu_from_pose_rotation_std_deg'] is None
+    from denoise_imu_ros.data.pose_alignment import needs_alignment
+    assert not needs_alignment({'time_offset_s': 0.0, 'time_offset_std_s': 1e-4,
+                                'imu_from_pose_rotation_deg': 0.5,
+                                'imu_from_pose_rotation_std_deg': None})
 
 
 def test_a_trajectory_in_milliseconds_since_its_start_is_named_so(tmp_path):
