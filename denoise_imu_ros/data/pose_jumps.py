@@ -12,7 +12,12 @@ the gyro's own turn over it is a jump (a jump while turning fast is missed), and
 lose their trusted poses (the loss drops every increment across it). Blocks across an
 IMU hole are not judged (the gyro does not cover it). Poses on another
 clock or in another frame disagree everywhere: beyond JUMP_MAX_FRACTION of the blocks
-nothing is masked (alignment, not masking, is what they need).
+nothing is masked (alignment, not masking, is what they need). A VIO re-initialising
+after it lost track leaves a gap in its poses, which no block spans: across each gap
+the gyro less its constant bias carries the pose before it to the pose after it, and a
+pose after it beyond the blocks' limit plus GAP_DRIFT_DEG_S a second of the gap (the
+bias's error, and the poses' own drift, that the gyro carries over the gap) is in
+another world: a jump over the gap's span.
 """
 
 from __future__ import annotations
@@ -33,6 +38,9 @@ JUMP_FACTOR = 10.0
 JUMP_MAX_FRACTION = 0.2
 JUMP_MOTION_FRACTION = 0.5  # and more than this part of the gyro's own turn over the block
 HOLE_FACTOR = 1.5          # a block lasting longer than this times its length holds a hole
+# what the gyro less its fitted bias may drift a second across a gap in the poses: twice
+# VINS-Mono's largest heading drift on EuRoC (0.23 deg/s), which a bias fit on it takes in
+GAP_DRIFT_DEG_S = 0.5
 
 
 class Jump(NamedTuple):
@@ -61,8 +69,8 @@ def find_jumps(seq: Sequence) -> list[Jump]:
     # scale with it (BROAD's fast trial: 14 deg in 0.2 s at 250 deg/s), a jump does not
     steps = np.concatenate([np.zeros((1, 3)), np.cumsum(seq.imu[:-1, :3] * seq.dt[:, None], 0)])
     turn = np.degrees(np.linalg.norm(steps[starts + n] - steps[starts], axis=1))
-    bad = covered & (angle > max(JUMP_MIN_DEG, JUMP_FACTOR * float(np.median(angle)))) & (
-        angle > JUMP_MOTION_FRACTION * turn)
+    limit = max(JUMP_MIN_DEG, JUMP_FACTOR * float(np.median(angle)))
+    bad = covered & (angle > limit) & (angle > JUMP_MOTION_FRACTION * turn)
     if bad.mean() > JUMP_MAX_FRACTION:
         return []
     t = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
@@ -73,6 +81,27 @@ def find_jumps(seq: Sequence) -> list[Jump]:
             jumps[-1] = Jump(jumps[-1].start_s, end, max(jumps[-1].angle_deg, angle[k]))
         else:
             jumps.append(Jump(start, end, float(angle[k])))
+    return sorted(jumps + _over_gaps(seq, limit, t))
+
+
+def _over_gaps(seq: Sequence, limit_deg: float, t: np.ndarray) -> list[Jump]:
+    """Gaps in the poses after which the poses are in another world (module docstring)."""
+    valid = seq.gt_valid
+    edges = np.flatnonzero(np.diff(valid.astype(np.int8)))
+    # a gap: the poses trusted before it (at i) and after it (at j), none between
+    gaps = [(i, j) for i, j in zip(edges, edges[1:] + 1) if valid[i]]
+    if not gaps:
+        return []
+    gyro = seq.imu[:, :3] - _bias(seq, valid)
+    hole = HOLE_FACTOR * float(np.median(seq.dt))
+    jumps = []
+    for i, j in gaps:
+        if (seq.dt[i:j] > hole).any():
+            continue  # the gyro does not cover an IMU hole
+        bridged = integrate(seq.gt_quat[i], gyro[i:j], seq.dt[i:j])[-1]
+        angle = math.degrees((bridged.inv() * Rotation.from_quat(seq.gt_quat[j])).magnitude())
+        if angle > limit_deg + GAP_DRIFT_DEG_S * (t[j] - t[i]):
+            jumps.append(Jump(float(t[i + 1]), float(t[j - 1]), angle))
     return jumps
 
 

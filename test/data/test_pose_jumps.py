@@ -47,6 +47,31 @@ def test_motion_capture_has_no_jumps_and_a_reinitialisation_is_one(euroc):
     assert np.abs(masked.gt_pos[after] - truth.gt_pos[after]).max() < 0.3  # its span: unbridged
 
 
+def test_a_reinitialisation_after_a_gap_in_the_poses_is_one_and_a_gap_alone_none(euroc):
+    """A VIO that lost track for 3 s and started again in a new world."""
+    rec = read_asl(euroc / 'MH_04_difficult')
+    t = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
+    kept = (t < 28.0) | (t >= 31.0)
+
+    def gap(r):
+        return dataclasses.replace(r, gt_stamp_ns=r.gt_stamp_ns[kept], gt_quat=r.gt_quat[kept],
+                                   gt_pos=r.gt_pos[kept])
+    assert find_jumps(onto_imu_stamps(gap(rec))) == []  # a hole in the poses: no jump
+    seq = onto_imu_stamps(gap(_reinitialised(rec)))
+    jumps = find_jumps(seq)
+    t0 = (rec.gt_stamp_ns[0] - seq.stamp_ns[0]) * 1e-9
+    assert len(jumps) == 1 and 35 < jumps[0].angle_deg < 45
+    assert jumps[0].start_s == pytest.approx(28.0 - t0, abs=0.01)
+    assert jumps[0].end_s == pytest.approx(31.0 - t0, abs=0.01)
+    masked = mask_jumps(seq, jumps)
+    assert np.array_equal(masked.gt_valid, seq.gt_valid)  # nothing more untrusted
+    truth = onto_imu_stamps(gap(rec))
+    after = masked.gt_valid & (seq.stamp_ns >= rec.gt_stamp_ns[0] + 31_000_000_000)
+    moved = Rotation.from_quat(masked.gt_quat[after]) * Rotation.from_quat(
+        truth.gt_quat[after]).inv()
+    assert np.degrees(moved.magnitude()).max() < 0.5  # back in the world before the gap
+
+
 def test_a_placeholder_first_pose_and_a_jump_are_said_masked_and_judged_without(
         euroc, tmp_path):
     rec = _reinitialised(read_asl(euroc / 'MH_04_difficult'))
