@@ -13,7 +13,8 @@ start); commas between values; the same 8 followed by more columns that are not 
 (COLUMNS: ASL's state CSV as EuRoC, OKVIS and Kimera write it, velocity and biases;
 OpenVINS's covariance); a header line (the last comment before the first pose, or a
 first line holding no number) whose names put the quaternion's w first (ASL's
-``q_RS_w``, Kimera's ``qw``): read so. Each is said. Tools write duplicate stamps (a
+``q_RS_w``, Kimera's ``qw``): read so; without one, 11 or 17 columns are read w first
+(W_FIRST_COLUMNS: VINS-Mono's and VINS-Fusion's CSV). Each is said. Tools write duplicate stamps (a
 pose written twice), stamps that step back (a re-initialisation rewriting its past) and
 rows that are not poses (NaN, a zero quaternion): those rows are dropped and counted,
 and a file with nothing left is an error.
@@ -40,6 +41,9 @@ UNIT_TOLERANCE = 1e-2         # a quaternion's norm off 1 by more is no pose
 NANOSECOND_STAMPS = 1e11      # a stamp this large is no clock in seconds (the year 5138)
 NANOSECOND_SPACING = 1e3      # nor poses this far apart (median): 17 min in seconds
 COLUMNS = (8, 11, 17, 20)  # TUM's 8, then ASL's velocity and biases, OpenVINS's covariance
+# widths every tool writes w first (ASL's state CSV; VINS-Mono's and VINS-Fusion's CSV,
+# t x y z qw qx qy qz vx vy vz): read so where no header names the columns
+W_FIRST_COLUMNS = (11, 17)
 
 
 @dataclass(frozen=True)
@@ -96,6 +100,10 @@ def read_tum(path: str | Path) -> Trajectory:
     if _names_w_first(header, width):
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
         read_as.append('quaternions read w first, as its header names them')
+    elif len(header) != width and width in W_FIRST_COLUMNS:
+        rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
+        read_as.append(f'quaternions read w first, as every tool writing {width} columns '
+                       "writes them (ASL's state CSV, VINS-Mono's and VINS-Fusion's)")
     dropped: dict[str, int] = {}
     rows, stamps = drop_rows(not_poses(rows, rows[:, 4:8]), dropped, rows, stamps)
     if len(rows) < 2:

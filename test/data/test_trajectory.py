@@ -95,6 +95,13 @@ def test_asl_state_csvs_read_as_evo_reads_them_and_their_header_says_w_first(dat
         assert (other.read_as[0].startswith('the first 8 of its 17 columns read')
                 and ('quaternions read w first, as its header names them' in other.read_as)
                 == said)
+    # VINS-Mono's and VINS-Fusion's own CSV, no header: t[ns],x,y,z,qw,qx,qy,qz,vx,vy,vz,
+    vins = read_tum(_write(tmp_path / 'vio.csv', [
+        f'{t},' + ','.join(f'{v:.5f}' for v in (*p, q[3], *q[:3], 0.0, 0.0, 0.0)) + ','
+        for t, p, q in zip(ours.stamp_ns, ours.pos, ours.quat)]))
+    np.testing.assert_allclose(vins.quat, ours.quat, rtol=0, atol=1e-4)
+    assert vins.read_as[1] == ('quaternions read w first, as every tool writing 11 columns '
+                               "writes them (ASL's state CSV, VINS-Mono's and VINS-Fusion's)")
     # units written apart from their names; a spreadsheet's empty first row
     tum = read_tum(_write(tmp_path / 'units.txt', [
         ',,,,,,,', '# t [s] x [m] y [m] z [m] qw qx qy qz', '1.0 0 0 0 0.5 0.5 0.5 0.5',
