@@ -10,6 +10,7 @@ Every command takes either source; the reader is chosen by the path
 from __future__ import annotations
 
 import dataclasses
+import glob
 from pathlib import Path
 import warnings
 
@@ -30,13 +31,23 @@ def is_bag(path: str | Path) -> bool:
     return p.suffix in ('.bag', '.mcap', '.db3') or (p / 'metadata.yaml').is_file()
 
 
+def no_such(path: str | Path) -> DatasetError:
+    """Return the error for a recording not there, naming a bag file of that name."""
+    path = Path(path)
+    bags = sorted(p.name for p in path.parent.glob(f'{glob.escape(path.name)}.*')
+                  if is_bag(p)) if path.parent.is_dir() else []
+    return DatasetError(f'{path}: no such sequence folder or bag'
+                        + (f' (there is {", ".join(bags)}: name it with its suffix)'
+                           if bags else ''))
+
+
 def load_imu(path: str | Path, imu_topic: str | None = None) -> Recording:
     """IMU stream only (no ground truth needed) from an ASL folder or a bag."""
     if is_bag(path):
         from .bags import read_bag  # rosbags: a quarter second of import, for bags only
         return read_bag(path, imu_topic=imu_topic, with_pose=False)
     if not Path(path).exists():
-        raise DatasetError(f'{path}: no such sequence folder or bag')
+        raise no_such(path)
     return read_asl(path, with_gt=False)
 
 
@@ -61,7 +72,7 @@ def load_recording(path: str | Path, imu_topic: str | None = None,
         from .bags import read_bag  # rosbags: a quarter second of import, for bags only
         return read_bag(path, imu_topic=imu_topic, pose_topic=pose_topic)
     if not Path(path).exists():
-        raise DatasetError(f'{path}: no such sequence folder or bag')
+        raise no_such(path)
     return read_asl(path)
 
 

@@ -71,7 +71,7 @@ from ..core.limits import common_rate
 from ..data import rest_bias
 from ..data.check import (check, INTERPOLATION_LIMIT_PERCENT, interpolation_worst,
                           paper_increments)
-from ..data.load import load_recording
+from ..data.load import load_recording, no_such
 
 WINDOW_S = 80.0
 START_STILL_S = 5.0  # a recording still within this many seconds of its start starts still
@@ -101,7 +101,7 @@ def init_recipe(data: str | Path, sequences: list[str], imu_topic: str | None = 
                            'recordings; give a folder of <recording>.txt')
     for name in sequences:
         if not (Path(data) / name).exists():  # a name mistyped: not a recording to leave out
-            raise DatasetError(f'{Path(data) / name}: no such sequence folder or bag')
+            raise no_such(Path(data) / name)
         try:
             rec = load_recording(Path(data) / name, imu_topic, pose_topic, poses)
             report = check(rec)

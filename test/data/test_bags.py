@@ -25,6 +25,11 @@ def _check(seq):
 
 def test_ros1_bag_with_transform_stamped_ground_truth(tmp_path):
     _check(load_sequence(write_ros1_bag(tmp_path / 'euroc_like.bag')))
+    # named without its suffix: not found, and the bag of that name said
+    with pytest.raises(DatasetError, match=r'euroc_like: no such sequence folder or bag '
+                                           r'\(there is euroc_like\.bag: name it with its '
+                                           r'suffix\)$'):
+        load_sequence(tmp_path / 'euroc_like')
 
 
 @pytest.mark.parametrize('storage, pose_type', [
