@@ -16,8 +16,13 @@ nothing is masked (alignment, not masking, is what they need). A VIO re-initiali
 after it lost track leaves a gap in its poses, which no block spans: across each gap
 the gyro less its constant bias carries the pose before it to the pose after it, and a
 pose after it beyond the blocks' limit plus GAP_DRIFT_DEG_S a second of the gap (the
-bias's error, and the poses' own drift, that the gyro carries over the gap) is in
-another world: a jump over the gap's span.
+bias's error, and the poses' own drift, that the gyro carries over the gap) is a jump
+over the gap's span: said, and not rejoined. The poses after it may be in a new world (a
+VIO re-initialising), or back in the world of before, where a SLAM relocalised in its
+map after its poses had drifted before it lost track (ORB-SLAM2 on EuRoC's V2_03, as its
+motion capture shows): moved into the world of the poses before the gap, those are
+further from the truth, not nearer. Figures between poses (training's loss, check-data's
+label noise) never span a gap; attitude errors from the first pose carry such a jump.
 """
 
 from __future__ import annotations
@@ -49,6 +54,7 @@ class Jump(NamedTuple):
     start_s: float
     end_s: float
     angle_deg: float      # the largest block error in it
+    over_gap: bool = False  # a gap in the poses, not a block of them
 
 
 def _block(seq: Sequence) -> int:
@@ -101,7 +107,7 @@ def _over_gaps(seq: Sequence, limit_deg: float, t: np.ndarray) -> list[Jump]:
         bridged = integrate(seq.gt_quat[i], gyro[i:j], seq.dt[i:j])[-1]
         angle = math.degrees((bridged.inv() * Rotation.from_quat(seq.gt_quat[j])).magnitude())
         if angle > limit_deg + GAP_DRIFT_DEG_S * (t[j] - t[i]):
-            jumps.append(Jump(float(t[i + 1]), float(t[j - 1]), angle))
+            jumps.append(Jump(float(t[i + 1]), float(t[j - 1]), angle, over_gap=True))
     return jumps
 
 
@@ -113,7 +119,8 @@ def mask_jumps(seq: Sequence, jumps: list[Jump]) -> Sequence:
     after the span is moved back into the world before it, bridged by the gyro less its
     constant bias fitted on the poses (the span lasts a fraction of a second), so that an
     attitude error from the first pose measures the gyro, not the jump. A jump at the
-    start (a placeholder pose) has no world before it: nothing is moved.
+    start (a placeholder pose) has no world before it: nothing is moved; nor after a jump
+    over a gap (module docstring).
     """
     if not jumps:
         return seq
@@ -123,7 +130,7 @@ def mask_jumps(seq: Sequence, jumps: list[Jump]) -> Sequence:
         valid[(t >= jump.start_s) & (t <= jump.end_s)] = False
     quat, pos = seq.gt_quat.copy(), seq.gt_pos.copy()
     gyro = seq.imu[:, :3] - _bias(seq, valid)
-    for jump in jumps:
+    for jump in (j for j in jumps if not j.over_gap):
         before = np.flatnonzero(valid & (t < jump.start_s))
         after = np.flatnonzero(valid & (t > jump.end_s))
         if not len(before) or not len(after):
@@ -144,9 +151,13 @@ def _bias(seq: Sequence, valid: np.ndarray) -> np.ndarray:
 
 def describe(jumps: list[Jump], most: int = 3) -> str:
     """Return the jumps in words: how many, and the first few spans."""
-    spans = ', '.join(f'{j.start_s:.1f}-{j.end_s:.1f} s ({j.angle_deg:.0f} deg)'
-                      for j in jumps[:most])
+    spans = ', '.join(f'{j.start_s:.1f}-{j.end_s:.1f} s ({j.angle_deg:.0f} deg'
+                      + (', over a gap)' if j.over_gap else ')') for j in jumps[:most])
     more = f' and {len(jumps) - most} more' if len(jumps) > most else ''
+    gaps = sum(j.over_gap for j in jumps)
     return (f'{len(jumps)} pose jump{"s" if len(jumps) > 1 else ""} the gyro cannot explain '
             f'(a VIO re-initialising, a placeholder pose?), masked: {spans}{more}; '
-            f'{math.fsum(j.end_s - j.start_s for j in jumps):.1f} s in all')
+            f'{math.fsum(j.end_s - j.start_s for j in jumps):.1f} s in all'
+            + ('; over a gap in the poses, not rejoined: the poses after it are in a new world '
+               '(a VIO re-initialising) or back in the one before (a SLAM relocalising), '
+               'and attitude errors from the first pose carry it' if gaps else ''))

@@ -9,7 +9,7 @@ from denoise_imu_ros.data.asl import read_asl
 from denoise_imu_ros.data.bags import write_bag
 from denoise_imu_ros.data.check import check
 from denoise_imu_ros.data.load import load_sequence
-from denoise_imu_ros.data.pose_jumps import find_jumps, mask_jumps
+from denoise_imu_ros.data.pose_jumps import describe, find_jumps, mask_jumps
 from denoise_imu_ros.data.timebase import onto_imu_stamps
 import numpy as np
 import pytest
@@ -63,13 +63,15 @@ def test_a_reinitialisation_after_a_gap_in_the_poses_is_one_and_a_gap_alone_none
     assert len(jumps) == 1 and 35 < jumps[0].angle_deg < 45
     assert jumps[0].start_s == pytest.approx(28.0 - t0, abs=0.01)
     assert jumps[0].end_s == pytest.approx(31.0 - t0, abs=0.01)
+    assert jumps[0].over_gap and describe(jumps).endswith(
+        '(40 deg, over a gap); 3.0 s in all; over a gap in the poses, not rejoined: the poses '
+        'after it are in a new world (a VIO re-initialising) or back in the one before (a '
+        'SLAM relocalising), and attitude errors from the first pose carry it')
+    # which of the two the gyro cannot tell (a SLAM's drift before it lost track looks
+    # like a new world after): said, and the poses left as written
     masked = mask_jumps(seq, jumps)
-    assert np.array_equal(masked.gt_valid, seq.gt_valid)  # nothing more untrusted
-    truth = onto_imu_stamps(gap(rec))
-    after = masked.gt_valid & (seq.stamp_ns >= rec.gt_stamp_ns[0] + 31_000_000_000)
-    moved = Rotation.from_quat(masked.gt_quat[after]) * Rotation.from_quat(
-        truth.gt_quat[after]).inv()
-    assert np.degrees(moved.magnitude()).max() < 0.5  # back in the world before the gap
+    assert np.array_equal(masked.gt_valid, seq.gt_valid)
+    assert np.array_equal(masked.gt_quat, seq.gt_quat)
 
 
 def test_a_placeholder_first_pose_and_a_jump_are_said_masked_and_judged_without(
