@@ -158,6 +158,7 @@ def describe(jumps: list[Jump], most: int = 3) -> str:
     return (f'{len(jumps)} pose jump{"s" if len(jumps) > 1 else ""} the gyro cannot explain '
             f'(a VIO re-initialising, a placeholder pose?), masked: {spans}{more}; '
             f'{math.fsum(j.end_s - j.start_s for j in jumps):.1f} s in all'
-            + ('; over a gap in the poses, not rejoined: the poses after it are in a new world '
-               '(a VIO re-initialising) or back in the one before (a SLAM relocalising), '
-               'and attitude errors from the first pose carry it' if gaps else ''))
+            + ('; those over a gap in the poses are not rejoined: the poses after each are in '
+               'a new world (a VIO re-initialising) or back in the one before (a SLAM '
+               'relocalising), and attitude errors from the first pose carry them'
+               if gaps else ''))

@@ -25,10 +25,10 @@ recording; everything else is the reference recipe (``TrainConfig`` defaults):
   power-on, docs/results.md).
 - under a VIO's or SLAM's estimate (trajectory files, ``poses``, or ``estimated``: a
   bag's odometry topic, say) with a recording that starts still: rest_bias and
-  recording_bias on. The trajectory's drift over a recording
-  is what a model learns as the gyro's bias from it (VINS-Mono on EuRoC); the bias is
-  then measured from stillness, and what each recording's trajectory adds stays apart
-  from the model (docs/results.md).
+  recording_bias on. The trajectory's drift over a recording is what a model learns as
+  the gyro's bias from it (VINS-Mono on EuRoC); the bias is then measured from
+  stillness, and what each recording's trajectory adds stays apart from the model
+  (docs/results.md).
 - heading_weight: 0 under an estimate whose heading disagrees with the gyro more
   than HEADING_RATIO times their tilt does (check-data's label noise at the first
   increment and over its drift horizons, 5-20 s, the largest, pooled over the

@@ -1,7 +1,7 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
 """
-Poses after a jump over a gap: nearer the motion capture as written, or moved back?
+Poses after a jump over a gap, as written and moved back, against the motion capture.
 
 For each EuRoC recording whose trajectory (TUM files in SRC) has jumps over gaps in its
 poses, the trajectory aligned in clock and frame as ``align: auto`` aligns it, against

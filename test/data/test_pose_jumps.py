@@ -64,9 +64,9 @@ def test_a_reinitialisation_after_a_gap_in_the_poses_is_one_and_a_gap_alone_none
     assert jumps[0].start_s == pytest.approx(28.0 - t0, abs=0.01)
     assert jumps[0].end_s == pytest.approx(31.0 - t0, abs=0.01)
     assert jumps[0].over_gap and describe(jumps).endswith(
-        '(40 deg, over a gap); 3.0 s in all; over a gap in the poses, not rejoined: the poses '
-        'after it are in a new world (a VIO re-initialising) or back in the one before (a '
-        'SLAM relocalising), and attitude errors from the first pose carry it')
+        '(40 deg, over a gap); 3.0 s in all; those over a gap in the poses are not rejoined: '
+        'the poses after each are in a new world (a VIO re-initialising) or back in the one '
+        'before (a SLAM relocalising), and attitude errors from the first pose carry them')
     # which of the two the gyro cannot tell (a SLAM's drift before it lost track looks
     # like a new world after): said, and the poses left as written
     masked = mask_jumps(seq, jumps)
