@@ -34,6 +34,7 @@ from ..core.schema import ModelMeta, REST_ONLY
 from ..data import rest_bias
 from ..data.check import label_noise
 from ..data.load import load_sequence
+from ..data.pose_alignment import offset_text
 from ..data.pose_jumps import JUMP_WINDOW_S
 from ..learn.checkpoint import load_model, LoadedModel
 
@@ -263,6 +264,18 @@ def _report(models: dict[str, LoadedModel], baseline: str | None, data: str,
     return report
 
 
+def _moved_note(results: dict[str, Any]) -> str:
+    """Say the clock offset and frame rotation ``--align auto`` applied to each recording."""
+    said = []
+    for name, r in results.items():
+        if 'pose_alignment' in r:
+            turn = Rotation.from_quat(r['pose_alignment']['imu_from_pose_rotation_xyzw'])
+            said.append(f'{name} {offset_text(r["pose_alignment"]["time_offset_s"])}, '
+                        f'{np.degrees(turn.magnitude()):.2f} deg')
+    return ("\nPoses moved onto the IMU's clock and frame first (--align auto; t_imu = t_pose "
+            f'+ offset): {"; ".join(said)}.\n' if said else '')
+
+
 def _write(out_dir: Path, report: dict[str, Any], rest_only: bool) -> None:
     """Write ``results.json`` and ``results.md``; print the tables."""
     write_text(out_dir / 'results.json', jsonio.dumps(report, indent=2))
@@ -278,6 +291,7 @@ def _write(out_dir: Path, report: dict[str, Any], rest_only: bool) -> None:
                   'it, as online.\n')
     if report['start_sample']:
         table += f'\nScored from sample {report["start_sample"]} on of every recording.\n'
+    table += _moved_note(results)
     if report['training_fit_note']:
         table += f'\nNote: {report["training_fit_note"]}\n'
     if report['reference_noise_deg']:

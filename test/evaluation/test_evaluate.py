@@ -3,6 +3,7 @@
 """eval and correct: tables, figures, chunked batch correction."""
 
 import json
+import re
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.data.load import load_imu
@@ -173,6 +174,9 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
     assert json.loads((tmp_path / 'e_keyframes' / 'results.json').read_text())[
         'reference_noise_deg']['MH_01_easy'] < 0.25
     assert 'an estimate, not ground truth' in (tmp_path / 'e_noisy' / 'results.md').read_text()
+    assert re.search(r"Poses moved onto the IMU's clock and frame first \(--align auto; t_imu = "
+                     r't_pose \+ offset\): MH_01_easy [+-]0\.\d ms, 0\.\d\d deg\.',
+                     (tmp_path / 'e_noisy' / 'results.md').read_text())
     assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences', 'MH_01_easy',
                  '--out', str(tmp_path / 'e_mocap'), '--no-plots']) == 0  # its own poses
     assert json.loads((tmp_path / 'e_mocap' / 'results.json').read_text())[
