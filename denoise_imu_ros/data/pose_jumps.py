@@ -53,7 +53,7 @@ class Jump(NamedTuple):
 
     start_s: float
     end_s: float
-    angle_deg: float      # the largest block error in it
+    angle_deg: float      # the largest block error in it, or the pose's after a gap
     over_gap: bool = False  # a gap in the poses, not a block of them
 
 
@@ -63,7 +63,7 @@ def _block(seq: Sequence) -> int:
 
 
 def find_jumps(seq: Sequence) -> list[Jump]:
-    """Spans whose pose increments the gyro cannot explain (merged where they touch)."""
+    """Spans whose pose increments the gyro cannot explain (merged where they touch), and gaps."""
     n = _block(seq)
     starts = trusted_blocks(seq.gt_valid, n)
     if len(starts) < 2:
@@ -87,10 +87,11 @@ def find_jumps(seq: Sequence) -> list[Jump]:
             jumps[-1] = Jump(jumps[-1].start_s, end, max(jumps[-1].angle_deg, angle[k]))
         else:
             jumps.append(Jump(start, end, float(angle[k])))
-    return sorted(jumps + _over_gaps(seq, limit, t))
+    return sorted(jumps + _over_gaps(seq, limit, t, jumps))
 
 
-def _over_gaps(seq: Sequence, limit_deg: float, t: np.ndarray) -> list[Jump]:
+def _over_gaps(seq: Sequence, limit_deg: float, t: np.ndarray,
+               jumps: list[Jump]) -> list[Jump]:
     """Gaps in the poses after which the poses are in another world (module docstring)."""
     valid = seq.gt_valid
     edges = np.flatnonzero(np.diff(valid.astype(np.int8)))
@@ -98,17 +99,20 @@ def _over_gaps(seq: Sequence, limit_deg: float, t: np.ndarray) -> list[Jump]:
     gaps = [(i, j) for i, j in zip(edges, edges[1:] + 1) if valid[i]]
     if not gaps:
         return []
-    gyro = seq.imu[:, :3] - _bias(seq, valid)
+    fitted = valid.copy()  # the bias fitted without the jumps already found
+    for jump in jumps:
+        fitted[(t >= jump.start_s) & (t <= jump.end_s)] = False
+    gyro = seq.imu[:, :3] - _bias(seq, fitted)
     hole = HOLE_FACTOR * float(np.median(seq.dt))
-    jumps = []
+    found = []
     for i, j in gaps:
         if (seq.dt[i:j] > hole).any():
             continue  # the gyro does not cover an IMU hole
         bridged = integrate(seq.gt_quat[i], gyro[i:j], seq.dt[i:j])[-1]
         angle = math.degrees((bridged.inv() * Rotation.from_quat(seq.gt_quat[j])).magnitude())
         if angle > limit_deg + GAP_DRIFT_DEG_S * (t[j] - t[i]):
-            jumps.append(Jump(float(t[i + 1]), float(t[j - 1]), angle, over_gap=True))
-    return jumps
+            found.append(Jump(float(t[i + 1]), float(t[j - 1]), angle, over_gap=True))
+    return found
 
 
 def mask_jumps(seq: Sequence, jumps: list[Jump]) -> Sequence:
@@ -136,6 +140,9 @@ def mask_jumps(seq: Sequence, jumps: list[Jump]) -> Sequence:
         if not len(before) or not len(after):
             continue
         i, j = before[-1], after[0]
+        if not seq.gt_valid[i:j + 1][(t[i:j + 1] < jump.start_s) | (t[i:j + 1] > jump.end_s)
+                                     ].all():
+            continue  # a gap beside the jump: as over a gap, not moved
         bridged = integrate(quat[i], gyro[i:j], seq.dt[i:j])[-1]
         turn = bridged * Rotation.from_quat(quat[j]).inv()  # the world change at the jump
         quat[j:] = (turn * Rotation.from_quat(quat[j:])).as_quat()
@@ -155,9 +162,11 @@ def describe(jumps: list[Jump], most: int = 3) -> str:
                       + (', over a gap)' if j.over_gap else ')') for j in jumps[:most])
     more = f' and {len(jumps) - most} more' if len(jumps) > most else ''
     gaps = sum(j.over_gap for j in jumps)
+    causes = ['a VIO re-initialising', 'a placeholder pose'] + (
+        ['a SLAM relocalising', 'motion capture at a hole'] if gaps else [])
     return (f'{len(jumps)} pose jump{"s" if len(jumps) > 1 else ""} the gyro cannot explain '
-            f'(a VIO re-initialising, a placeholder pose?), masked: {spans}{more}; '
-            f'{math.fsum(j.end_s - j.start_s for j in jumps):.1f} s in all'
+            f'({", ".join(causes)}?), {"found" if gaps == len(jumps) else "masked"}: '
+            f'{spans}{more}; {math.fsum(j.end_s - j.start_s for j in jumps):.1f} s in all'
             + ('; those over a gap in the poses are not rejoined: the poses after each are in '
                'a new world (a VIO re-initialising) or back in the one before (a SLAM '
                'relocalising), and attitude errors from the first pose carry them'

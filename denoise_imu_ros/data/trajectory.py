@@ -13,11 +13,12 @@ start); commas between values; the same 8 followed by more columns that are not 
 (COLUMNS: ASL's state CSV as EuRoC, OKVIS and Kimera write it, velocity and biases;
 OpenVINS's covariance); a header line (the last comment before the first pose, or a
 first line holding no number) whose names put the quaternion's w first (ASL's
-``q_RS_w``, Kimera's ``qw``): read so; without one, 11 or 17 columns are read w first
-(W_FIRST_COLUMNS: VINS-Mono's and VINS-Fusion's CSV). Each is said. Tools write duplicate stamps (a
-pose written twice), stamps that step back (a re-initialisation rewriting its past) and
-rows that are not poses (NaN, a zero quaternion): those rows are dropped and counted,
-and a file with nothing left is an error.
+``q_RS_w``, Kimera's ``qw``): read so; where no header names them, 11 or 17 columns are
+read w first (W_FIRST_COLUMNS: VINS-Mono's and VINS-Fusion's CSV). Each is said. Tools
+write duplicate stamps (a pose written twice), stamps that step back (a
+re-initialisation rewriting its past) and rows that are not poses (NaN, a zero
+quaternion): those rows are dropped and counted, and a file with nothing left is an
+error.
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ NANOSECOND_STAMPS = 1e11      # a stamp this large is no clock in seconds (the y
 NANOSECOND_SPACING = 1e3      # nor poses this far apart (median): 17 min in seconds
 COLUMNS = (8, 11, 17, 20)  # TUM's 8, then ASL's velocity and biases, OpenVINS's covariance
 # widths every tool writes w first (ASL's state CSV; VINS-Mono's and VINS-Fusion's CSV,
-# t x y z qw qx qy qz vx vy vz): read so where no header names the columns
+# t x y z qw qx qy qz vx vy vz): read so where no header names the quaternion's columns
 W_FIRST_COLUMNS = (11, 17)
 
 
@@ -97,10 +98,11 @@ def read_tum(path: str | Path) -> Trajectory:
     read_as = [f'the first 8 of its {width} columns read (t x y z and a quaternion), the '
                'rest unused'] if width > 8 else []
     rows = rows[:, :8]
-    if _names_w_first(header, width):
+    named = _quaternion_named(header)
+    if named == 'wxyz':
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
         read_as.append('quaternions read w first, as its header names them')
-    elif len(header) != width and width in W_FIRST_COLUMNS:
+    elif named is None and width in W_FIRST_COLUMNS:
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
         read_as.append(f'quaternions read w first, as every tool writing {width} columns '
                        "writes them (ASL's state CSV, VINS-Mono's and VINS-Fusion's)")
@@ -203,9 +205,14 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def _names_w_first(header: list[str], width: int) -> bool:
-    """Whether a header naming every column puts the quaternion's w first (qw qx qy qz)."""
-    return len(header) == width and [n[-1:].lower() for n in header[4:8]] == list('wxyz')
+def _quaternion_named(header: list[str]) -> str | None:
+    """
+    Return the order a header names the quaternion's columns in (``wxyz``, ``xyzw``), or None.
+
+    The 5th to 8th names, the first 8 being t, x, y, z and the quaternion's (more may follow).
+    """
+    order = ''.join(n[-1:].lower() for n in header[4:8])
+    return order if len(header) >= 8 and order in ('wxyz', 'xyzw') else None
 
 
 def write_tum(path: str | Path, stamp_ns: np.ndarray, pos: np.ndarray,

@@ -102,6 +102,14 @@ def test_asl_state_csvs_read_as_evo_reads_them_and_their_header_says_w_first(dat
     np.testing.assert_allclose(vins.quat, ours.quat, rtol=0, atol=1e-4)
     assert vins.read_as[1] == ('quaternions read w first, as every tool writing 11 columns '
                                "writes them (ASL's state CSV, VINS-Mono's and VINS-Fusion's)")
+    # a header that names the first 8 columns x first decides, and a comment that names no
+    # quaternion does not
+    for comment, order in (('# timestamp tx ty tz qx qy qz qw', [0, 1, 2, 3]),
+                           ('# written by my VIO', [3, 0, 1, 2])):
+        other = read_tum(_write(tmp_path / 'eleven.txt', [comment] + [
+            f'{t} ' + ' '.join(f'{v:.9f}' for v in (*p, *q[order], 0.0, 0.0, 0.0))
+            for t, p, q in zip(ours.stamp_ns, ours.pos, ours.quat)]))
+        np.testing.assert_allclose(other.quat, ours.quat, rtol=0, atol=1e-8)
     # units written apart from their names; a spreadsheet's empty first row
     tum = read_tum(_write(tmp_path / 'units.txt', [
         ',,,,,,,', '# t [s] x [m] y [m] z [m] qw qx qy qz', '1.0 0 0 0 0.5 0.5 0.5 0.5',
