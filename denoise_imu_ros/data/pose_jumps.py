@@ -92,7 +92,7 @@ def find_jumps(seq: Sequence) -> list[Jump]:
 
 def _over_gaps(seq: Sequence, limit_deg: float, t: np.ndarray,
                jumps: list[Jump]) -> list[Jump]:
-    """Gaps in the poses after which the poses are in another world (module docstring)."""
+    """Gaps in the poses across which the gyro cannot carry the pose before to the one after."""
     valid = seq.gt_valid
     edges = np.flatnonzero(np.diff(valid.astype(np.int8)))
     # a gap: the poses trusted before it (at i) and after it (at j), none between

@@ -99,13 +99,13 @@ def read_tum(path: str | Path) -> Trajectory:
                'rest unused'] if width > 8 else []
     rows = rows[:, :8]
     named = _quaternion_named(header)
-    if named == 'wxyz':
+    w_first = ('as its header names them' if named == 'wxyz' else
+               f"as every tool writing {width} columns writes them (ASL's state CSV, "
+               "VINS-Mono's and VINS-Fusion's)" if named is None and width in W_FIRST_COLUMNS
+               else None)
+    if w_first:
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
-        read_as.append('quaternions read w first, as its header names them')
-    elif named is None and width in W_FIRST_COLUMNS:
-        rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
-        read_as.append(f'quaternions read w first, as every tool writing {width} columns '
-                       "writes them (ASL's state CSV, VINS-Mono's and VINS-Fusion's)")
+        read_as.append(f'quaternions read w first, {w_first}')
     dropped: dict[str, int] = {}
     rows, stamps = drop_rows(not_poses(rows, rows[:, 4:8]), dropped, rows, stamps)
     if len(rows) < 2:
