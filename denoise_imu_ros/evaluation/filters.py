@@ -111,7 +111,7 @@ def grid(kind: str, accel_bias: tuple[float, float, float] | None = None) -> lis
 def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
         stamp_ns: np.ndarray | None = None) -> np.ndarray:
     """
-    Orientation (N, 4) xyzw at every stamp; sample k - 1's gyro drives the step to k.
+    Orientation (N, 4) xyzw at every stamp; sample k's gyro drives the step to stamp k.
 
     With ``stamp_ns``, VQF integrates the real intervals as the node does (the baselines
     step by one period: the recordings scored have none missing).
@@ -120,10 +120,8 @@ def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
         return fuse(gyro, accel, rate_hz, flt.settings,
                     None if stamp_ns is None else step_periods(stamp_ns, rate_hz))
     accel = accel - np.array(flt.accel_bias_m_s2)  # as fuse does
-    shifted = np.zeros((len(gyro), 3))
-    shifted[1:] = gyro[:-1]
-    if flt.kind == 'madgwick':
-        wxyz = ahrs.filters.Madgwick(gyr=shifted, acc=accel, frequency=rate_hz,
+    if flt.kind == 'madgwick':  # its sample 0 sets the tilt, sample k steps to k
+        wxyz = ahrs.filters.Madgwick(gyr=gyro, acc=accel, frequency=rate_hz,
                                      gain=flt.gain).Q
     else:
         fusion = imufusion.Ahrs()
@@ -134,7 +132,7 @@ def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
         fusion.set_settings(settings)
         fusion.skip_startup()  # as the others: the first accelerometer sets the tilt
         wxyz = np.empty((len(gyro), 4))
-        deg, g = np.degrees(shifted), accel / GRAVITY_M_S2  # its units: deg/s and g
+        deg, g = np.degrees(gyro), accel / GRAVITY_M_S2  # its units: deg/s and g
         for k in range(len(gyro)):
             if k == 0:
                 x, y, z, w = from_gravity(*accel[0])

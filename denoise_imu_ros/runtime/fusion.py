@@ -12,13 +12,16 @@ constant bias, fitted on the training recordings' poses (``tune-fusion``), is re
 before the filter sees it: a bias b tilts the estimated vertical by about |b| / g, which
 the filter cannot average away (0.7 deg for EuRoC's ADIS16448).
 
-Time convention, the package's one: gyro sample k drives the orientation from stamp k
-to stamp k + 1. So at sample k the filter first integrates sample k - 1's gyro, then
-corrects with sample k's accelerometer, and the result is the orientation at stamp k.
+Time convention, imu_tools' (imu_filter_madgwick, VQF, every filter a user would swap
+in): the orientation published at stamp k includes sample k's rate. So at sample k the
+filter integrates sample k's gyro over the interval from stamp k - 1 to stamp k, then
+corrects with sample k's accelerometer. (The paper's open-loop AOE keeps its own
+convention, sample k driving stamp k to k + 1: :mod:`denoise_imu_ros.core.metrics`.)
 VQF steps by one nominal period; the gyro is scaled by the real interval in periods, so
 that a lost message does not take its rotation out of the yaw (as the open-loop attitude,
-which integrates the real interval). Across a gap (the network restarts) there is no
-gyro step: the yaw is held, as the attitude is, and gravity keeps correcting the tilt.
+which integrates the real interval). Across a gap (the network restarts) and at the
+first sample after a reset there is no gyro step: the yaw is held, as the attitude is,
+and gravity keeps correcting the tilt.
 :func:`fuse` (offline, one compiled batch) equals :meth:`GravityFilter.update` (online,
 per sample) bit for bit.
 
@@ -59,25 +62,24 @@ class GravityFilter:
         self._vqf = _vqf(rate_hz, settings)
         self._accel_bias = np.array(settings.accel_bias_m_s2)
         # preallocated: this runs on every IMU message
-        self._gyro, self._step, self._accel = np.zeros(3), np.empty(3), np.empty(3)
+        self._step, self._accel = np.empty(3), np.empty(3)
         self._heading: Quat | None = None  # the turn to yaw 0, set by the first sample
 
     def reset(self) -> None:
         """Start again: the next sample's accelerometer sets the tilt, yaw 0."""
         self._vqf.resetState()
-        self._gyro[:] = 0.0
         self._heading = None
 
     def update(self, gyro: np.ndarray, accel: np.ndarray, periods: float = 1.0) -> np.ndarray:
         """
-        Orientation (4,) xyzw at this sample's stamp; ``gyro`` drives the next step.
+        Orientation (4,) xyzw at this sample's stamp, this sample's ``gyro`` included.
 
-        ``periods``: the interval since the last sample, in nominal periods.
+        ``periods``: the interval since the last sample, in nominal periods (no step at
+        the first sample since a reset).
         """
         np.subtract(accel, self._accel_bias, out=self._accel)
-        np.multiply(self._gyro, periods, out=self._step)  # the last sample's gyro, 0 at start
+        np.multiply(gyro, periods if self._heading is not None else 0.0, out=self._step)
         self._vqf.update(self._step, self._accel)
-        self._gyro[:] = gyro
         w, x, y, z = self._vqf.getQuat6D().tolist()  # floats: numpy on four costs more
         if self._heading is None:
             self._heading = level_heading((x, y, z, w))
@@ -107,12 +109,13 @@ def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
     ``periods`` (N,): each interval to a stamp in nominal periods (:func:`step_periods`);
     None: every interval one period.
     """
-    shifted = np.zeros((len(gyro), 3))
-    shifted[1:] = gyro[:-1]  # sample k - 1 drives the step to stamp k
+    step = np.array(gyro, dtype=np.float64)  # sample k drives the step to stamp k
+    if len(step):
+        step[0] = 0.0  # nothing before the first stamp
     if periods is not None:
-        shifted *= np.asarray(periods, dtype=np.float64)[:, None]
+        step *= np.asarray(periods, dtype=np.float64)[:, None]
     out = _xyzw(_vqf(rate_hz, settings).updateBatch(
-        np.ascontiguousarray(shifted),
+        np.ascontiguousarray(step),
         np.asarray(accel, dtype=np.float64) - np.array(settings.accel_bias_m_s2))['quat6D'])
     if not len(out):
         return out
