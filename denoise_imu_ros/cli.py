@@ -169,8 +169,8 @@ def _crossval(args: argparse.Namespace) -> None:
         return
     sys.stdout.write(crossval_table(report))
     for path in args.attach or []:
-        row = {'network': 'network', 'calibration': 'calibrated'}.get(
-            model_kind(read_model_file(path)))  # a rest-only model tracks nothing
+        row = {'network': 'network', 'calibration': 'calibrated', 'tracker only': 'tracker only'
+               }.get(model_kind(read_model_file(path)))  # a rest-only model tracks nothing
         tracking = None if row is None else report['tracking']['chosen'][row]
         add_metadata(path, crossval=report, bias_tracking=tracking and dict(
             tracking, chosen_on=f'crossval: {report["tracking"]["chosen_on"]}'))
@@ -217,11 +217,15 @@ def _ensemble(args: argparse.Namespace) -> None:
 
 def _rest_model(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file, sample_rate
-    from .data.rest_bias import write_rest_only_model
+    from .data.rest_bias import classical_tracking, write_rest_only_model
     like = read_model_file(args.like)
     _guard_output(args.out, [like.path], args.overwrite)
-    write_rest_only_model(like, args.out)
-    print(f'wrote {args.out}: the gyro less its turn-on bias, nothing learnt '
+    tracking = classical_tracking(like.meta) if args.tracker_only else None
+    write_rest_only_model(like, args.out, tracking)
+    tracked = '' if tracking is None else (
+        f', its bias tracked (sigma {tracking.sigma_motion_deg_s:g} deg/s, forgetting '
+        f'{tracking.forgetting_s:g} s)')
+    print(f'wrote {args.out}: the gyro less its turn-on bias{tracked}, nothing learnt '
           f'({sample_rate(like):g} Hz, the estimator of {like.path.name})')
 
 
@@ -401,9 +405,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_ensemble)
 
     p = sub.add_parser('rest-model', help='a model file that only removes the turn-on bias '
-                       "(crossval's verdict 'rest bias'), from a model trained with rest_bias")
+                       "(crossval's verdict 'rest bias'), or that and tracks the bias left "
+                       "('tracker only'), from a model trained with rest_bias")
     p.add_argument('--like', required=True, help='a model trained with rest_bias: its rate, '
                    'estimator and prior, recordings and verdict')
+    p.add_argument('--tracker-only', action='store_true', help='track the bias left too, '
+                   'as crossval chose for its tracker-only row (else as the model does)')
     p.add_argument('--out', required=True, help='model file to write')
     p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.set_defaults(func=_rest_model)

@@ -21,7 +21,7 @@ from .architecture import ModelConfig
 from .errors import ModelFileError
 from .limits import check_gaps, check_rate, check_units
 from .modelfile import sample_rate
-from .schema import ModelMeta, REST_ONLY
+from .schema import ModelMeta, REST_ONLY, TRACKER_ONLY
 
 __all__ = ['check_baseline', 'check_stream']
 
@@ -60,8 +60,8 @@ def check_baseline(model: Paired, baseline: Paired) -> None:
     file, and of the model's IMU rate: the "calibrated" rows and the filter settings
     stored crosswise would otherwise be wrong without a word.
     """
-    role = ('a rest-only model' if baseline.meta.kind == REST_ONLY else
-            None if baseline.config.calibration_only else 'a network')
+    role = {REST_ONLY: 'a rest-only model', TRACKER_ONLY: 'a tracker-only model'}.get(
+        baseline.meta.kind, None if baseline.config.calibration_only else 'a network')
     if role:
         raise ModelFileError(f'--baseline {baseline.path}: {role}, not a calibration (train '
                              '--calibration-only makes one)')

@@ -21,12 +21,16 @@ from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
 
 __all__ = ['BiasTracking', 'Fusion', 'FusionSettings', 'InputEnvelope', 'JUDGED', 'judged_on',
-           'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'parse_meta', 'REST_ONLY', 'RestBiasSettings',
-           'Validation', 'Verdict']
+           'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'NO_MODEL', 'parse_meta', 'REST_ONLY',
+           'RestBiasSettings', 'TRACKER_ONLY', 'Validation', 'Verdict']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
+# the ``kind`` of a model file that runs the classical pipeline, no model: the turn-on bias
+# removed, then the remaining bias tracked at rest and in motion (its ``bias_tracking``)
+TRACKER_ONLY = 'tracker only'
+NO_MODEL = (REST_ONLY, TRACKER_ONLY)  # kinds whose file corrects nothing itself
 MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
-DEPLOY_CHOICES = ('network', 'calibration', REST_ONLY, 'none')
+DEPLOY_CHOICES = ('network', 'calibration', TRACKER_ONLY, REST_ONLY, 'none')
 JUDGED = {'aoe_deg': 'AOE', 'tilt_deg': 'tilt error'}  # figures a verdict compares, named
 
 

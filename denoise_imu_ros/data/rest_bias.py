@@ -39,15 +39,18 @@ from vqf import VQF
 from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
 from ..core.modelfile import code_version, Described, ModelFile, sample_rate, write_model_file
-from ..core.schema import BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings
+from ..core.schema import BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings, TRACKER_ONLY
 
-__all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES', 'estimator',
-           'model_input', 'nominal_bias', 'remove_rest_bias', 'resolve',
-           'RestBias', 'rest_bias_batch', 'RestBiasSettings', 'track_bias', 'tracker',
-           'tracking', 'write_rest_only_model']
+__all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES',
+           'classical_tracking', 'estimator', 'model_input', 'nominal_bias',
+           'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch', 'RestBiasSettings',
+           'track_bias', 'tracker', 'tracker_only_gyro', 'tracking', 'write_rest_only_model']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
+# the tracker-only row's settings where neither crossval nor the model chose any: what
+# crossval chose for BROAD's sessions (docs/results.md), started as sure of its 0 as that
+CLASSICAL_TRACKING = BiasTracking(0.05, 30.0, 0.05)
 
 
 def estimator(settings: RestBiasSettings, rate_hz: float) -> VQF:
@@ -234,6 +237,34 @@ def baseline_gyro(loaded: Described, imu: np.ndarray) -> np.ndarray:
     return remove_rest_bias(imu, sample_rate(loaded), baseline_settings(loaded.meta))[:, :3]
 
 
+def classical_tracking(meta: ModelMeta) -> BiasTracking | None:
+    """
+    Return the tracking of the "tracker only" rows: the classical pipeline, no model.
+
+    What ``crossval`` chose for that row (stored with its verdict; None: none), else the
+    model's own output tracking (the same tracker, no model before it), else
+    CLASSICAL_TRACKING.
+    """
+    chosen = ((meta.crossval.report.get('tracking') or {}).get('chosen') or {}
+              if meta.crossval is not None else {})
+    if TRACKER_ONLY in chosen:
+        stored = chosen[TRACKER_ONLY]
+        try:
+            return None if stored is None else BiasTracking(
+                stored.get('sigma_motion_deg_s'), stored.get('forgetting_s'),
+                stored.get('sigma_init_deg_s'))
+        except (AttributeError, ValueError) as err:
+            raise ModelFileError(f'inconsistent crossval.tracking.chosen.{TRACKER_ONLY} '
+                                 f'({err})') from err
+    return meta.bias_tracking or CLASSICAL_TRACKING
+
+
+def tracker_only_gyro(loaded: Described, imu: np.ndarray) -> np.ndarray:
+    """Return the "tracker only" row's gyro (N, 3): the rest-bias row's, its bias tracked."""
+    return track_bias(baseline_gyro(loaded, imu), imu[:, 3:], sample_rate(loaded),
+                      classical_tracking(loaded.meta))
+
+
 def model_input(loaded: Described, imu: np.ndarray, choice: str = 'model') -> np.ndarray:
     """Return what a model is fed for a recording's raw samples (N, 6), at its own rate."""
     settings = resolve(loaded.meta, choice)
@@ -263,7 +294,8 @@ def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,
     return (float(mean[0]), float(mean[1]), float(mean[2])), len(found)
 
 
-def write_rest_only_model(like: ModelFile, path: str | Path) -> None:
+def write_rest_only_model(like: ModelFile, path: str | Path,
+                          tracking: BiasTracking | None = None) -> None:
     """
     Write a model file that removes the turn-on bias and corrects nothing else.
 
@@ -271,7 +303,8 @@ def write_rest_only_model(like: ModelFile, path: str | Path) -> None:
     turn-on bias (``deploy: rest bias``): the identity (a calibration with Δ = 0 and no
     bias) fed the gyro less the estimate, with ``like``'s rate, estimator settings and
     prior, recordings, recipe and cross-recording report, so that every tool runs it as
-    any model (the node, ``process-bag``, ``eval``, ``tune-fusion``).
+    any model (the node, ``process-bag``, ``eval``, ``tune-fusion``). With ``tracking``,
+    the classical pipeline (``deploy: tracker only``): the bias left tracked after it.
     """
     settings = like.meta.rest_bias
     if settings is None:
@@ -283,6 +316,9 @@ def write_rest_only_model(like: ModelFile, path: str | Path) -> None:
               'delta': np.zeros((3, 3), np.float32), 'bias': np.zeros(3, np.float32)}
     keep = ('dataset', 'sample_rate_hz', 'train_sequences', 'train_config', 'crossval')
     meta = {k: like.meta.raw[k] for k in keep if k in like.meta.raw}
-    meta.update(kind=REST_ONLY, rest_bias=settings.to_dict(), made_from=like.path.name,
+    meta.update(kind=REST_ONLY if tracking is None else TRACKER_ONLY,
+                rest_bias=settings.to_dict(), made_from=like.path.name,
                 code_version=code_version())
+    if tracking is not None:
+        meta['bias_tracking'] = tracking.as_dict()
     write_model_file(path, config, arrays, meta)

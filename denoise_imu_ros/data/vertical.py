@@ -31,7 +31,7 @@ import numpy as np
 from vqf import VQF
 
 from .rest_bias import resolve
-from ..core.schema import ModelMeta, REST_ONLY
+from ..core.schema import ModelMeta, NO_MODEL
 
 __all__ = ['drops', 'drops_vertical', 'drop_vertical', 'up_in_body', 'Vertical']
 
@@ -54,10 +54,10 @@ def drops_vertical(meta: ModelMeta, rest: str = 'model') -> bool:
     """
     :func:`drops` for a model file fed as ``rest`` says.
 
-    ``rest`` as :func:`~denoise_imu_ros.data.rest_bias.resolve`; a rest-only model
-    corrects nothing to drop.
+    ``rest`` as :func:`~denoise_imu_ros.data.rest_bias.resolve`; a rest-only or
+    tracker-only model corrects nothing to drop.
     """
-    return meta.kind != REST_ONLY and drops(meta.heading_weight, resolve(meta, rest) is not None)
+    return meta.kind not in NO_MODEL and drops(meta.heading_weight, resolve(meta, rest) is not None)
 
 
 def _filter(rate_hz: float) -> VQF:

@@ -7,13 +7,17 @@ The validation tails come from the training recordings, so they cannot say how a
 does on a recording it never saw (another bias, another temperature). Here the recipe's
 recordings are split into folds by recording; each fold trains the network and the
 12-parameter calibrated-IMU baseline on the other recordings and scores the held-out
-ones whole (AOE from the ground truth at their first stamp), against plain integration
-of the input gyro and of the input gyro less its turn-on bias (estimated from stillness,
-``data/rest_bias.py``). The verdict says which of the four to deploy.
+ones whole (AOE from the ground truth at their first stamp), against the classical
+pipeline a practitioner runs with no training: plain integration of the input gyro, the
+input gyro less its turn-on bias (estimated from stillness, ``data/rest_bias.py``), and
+that with its remaining bias tracked ("tracker only"). The verdict says which of the five
+to deploy; a learnt one never loses to the classical pipeline on one recording by more
+than LOSS_LIMIT.
 
-The models' output bias tracking (:class:`~denoise_imu_ros.core.schema.BiasTracking`)
-is chosen here too, on recordings no model saw: the shipped model's, for the network and
-for the calibration, is the candidate of lowest mean AOE over every held-out recording
+The output bias tracking (:class:`~denoise_imu_ros.core.schema.BiasTracking`) is chosen
+here too, on recordings no model saw: the shipped model's, for the network, for the
+calibration and for the tracker only, is the candidate of lowest mean AOE over every
+held-out recording
 (none among them); the figures of a fold's recordings use the candidate the other folds'
 recordings choose, so that no figure was picked on itself.
 
@@ -25,6 +29,7 @@ chooses what ruins the heading beyond the poses' drift (:func:`heading_off`).
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 import sys
 from typing import Any
@@ -38,7 +43,7 @@ from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..core.modelfile import sample_rate
 from ..core.schema import (BiasTracking, InputEnvelope, JUDGED, judged_on, ModelMeta,
-                           parse_meta)
+                           parse_meta, REST_ONLY, TRACKER_ONLY)
 from ..data import envelope, rest_bias, vertical
 from ..data.load import load_sequence
 from ..learn import parallel
@@ -48,7 +53,10 @@ from ..learn.model import correct_gyro
 from ..learn.train import train
 
 
-TRACKED = ('calibrated', 'network')  # the rows whose output bias may be tracked
+# the rows whose output bias may be tracked: the classical pipeline's (no model) too
+TRACKED = (TRACKER_ONLY, 'calibrated', 'network')
+CLASSICAL = ('raw', 'rest bias', TRACKER_ONLY)  # what a practitioner runs with no training
+LOSS_LIMIT = 1.1  # a learnt row deployed is never worse than the classical one by more
 # the candidates: VQF's biasSigmaMotion (its default 0.1 deg/s) and biasForgettingTime
 # (its default 100 s), beside none; each starts as certain of its 0 as its motion updates
 # ever make it, not at VQF's 0.5 deg/s for a raw gyro: what is left after the model is
@@ -161,21 +169,23 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                        + ('' if seed is None else f', seed {seed}'), progress))
         if only_fold is not None:
             return None
-        fields = {'calibrated': models[0][1].config.receptive_field,
+        fields = {TRACKER_ONLY: 1, 'calibrated': models[0][1].config.receptive_field,
                   'network': models[0][0].config.receptive_field}
-        bounds = [{'calibrated': calib.meta.input_envelope,
+        bounds = [{TRACKER_ONLY: None, 'calibrated': calib.meta.input_envelope,
                    'network': net.meta.input_envelope} for net, calib in models]
-        ensemble_bounds = {'calibrated': bounds[0]['calibrated'],  # the calibration: seed 0's
+        ensemble_bounds = {TRACKER_ONLY: None,
+                           'calibrated': bounds[0]['calibrated'],  # the calibration: seed 0's
                            'network': envelope.combine([b['network'] for b in bounds])}
         for name in held_out:  # read as the recipe reads its recordings
             seq = load_sequence(Path(recipe.data) / name, recipe.imu_topic, recipe.pose_topic,
                                 recipe.max_gt_gap_s,
                                 min_samples=models[0][0].model.receptive_field,
                                 align_poses=recipe.align, poses=recipe.poses)
-            raw_rows[name] = {'raw': score(seq, seq.imu[:, :3]), 'rest bias': score(
-                seq, seq.on_poses(rest_bias.baseline_gyro(models[0][0], seq.stream)))}
+            rest = rest_bias.baseline_gyro(models[0][0], seq.stream)
+            raw_rows[name] = {'raw': score(seq, seq.imu[:, :3]),
+                              'rest bias': score(seq, seq.on_poses(rest))}
             fed = rest_bias.model_input(models[0][0], seq.stream)  # one recipe, one input
-            gyros = [{'calibrated': correct_gyro(calib.model, fed),
+            gyros = [{TRACKER_ONLY: rest, 'calibrated': correct_gyro(calib.model, fed),
                       'network': correct_gyro(net.model, fed)} for net, calib in models]
             rate, drop = sample_rate(models[0][0]), vertical.drops_vertical(models[0][0].meta)
             tracked[name] = _candidates(
@@ -261,11 +271,11 @@ def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float, fed: np.
 
     Each gyro (over the recording's whole stream, as ``fed``) tracked and guarded by its
     row's input envelope, and its correction about the vertical dropped where the recipe's
-    is (``drop``), as every path ends it (:func:`~denoise_imu_ros.data.envelope.finish`).
+    is (``drop``; the tracker only corrects nothing to drop), as every path ends it (:func:`~denoise_imu_ros.data.envelope.finish`).
     """
-    return {label: {m: score(seq, seq.on_poses(envelope.finish(g, fed, rate_hz, t, bounds[m],
-                                                               fields[m], drop)))
-                    for m, g in gyros.items()} for label, t in CANDIDATES.items()}
+    return {label: {m: score(seq, seq.on_poses(envelope.finish(
+        g, fed, rate_hz, t, bounds[m], fields[m], drop and m != TRACKER_ONLY)))
+        for m, g in gyros.items()} for label, t in CANDIDATES.items()}
 
 
 def _choose(tracked: dict[str, Any], names: list[str], key: str,
@@ -373,25 +383,44 @@ def heading_off(mean: dict[str, dict[str, float]], key: str) -> list[str]:
     return [m for m in ('calibrated', 'network') if m in mean and mean[m]['aoe_yaw_deg'] > bar]
 
 
+def _worst_ratio(per_recording: dict[str, dict[str, dict[str, float]]], row: str,
+                 bar: str, key: str) -> tuple[float, str]:
+    """Return ``row``'s largest ratio to ``bar`` over the recordings, and where it is."""
+    def ratio(r: dict[str, dict[str, float]]) -> float:
+        return r[row][key] / r[bar][key] if r[bar][key] > 0 else (
+            math.inf if r[row][key] > 0 else 1.0)
+    name = max(per_recording, key=lambda n: ratio(per_recording[n]))
+    return ratio(per_recording[name]), name
+
+
 def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
             mean: dict[str, dict[str, float]], key: str = 'aoe_deg') -> tuple[str, str]:
     """
-    Return what to deploy (``network``, ``calibration``, ``rest bias`` or ``none``), and why.
+    Return what to deploy (one of DEPLOY_CHOICES), and why.
 
     Judged on the ``key`` figure (:func:`judged_on`), never deploying a row whose heading
-    is off (:func:`heading_off`). The network only if it beats the baseline on most
-    recordings and on average. The baseline is the best on average of the calibrated IMU,
-    the raw gyro less its turn-on bias and plain integration, so a calibration that hurts
-    new recordings (an already calibrated IMU) is not the bar, nor is a raw gyro that a
-    still start would fix. On a tie the simpler wins (recordings never still: the rest
-    bias is the raw gyro).
+    is off (:func:`heading_off`), nor a learnt row that loses to the classical pipeline
+    (the best on average of plain integration, the gyro less its turn-on bias, and that
+    with its bias tracked: no model) by more than LOSS_LIMIT on any one recording: a
+    mean can hide many small losses. The network only if it beats the baseline on most
+    recordings and on average. The baseline is the best on average of the classical rows
+    and the calibrated IMU, so a calibration that hurts new recordings (an already
+    calibrated IMU) is not the bar, nor is a raw gyro that a still start would fix. On a
+    tie the simpler wins (recordings never still: the rest bias is the raw gyro).
     """
     off = heading_off(mean, key)
-    order = ('raw', 'rest bias', 'calibrated')
-    base = min((m for m in order if m in mean and m not in off),
+    classical = min((m for m in CLASSICAL if m in mean),
+                    key=lambda m: (mean[m][key], CLASSICAL.index(m)))
+    worst = {m: _worst_ratio(per_recording, m, classical, key)
+             for m in ('calibrated', 'network') if m in mean}
+    losing = [m for m, (ratio, _) in worst.items() if ratio > LOSS_LIMIT and m not in off]
+    order = (*CLASSICAL, 'calibrated')
+    base = min((m for m in order if m in mean and m not in off and m not in losing),
                key=lambda m: (mean[m][key], order.index(m)))
     label = {'calibrated': 'the calibrated IMU', 'raw': 'plain integration',
-             'rest bias': 'the raw gyro less its turn-on bias'}[base]
+             'rest bias': 'the raw gyro less its turn-on bias',
+             TRACKER_ONLY: 'the classical pipeline (the gyro less its turn-on bias, its '
+                           'bias tracked, no model)'}
     names = {'calibrated': 'the calibration', 'network': 'the network'}
     yaw = ', '.join(f'{names[m]} {mean[m]["aoe_yaw_deg"]:.2f}' for m in off)
     guard = '' if not off else (
@@ -399,17 +428,23 @@ def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
         f"the poses' heading more than {HEADING_GUARD:g}x as much as the gyro less its "
         f'turn-on bias (mean yaw {yaw} against {mean["rest bias"]["aoe_yaw_deg"]:.2f} deg): '
         'not deployed; ')
+    guard += ''.join(f'{names[m]} is {worst[m][0]:.2f}x {label[classical]} on '
+                     f'{worst[m][1]} (more than {LOSS_LIMIT:g}x on one recording): not '
+                     'deployed; ' for m in losing)
     n = len(per_recording)
     wins = sum(r['network'][key] < r[base][key] for r in per_recording.values())
     gain = 100 * (1 - mean['network'][key] / mean[base][key])
-    if 'network' not in off and wins > n / 2 and gain > 0:
-        return 'network', (f'{guard}the network beats {label} on {wins} of {n} unseen '
+    if 'network' not in off + losing and wins > n / 2 and gain > 0:
+        return 'network', (f'{guard}the network beats {label[base]} on {wins} of {n} unseen '
                            f'recordings, by {gain:.0f} % in mean {JUDGED[key]}: deploy the '
                            'network')
-    deploy = {'calibrated': 'calibration', 'rest bias': 'rest bias', 'raw': 'none'}[base]
-    why = ('' if 'network' in off else f'the network does not beat {label} on unseen '
-           f'recordings ({wins} of {n}, {gain:+.0f} % in mean {JUDGED[key]}): ')
+    deploy = {'calibrated': 'calibration', 'rest bias': REST_ONLY, 'raw': 'none',
+              TRACKER_ONLY: TRACKER_ONLY}[base]
+    why = ('' if 'network' in off + losing else f'the network does not beat {label[base]} '
+           f'on unseen recordings ({wins} of {n}, {gain:+.0f} % in mean {JUDGED[key]}): ')
     return deploy, (f'{guard}{why}deploy '
-                    + {'calibration': 'the calibration', 'rest bias': 'no learnt correction, '
+                    + {'calibration': 'the calibration', REST_ONLY: 'no learnt correction, '
                        'only the turn-on bias removed (rest_bias)',
+                       TRACKER_ONLY: 'no learnt correction: the turn-on bias removed and '
+                       'the bias left tracked (tracker only)',
                        'none': 'no correction'}[deploy])

@@ -59,15 +59,18 @@ def recording_names(sequences: list[str]) -> list[str]:
 
 def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndarray]:
     """
-    Return the gyro of every method: raw, rest bias (less the turn-on bias), each model's.
+    Return the gyro of every method: the classical rows (no model), then each model's.
 
     Over the recording's whole IMU stream
     (:attr:`~denoise_imu_ros.core.records.Sequence.stream`, the samples before its poses
     included), each model fed as it runs online (its rest-bias settings, if it has them).
-    The rest-bias row: :func:`~denoise_imu_ros.data.rest_bias.baseline_gyro`.
+    The classical rows: raw; rest bias
+    (:func:`~denoise_imu_ros.data.rest_bias.baseline_gyro`); tracker only, that with its
+    bias tracked (:func:`~denoise_imu_ros.data.rest_bias.tracker_only_gyro`).
     """
     net, stream = models['network'], seq.stream
-    gyros = {'raw': stream[:, :3], 'rest bias': rest_bias.baseline_gyro(net, stream)}
+    gyros = {'raw': stream[:, :3], 'rest bias': rest_bias.baseline_gyro(net, stream),
+             'tracker only': rest_bias.tracker_only_gyro(net, stream)}
     gyros.update({m: lm.correct(stream) for m, lm in models.items()})
     return gyros
 

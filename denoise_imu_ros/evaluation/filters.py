@@ -325,6 +325,7 @@ def table(report: dict[str, Any]) -> str:
 
 DEFAULTS = {'imufusion': Filter('imufusion', gain=0.5), 'madgwick': Filter('madgwick', gain=0.033)}
 LABELS = {'vqf': 'VQF', 'imufusion': 'imufusion', 'madgwick': 'Madgwick'}
+VQF_DEFAULTS = Filter('vqf', 3.0, True)  # the vqf package's own: tau 3 s, bias estimation on
 
 
 def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None, where: str = 'model file'
@@ -332,8 +333,10 @@ def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None, where: str =
     """
     Return the fused rows of ``eval``: name -> (gyro source, filter with its settings).
 
-    Each model file's own VQF settings for its gyro; for the raw gyro and the other
-    filters the settings ``tune-fusion`` stored in the network's file (defaults if none).
+    Each model file's own VQF settings for its gyro; for the raw gyro, the classical rows
+    and the other filters the settings ``tune-fusion`` stored in the network's file
+    (defaults if none); and what a user runs with no model, VQF's defaults on the raw gyro
+    (its own bias estimation on).
     """
     stored = net_meta.fusion.filters
 
@@ -348,8 +351,10 @@ def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None, where: str =
         return Filter('vqf', settings.tau_acc_s, settings.bias_estimation,
                       accel_bias_m_s2=settings.accel_bias_m_s2)
 
-    rows = {'raw + VQF': ('raw', chosen('raw', 'vqf')),
-            'rest bias + VQF': ('rest bias', chosen('raw', 'vqf'))}
+    rows = {'raw + VQF defaults': ('raw', VQF_DEFAULTS),
+            'raw + VQF': ('raw', chosen('raw', 'vqf')),
+            'rest bias + VQF': ('rest bias', chosen('raw', 'vqf')),
+            'tracker only + VQF': ('tracker only', chosen('raw', 'vqf'))}
     if calib_meta is not None:
         rows['calibrated + VQF'] = ('calibrated', own(calib_meta))
         rows.update({f'calibrated + {LABELS[k]}': ('calibrated', chosen('calibrated', k))

@@ -11,7 +11,7 @@ from typing import Any
 from ..core.metrics import ROE_DISTANCES_M
 from ..core.schema import JUDGED, ModelMeta
 
-CROSSVAL_METHODS = ('raw', 'rest bias', 'calibrated', 'network')
+CROSSVAL_METHODS = ('raw', 'rest bias', 'tracker only', 'calibrated', 'network')
 
 
 def scored_on_training_samples(meta: ModelMeta, names: list[str],

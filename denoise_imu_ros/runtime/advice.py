@@ -5,18 +5,18 @@
 from __future__ import annotations
 
 from ..core.modelfile import ModelFile
-from ..core.schema import JUDGED, REST_ONLY
+from ..core.schema import JUDGED, NO_MODEL, REST_ONLY, TRACKER_ONLY
 
 __all__ = ['deployment_warning', 'model_kind']
 
 _ROWS = {'network': 'network', 'calibration': 'calibrated', REST_ONLY: 'rest bias',
-         'none': 'raw'}  # the report's row of each kind of model
+         TRACKER_ONLY: 'tracker only', 'none': 'raw'}  # the report's row of each kind
 
 
 def model_kind(loaded: ModelFile) -> str:
-    """Return what the file corrects with: ``network``, ``calibration`` or ``rest bias``."""
-    if loaded.meta.kind == REST_ONLY:
-        return REST_ONLY
+    """Return what the file corrects with: a network, a calibration, or no model (its kind)."""
+    if loaded.meta.kind in NO_MODEL:
+        return loaded.meta.kind
     return 'calibration' if loaded.config.calibration_only else 'network'
 
 

@@ -139,6 +139,42 @@ def test_a_rest_only_model_runs_anywhere_a_model_does_and_corrects_nothing_else(
     assert not (tmp_path / 'x').exists()
 
 
+def test_a_tracker_only_model_runs_the_classical_pipeline_as_eval_scores_it(tmp_path):
+    """The verdict can deploy no model: the node runs exactly eval's tracker-only row."""
+    from denoise_imu_ros.cli import main
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.learn.checkpoint import load_model
+    from denoise_imu_ros.runtime.advice import deployment_warning, model_kind
+    from denoise_imu_ros.runtime.online import OnlineDenoiser
+    from helpers import write_untrained_model
+    settings = RestBiasSettings(prior_rad_s=(0.001, 0.002, 0.003))
+    chosen = {'sigma_motion_deg_s': 0.1, 'forgetting_s': 100.0, 'sigma_init_deg_s': 0.1,
+              'label': 'sigma 0.1 deg/s, forgetting 100 s'}
+    report = {'deploy': 'tracker only', 'verdict': 'deploy no learnt correction',
+              'mean': {'network': {'aoe_deg': 2.0}, 'tracker only': {'aoe_deg': 1.0}},
+              'tracking': {'chosen': {'tracker only': chosen, 'network': None}}}
+    net = write_untrained_model(tmp_path / 'net.safetensors', {
+        'sample_rate_hz': RATE, 'rest_bias': settings.to_dict(), 'crossval': report,
+        'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0}})
+    assert main(['rest-model', '--like', str(net), '--tracker-only',
+                 '--out', str(tmp_path / 'tracker')]) == 0
+    tracker = read_model_file(tmp_path / 'tracker')
+    assert model_kind(tracker) == 'tracker only' and tracker.config.calibration_only
+    assert tracker.meta.bias_tracking.sigma_motion_deg_s == 0.1  # crossval's, not the model's
+    assert deployment_warning(tracker) is None
+    assert '(network 2.00° against tracker only 1.00°' in deployment_warning(
+        read_model_file(net))
+    imu = _tilted_turns(40.0, np.array([0.004, -0.003, 0.002]))
+    den = OnlineDenoiser.from_model_file(tracker)
+    got = np.array([den.process(10**9 + k * 5_000_000, s[:3], s[3:]).gyro
+                    for k, s in enumerate(imu)])
+    expected = rest_bias.tracker_only_gyro(load_model(str(net)), imu)
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-7)
+    assert np.abs(expected - rest_bias.baseline_gyro(load_model(str(net)), imu)).max() > 1e-4
+    np.testing.assert_allclose(load_model(str(tmp_path / 'tracker')).correct(imu), expected,
+                               rtol=0, atol=1e-7)
+
+
 def _tilted_turns(seconds: float, bias: np.ndarray, seed: int = 0) -> np.ndarray:
     """Return a gyro biased by ``bias`` turning about tilted axes, with true gravity."""
     from scipy.spatial.transform import Rotation

@@ -34,12 +34,13 @@ def test_eval_writes_json_markdown_and_figures(model_file, calib_file, tmp_path)
                  '--baseline', str(calib_file)]) == 0
     report = json.loads((out / 'results.json').read_text())
     seq = report['sequences'][SAMPLE.name]
-    assert set(seq) == {'raw', 'rest bias', 'calibrated', 'network'}
+    assert set(seq) == {'raw', 'rest bias', 'tracker only', 'calibrated', 'network'}
     assert set(seq['raw']['roe_median_deg']) == {'7', '21', '35'}
     assert seq['raw']['aoe_deg'] > 1
     assert (out / 'results.md').read_text().startswith('| method |')
     fused = report['fused'][SAMPLE.name]
-    assert set(fused) == {'raw + VQF', 'rest bias + VQF', 'calibrated + VQF',
+    assert set(fused) == {'raw + VQF defaults', 'raw + VQF', 'rest bias + VQF',
+                          'tracker only + VQF', 'calibrated + VQF',
                           'calibrated + imufusion',
                           'calibrated + Madgwick', 'network + VQF'}
     assert all(np.isfinite([f['aoe_deg'], f['tilt_deg'], f['tilt_growth_deg_min']]).all()
