@@ -159,6 +159,7 @@ def _crossval(args: argparse.Namespace) -> None:
                                f'model was trained ({"; ".join(why)})')
     report = crossval(args.config, args.folds, args.out, progress=not args.quiet,
                       only_fold=args.fold, seeds=args.seeds, sessions=args.sessions,
+                      motions=args.motions,
                       seed=args.seed, data=args.data,
                       steps=args.steps, workers=args.workers, device=args.device)
     if report is None:
@@ -378,6 +379,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--sessions', nargs='+', metavar='A,B,..',
                    help='recordings that share a power-on, comma-separated, one argument a '
                         'session: the folds leave one session out (its turn-on bias unseen)')
+    p.add_argument('--motions', nargs='+', metavar='A,B,..',
+                   help='with --sessions, recordings of one motion kind (rotation, '
+                        'translation...), grouped as --sessions: each fold leaves one '
+                        "session's recordings of one kind out and trains on the other "
+                        "sessions' other kinds (motion and power-on both unseen)")
     p.add_argument('--out', type=Path, help='write the fold models and crossval.json here '
                    '(folds trained there already are scored, not trained again)')
     p.add_argument('--fold', type=int, help='train this fold alone (0-based) into --out, '

@@ -89,33 +89,62 @@ def folds(recordings: list[str], k: int | None = None) -> list[list[str]]:
     return [recordings[i::k] for i in range(k)]
 
 
-def session_folds(recordings: list[str], sessions: list[str]) -> list[list[str]]:
+def session_folds(recordings: list[str], sessions: list[str],
+                  option: str = '--sessions', what: str = 'session') -> list[list[str]]:
     """
     Held-out groups of recordings that share a power-on: ``sessions`` lists each group.
 
     Each group is comma-separated recording names of the recipe; every recording of the
     recipe is in exactly one, and there are at least two: a fold then trains on other
-    power-ons only and scores one it never saw, as a robot's next start-up.
+    power-ons only and scores one it never saw, as a robot's next start-up. (``option``
+    and ``what`` name another grouping in the errors: :func:`motion_folds`.)
     """
     groups = [[n for n in group.split(',') if n] for group in sessions]
     listed = [n for group in groups for n in group]
     twice = sorted({n for n in listed if listed.count(n) > 1})
     unknown = sorted(set(listed) - set(recordings))
     missing = [n for n in recordings if n not in listed]
-    why = (f'{", ".join(twice)} in two sessions' if twice else
+    why = (f'{", ".join(twice)} in two {what}s' if twice else
            f'{", ".join(unknown)} not in the recipe' if unknown else
-           f'{", ".join(missing)} in no session' if missing else
-           'fewer than two sessions' if len([g for g in groups if g]) < 2 else None)
+           f'{", ".join(missing)} in no {what}' if missing else
+           f'fewer than two {what}s' if len([g for g in groups if g]) < 2 else None)
     if why:
-        raise TrainingError(f"--sessions: {why} (each of the recipe's recordings in exactly "
+        raise TrainingError(f"{option}: {why} (each of the recipe's recordings in exactly "
                             'one comma-separated group, at least two groups)')
     return [g for g in groups if g]
+
+
+def motion_folds(recordings: list[str], sessions: list[str], motions: list[str]
+                 ) -> list[tuple[list[str], list[str]]]:
+    """
+    Return (held out, trained on) pairs that leave one session and one motion kind out.
+
+    Each fold holds out the recordings of one session that are of one motion kind
+    (``motions`` groups the recordings as ``sessions`` does: rotation, translation,
+    disturbed...), and trains on those of the other sessions that are of the other kinds:
+    the held-out recordings' power-on and motion both unseen, as a robot's next start-up
+    doing something its training never showed. Every recording is held out once.
+    """
+    by_session = session_folds(recordings, sessions)
+    by_motion = session_folds(recordings, motions, '--motions', 'motion kind')
+    pairs = []
+    for session in by_session:
+        for motion in by_motion:
+            held = [n for n in recordings if n in session and n in motion]
+            train = [n for n in recordings if n not in session and n not in motion]
+            if held and not train:
+                raise TrainingError(f'--motions: holding out {", ".join(held)} leaves no '
+                                    'recording of another session and another motion kind '
+                                    'to train on')
+            if held:
+                pairs.append((held, train))
+    return pairs
 
 
 def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
              progress: bool = True, only_fold: int | None = None,
              seeds: list[int] | None = None, sessions: list[str] | None = None,
-             **overrides: Any) -> dict[str, Any] | None:
+             motions: list[str] | None = None, **overrides: Any) -> dict[str, Any] | None:
     """
     Train and score every fold of the recipe at ``config``; return the report.
 
@@ -132,7 +161,9 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     seeds' calibrations.
 
     ``sessions`` (comma-separated recordings sharing a power-on, one string a session)
-    makes the folds leave one power-on out instead of ``k`` groups of recordings.
+    makes the folds leave one power-on out instead of ``k`` groups of recordings; with
+    ``motions`` (the same for motion kinds) each fold leaves one session's recordings of
+    one motion kind out, trained on the other sessions' other kinds (:func:`motion_folds`).
     """
     if parallel.torchrun_rank() is not None:  # its other processes would have no model
         raise TrainingError('crossval does not run under torchrun: train its folds as '
@@ -141,6 +172,9 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                               or not all(isinstance(s, int) for s in seeds)
                               or overrides.get('seed') is not None):
         raise TrainingError(f'--seeds must list distinct seeds (and no --seed), got {seeds}')
+    if motions is not None and sessions is None:
+        raise TrainingError('--motions needs --sessions: its folds leave a session and a '
+                            'motion kind out')
     recipe = load_config(config, **overrides)
     runs: list[int | None] = [None] if seeds is None else list(seeds)
     raw_rows: dict[str, dict[str, dict[str, float]]] = {}
@@ -149,15 +183,17 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     fold_of: dict[str, int] = {}
     if sessions is not None and k is not None:
         raise TrainingError('--folds and --sessions: give one (sessions are the folds)')
-    fold_list = (folds(recipe.sequences, k) if sessions is None
-                 else session_folds(recipe.sequences, sessions))
+    pairs = (motion_folds(recipe.sequences, sessions, motions) if motions is not None else [
+        (held, [s for s in recipe.sequences if s not in held]) for held in (
+            folds(recipe.sequences, k) if sessions is None
+            else session_folds(recipe.sequences, sessions))])
+    fold_list = [held for held, _ in pairs]
     if only_fold is not None and not (out is not None and 0 <= only_fold < len(fold_list)):
         raise TrainingError(f'--fold {only_fold}: needs --out and a fold from 0 to '
                             f'{len(fold_list) - 1}')
-    for i, held_out in enumerate(fold_list):
+    for i, (held_out, train_on) in enumerate(pairs):
         if only_fold is not None and i != only_fold:
             continue
-        train_on = [s for s in recipe.sequences if s not in held_out]
         models = []
         for seed in runs:
             keys = dict(overrides, sequences=train_on, **({} if seed is None else {'seed': seed}))
@@ -198,11 +234,11 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     per_recording, per_seed, tracking = _nested(raw_rows, tracked, tracked_seed, fold_of,
                                                 seeds or [], key)
     report = summarize(per_recording, key)
-    sizes = sorted({len(recipe.sequences) - len(f) for f in fold_list})
+    sizes = sorted({len(train) for _, train in pairs})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
                   train_config=recipe.recipe(),
-                  fold_kind='leave one power-on session out' if sessions else
-                  'leave recordings out',
+                  fold_kind='leave one session and one motion kind out' if motions else
+                  'leave one power-on session out' if sessions else 'leave recordings out',
                   fold_training=(f'each fold trains on {"-".join(map(str, sizes))} of the '
                                  f"recipe's {len(recipe.sequences)} recordings; a model of "
                                  'the whole recipe trains on all of them, so these figures '

@@ -350,6 +350,22 @@ def test_crossval_under_torchrun_is_a_clear_error_not_a_crash(tmp_path, monkeypa
     assert 'crossval does not run under torchrun' in err and len(err.splitlines()) == 1
 
 
+def test_motion_folds_leave_a_session_and_a_motion_kind_out():
+    from denoise_imu_ros.evaluation.crossval import motion_folds
+    names = ['b_rot', 'b_trans', 'b_fast', 'c_rot', 'c_trans']
+    sessions = ['b_rot,b_trans,b_fast', 'c_rot,c_trans']
+    pairs = motion_folds(names, sessions, ['b_rot,c_rot', 'b_trans,c_trans,b_fast'])
+    assert pairs == [(['b_rot'], ['c_trans']), (['b_trans', 'b_fast'], ['c_rot']),
+                     (['c_rot'], ['b_trans', 'b_fast']), (['c_trans'], ['b_rot'])]
+    assert sorted(n for held, _ in pairs for n in held) == sorted(names)  # each held out once
+    with pytest.raises(TrainingError, match='--motions: b_fast in no motion kind'):
+        motion_folds(names, sessions, ['b_rot,c_rot', 'b_trans,c_trans'])
+    with pytest.raises(TrainingError, match='holding out b_rot leaves no recording'):
+        motion_folds(names, sessions, ['b_rot,c_rot,c_trans', 'b_trans,b_fast'])
+    with pytest.raises(TrainingError, match='--motions needs --sessions'):
+        crossval('unused.yaml', motions=['a'], sessions=None)
+
+
 def test_session_folds_leave_one_power_on_out_and_refuse_a_bad_grouping():
     from denoise_imu_ros.evaluation.crossval import session_folds
     names = ['b1', 'b2', 'c1', 'c2', 'c3']
