@@ -38,7 +38,7 @@ from ..core.rotation import from_gravity
 from ..core.schema import JUDGED, judged_on, MAX_ACCEL_BIAS_M_S2, ModelMeta
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
-from ..runtime.fusion import fuse, FusionSettings, step_periods
+from ..runtime.fusion import fuse, FusionSettings, interval_rates, step_periods
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
@@ -111,7 +111,8 @@ def grid(kind: str, accel_bias: tuple[float, float, float] | None = None) -> lis
 def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
         stamp_ns: np.ndarray | None = None) -> np.ndarray:
     """
-    Orientation (N, 4) xyzw at every stamp; sample k's gyro drives the step to stamp k.
+    Orientation (N, 4) xyzw at every stamp; the step to stamp k at the mean of samples
+    k - 1 and k (:func:`~denoise_imu_ros.runtime.fusion.interval_rates`).
 
     With ``stamp_ns``, VQF integrates the real intervals as the node does (the baselines
     step by one period: the recordings scored have none missing).
@@ -120,8 +121,9 @@ def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
         return fuse(gyro, accel, rate_hz, flt.settings,
                     None if stamp_ns is None else step_periods(stamp_ns, rate_hz))
     accel = accel - np.array(flt.accel_bias_m_s2)  # as fuse does
-    if flt.kind == 'madgwick':  # its sample 0 sets the tilt, sample k steps to k
-        wxyz = ahrs.filters.Madgwick(gyr=gyro, acc=accel, frequency=rate_hz,
+    rates = interval_rates(np.asarray(gyro, dtype=np.float64))
+    if flt.kind == 'madgwick':  # its sample 0 sets the tilt, rate k steps to stamp k
+        wxyz = ahrs.filters.Madgwick(gyr=rates, acc=accel, frequency=rate_hz,
                                      gain=flt.gain).Q
     else:
         fusion = imufusion.Ahrs()
@@ -132,7 +134,7 @@ def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
         fusion.set_settings(settings)
         fusion.skip_startup()  # as the others: the first accelerometer sets the tilt
         wxyz = np.empty((len(gyro), 4))
-        deg, g = np.degrees(gyro), accel / GRAVITY_M_S2  # its units: deg/s and g
+        deg, g = np.degrees(rates), accel / GRAVITY_M_S2  # its units: deg/s and g
         for k in range(len(gyro)):
             if k == 0:
                 x, y, z, w = from_gravity(*accel[0])

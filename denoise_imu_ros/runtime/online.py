@@ -125,6 +125,7 @@ class OnlineDenoiser:
          'skipped_input_periods', 'non_finite_covariance'), 0))
     _last_ns: int | None = None
     _attitude: rotation.Quat | None = None
+    _last_gyro: np.ndarray | None = None
     _pending_reset: bool = False
     _off_rate_run: int = 0
     _intervals: list[int] = field(default_factory=list)  # recent ones, ns
@@ -275,11 +276,12 @@ class OnlineDenoiser:
             if self.fusion is not None:
                 self.fusion.reset()
             self._pending_reset = False
-        elif event is None:  # sample k drives the attitude from stamp k-1 to stamp k
+        elif event is None:  # stamp k-1 to k at samples k-1's and k's mean, as imu/data
             dt = (stamp_ns - self._last_ns) * 1e-9
-            step = rotation.exp(*(float(w) * dt for w in corrected))
+            step = rotation.exp(*(0.5 * (float(a) + float(b)) * dt
+                                  for a, b in zip(self._last_gyro, corrected)))
             self._attitude = rotation.multiply(self._attitude, step)
-        self._last_ns = stamp_ns
+        self._last_ns, self._last_gyro = stamp_ns, corrected
         self.counts['accepted'] += 1
         orientation = None if self.fusion is None else self.fusion.update(
             corrected, accel, periods if event is None else 0.0)  # a gap: yaw held

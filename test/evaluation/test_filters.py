@@ -16,7 +16,7 @@ KINDS = [Filter('vqf', 2.0), Filter('imufusion', gain=0.2), Filter('madgwick', g
 
 @pytest.mark.parametrize('flt', KINDS, ids=lambda f: f.kind)
 def test_every_filter_starts_from_gravity_and_integrates_sample_k_into_stamp_k(flt):
-    """imu_tools' convention: the orientation at stamp k includes sample k's rate."""
+    """The orientation at stamp k includes sample k's rate: each interval at its ends' mean."""
     tilt = Rotation.from_euler('ZYX', [0.0, 0.15, -0.3])
     n = 1000
     rate = np.random.default_rng(1).uniform(-0.5, 0.5, n)  # about the body's vertical axis
@@ -29,7 +29,7 @@ def test_every_filter_starts_from_gravity_and_integrates_sample_k_into_stamp_k(f
     assert np.degrees(np.arccos(np.clip(seen @ up, -1, 1))).max() < 0.05
     # rotation about the vertical: the gyro's own integral, sample k into stamp k
     turned = (quat[0].inv() * quat).as_rotvec() @ up
-    expected = np.concatenate([[0.0], np.cumsum(rate[1:] * 0.005)])
+    expected = np.concatenate([[0.0], np.cumsum(0.5 * (rate[:-1] + rate[1:]) * 0.005)])
     np.testing.assert_allclose(np.unwrap(turned), expected, atol=2e-3)
 
 
@@ -52,14 +52,17 @@ def test_eval_uses_the_settings_the_model_files_store():
                                   'calibrated madgwick': Filter('madgwick', gain=0.1).as_dict()}}}
     calib = {'fusion': {'settings': {'tau_acc_s': 4.0, 'bias_estimation': True}}}
     rows = eval_filters(parse_meta(net, 'm'), parse_meta(calib, 'c'))
-    assert rows == {'raw + VQF': ('raw', Filter('vqf', 1.0)),
+    assert rows == {'raw + VQF defaults': ('raw', Filter('vqf', 3.0, True)),
+                    'raw + VQF': ('raw', Filter('vqf', 1.0)),
                     'rest bias + VQF': ('rest bias', Filter('vqf', 1.0)),
+                    'tracker only + VQF': ('tracker only', Filter('vqf', 1.0)),
                     'calibrated + VQF': ('calibrated', Filter('vqf', 4.0, True)),
                     'calibrated + imufusion': ('calibrated', Filter('imufusion', gain=0.5)),
                     'calibrated + Madgwick': ('calibrated', Filter('madgwick', gain=0.1)),
                     'network + VQF': ('network', Filter('vqf', 7.0))}
     rows = eval_filters(parse_meta({}, 'm'), None)
-    assert set(rows) == {'raw + VQF', 'rest bias + VQF', 'network + VQF'}
+    assert set(rows) == {'raw + VQF defaults', 'raw + VQF', 'rest bias + VQF',
+                         'tracker only + VQF', 'network + VQF'}
 
 
 def _turning_sequence(n: int) -> Sequence:

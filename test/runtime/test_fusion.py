@@ -48,14 +48,14 @@ def test_the_fused_orientation_starts_where_the_attitude_does(accel):
     np.testing.assert_allclose(np.linalg.norm(batch, axis=1), 1.0, atol=1e-12)
 
 
-def test_sample_k_drives_the_step_to_stamp_k():
-    """imu_tools' convention: the yaw at stamp k includes sample k's rate (gravity: none)."""
+def test_the_step_to_stamp_k_includes_sample_k():
+    """Each interval at its two samples' mean: the yaw at stamp k includes sample k's rate."""
     rate = np.random.default_rng(0).uniform(-1.0, 1.0, 1000)
     gyro = np.stack([np.zeros(1000), np.zeros(1000), rate], axis=1)
     accel = np.tile([0.0, 0.0, 9.81], (1000, 1))
     quat = fuse(gyro, accel, 200.0, FusionSettings(tau_acc_s=1.0))
     yaw = Rotation.from_quat(quat).as_rotvec()[:, 2]
-    expected = np.concatenate([[0.0], np.cumsum(rate[1:] * 0.005)])
+    expected = np.concatenate([[0.0], np.cumsum(0.5 * (rate[:-1] + rate[1:]) * 0.005)])
     np.testing.assert_allclose(np.unwrap(yaw), expected, atol=1e-9)
 
 

@@ -41,8 +41,9 @@ def test_online_attitude_equals_offline_integration_of_the_batch_output(seq, mod
                 seq.imu[:n])
     gyro = correct_gyro(model, seq.imu[:n])
     np.testing.assert_allclose(np.array([o.gyro for o in outs]), gyro, atol=1e-6)
-    # imu_tools' convention: the attitude at stamp k includes sample k's rate
-    offline = integrate(np.array(from_gravity(*seq.imu[0, 3:])), gyro[1:], seq.dt[:n - 1])
+    # the attitude at stamp k includes sample k's rate: each interval at its ends' mean
+    offline = integrate(np.array(from_gravity(*seq.imu[0, 3:])), 0.5 * (gyro[:-1] + gyro[1:]),
+                        seq.dt[:n - 1])
     online = Rotation.from_quat(np.array([o.attitude for o in outs]))
     assert np.max((offline.inv() * online).magnitude()) < 1e-6
     assert outs[0].event == Event.START and all(o.event is None for o in outs[1:])
