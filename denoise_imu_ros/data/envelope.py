@@ -8,16 +8,17 @@ power-on session, at most 325 deg/s, add 1-20° on another session's trials at 6
 deg/s). Training stores the envelope of its input (:func:`measure`; the model file's
 ``input_envelope``: the largest gyro norm and the largest distance of the accelerometer
 norm from gravity). Wherever a sample of the receptive field since the last reset lies
-outside it, the output is the model's input gyro plus a constant: the model's mean
+outside it, the output is the model's input gyro plus a constant (the model's mean
 correction over its training recordings, or nothing where the turn-on bias is removed
-before the model (its input is then the gyro less that bias, the practitioner's
-baseline). It comes after the output's bias tracking (and before the drop of a
-heading-less model's correction about the vertical), whose tracker is fed the
-model's output throughout; after each stretch where the receptive field turned faster
-than the envelope its estimate and covariance are restored to those from before it: a
-network's output beyond the rates it was trained on is off by more than a bias, and a
-tracker that kept what it learnt there carried the error on (BROAD's fast trials 07 and
-29); accelerometer excursions alone (tapping) do not hold it. Measured worse
+before the model: its input is then the gyro less that bias), less the tracked bias where
+the output's bias is tracked: what the classical pipeline gives, not the model's guess.
+It comes after the output's bias tracking (and before the drop of a heading-less model's
+correction about the vertical), whose tracker is fed the model's output throughout; the
+bias removed through a stretch where the receptive field turned faster than the
+envelope is the one from before it, and after it the tracker's estimate and covariance
+are restored to those from before it: a network's output beyond the rates it was trained
+on is off by more than a bias, and a tracker that kept what it learnt there carried the
+error on (BROAD's fast trials 07 and 29); accelerometer excursions alone (tapping) do not hold it. Measured worse
 (``scripts/experiments/envelope_guard.py``, docs/experiments.md): holding the last
 correction (a correction taken in motion carries that motion's scale terms into faster
 motion), guarding before the tracking (its estimate then follows the fallback through
@@ -37,7 +38,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from .rest_bias import track_bias, tracking
+from .rest_bias import tracked_bias, tracking
 from .vertical import drop_vertical, drops_vertical
 from ..core.limits import GRAVITY_M_S2
 from ..core.modelfile import sample_rate
@@ -113,18 +114,21 @@ def too_fast(fed: np.ndarray, envelope: InputEnvelope, field: int) -> np.ndarray
 
 
 def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | None,
-                field: int) -> np.ndarray:
+                field: int, bias: np.ndarray | None = None) -> np.ndarray:
     """
     Return a model's ``output`` (N, 3) guarded for its input ``fed`` (N, 6), one run.
 
-    An :func:`untrusted` sample gets its input gyro plus the envelope's fallback correction.
+    An :func:`untrusted` sample gets its input gyro plus the envelope's fallback
+    correction, less the tracked ``bias`` (N, 3) where the output's is tracked: what the
+    tracker gives, not the model's guess.
     """
     if envelope is None:
         return output
     mask = untrusted(fed, envelope, field)
     if not mask.any():
         return output
-    return np.where(mask[:, None], fed[:, :3] + np.array(envelope.fallback_rad_s), output)
+    fallback = fed[:, :3] + np.array(envelope.fallback_rad_s)
+    return np.where(mask[:, None], fallback if bias is None else fallback - bias, output)
 
 
 def resolve(meta: Any, choice: str) -> InputEnvelope | None:
@@ -146,8 +150,9 @@ def finish(output: np.ndarray, fed: np.ndarray, rate_hz: float,
     (:func:`~denoise_imu_ros.data.vertical.drop_vertical`); one run.
     """
     hold = None if envelope is None or tracking is None else too_fast(fed, envelope, field)
-    output = guard_batch(track_bias(output, fed[:, 3:], rate_hz, tracking, hold),
-                         fed, envelope, field)
+    bias = None if tracking is None else tracked_bias(output, fed[:, 3:], rate_hz, tracking,
+                                                      hold)
+    output = guard_batch(output if bias is None else output - bias, fed, envelope, field, bias)
     return drop_vertical(output, fed, rate_hz) if vertical else output
 
 
@@ -197,9 +202,10 @@ class Guard:
         self.trusted = self._since_outside >= self.field
         self.too_fast = self._since_fast < self.field
 
-    def apply(self, output: np.ndarray, fed: np.ndarray) -> np.ndarray:
+    def apply(self, output: np.ndarray, fed: np.ndarray,
+              bias: np.ndarray | None = None) -> np.ndarray:
         """Return the model's ``output`` (3,) guarded, for the input :meth:`check` took."""
         if self.trusted:
             return output
         self.guarded += 1
-        return fed[:3] + self._fallback
+        return fed[:3] + self._fallback if bias is None else fed[:3] + self._fallback - bias

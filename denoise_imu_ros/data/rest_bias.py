@@ -44,7 +44,8 @@ from ..core.schema import BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings, 
 __all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES',
            'classical_tracking', 'estimator', 'model_input', 'nominal_bias',
            'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch', 'RestBiasSettings',
-           'track_bias', 'tracker', 'tracker_only_gyro', 'tracking', 'write_rest_only_model']
+           'track_bias', 'tracked_bias', 'tracker', 'tracker_only_gyro', 'tracking',
+           'write_rest_only_model']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
@@ -116,17 +117,18 @@ class BiasTracker:
 
     def update(self, gyro: np.ndarray, accel: np.ndarray, hold: bool = False) -> np.ndarray:
         """
-        Take one sample (rad/s, m/s^2); return the bias estimate after it (3,).
+        Take one sample (rad/s, m/s^2); return the bias to remove at it (3,).
 
-        ``hold``: this sample is within a held stretch; at the first sample after one, the
-        estimate and its covariance are restored to those from before it (:func:`track_bias`).
+        That is the estimate after it, or, with ``hold`` (this sample is within a held
+        stretch), the estimate from before the stretch, to which the estimate and its
+        covariance are restored at the first sample after it (:func:`tracked_bias`).
         """
         if hold != (self._held is not None):
             self._held = _hold(self._vqf, self._held)
         self._gyro[:] = gyro
         self._accel[:] = accel
         self._vqf.update(self._gyro, self._accel)
-        return self._vqf.getBiasEstimate()[0]
+        return self._vqf.getBiasEstimate()[0] if self._held is None else self._held[0]
 
     def estimate(self) -> tuple[np.ndarray, float]:
         """Return the current bias (3,) and its standard deviation, both rad/s."""
@@ -171,29 +173,37 @@ def _hold(vqf: VQF, held: tuple[np.ndarray, np.ndarray] | None
     return None
 
 
-def track_bias(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
-               settings: BiasTracking | None, hold: np.ndarray | None = None) -> np.ndarray:
+def tracked_bias(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
+                 settings: BiasTracking, hold: np.ndarray | None = None) -> np.ndarray:
     """
-    Return a model's output (N, 3) less its tracked bias at each sample (None: as is).
+    Return the tracked bias (N, 3) to remove from a model's output (N, 3) at each sample.
 
     ``hold`` (N,): held stretches. The tracker runs through them (its orientation goes
     on), and at the first sample after each its bias estimate and covariance are restored
     to those from before it: what it learnt there is forgotten (not what it learns after,
-    from an orientation the stretch may have moved).
+    from an orientation the stretch may have moved); through a stretch the bias removed
+    is the one from before it.
     """
-    if settings is None or not len(gyro):
-        return gyro
     vqf = tracker(settings, rate_hz)
     gyro, accel = (np.ascontiguousarray(a, dtype=float) for a in (gyro, accel))
     hold = np.zeros(len(gyro), bool) if hold is None else hold
-    ends = np.append(np.flatnonzero(np.diff(hold)) + 1, len(gyro))
+    ends = np.append(np.flatnonzero(np.diff(hold)) + 1, len(gyro)) if len(gyro) else []
     bias, held, start = np.empty_like(gyro), None, 0
     for end in ends:
         if hold[start] != (held is not None):
             held = _hold(vqf, held)
-        bias[start:end] = vqf.updateBatch(gyro[start:end], accel[start:end])['bias']
+        estimate = vqf.updateBatch(gyro[start:end], accel[start:end])['bias']
+        bias[start:end] = estimate if held is None else held[0]
         start = end
-    return gyro - bias
+    return bias
+
+
+def track_bias(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
+               settings: BiasTracking | None, hold: np.ndarray | None = None) -> np.ndarray:
+    """Return a model's output (N, 3) less its :func:`tracked_bias` (None: as is)."""
+    if settings is None or not len(gyro):
+        return gyro
+    return gyro - tracked_bias(gyro, accel, rate_hz, settings, hold)
 
 
 def rest_bias_batch(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings

@@ -40,9 +40,10 @@ perhaps another power-on), a gap does not (the same run). With a
 the model's output less its tracked bias is what every output carries, the open-loop
 attitude and the gravity-aided orientation included; it restarts with the estimate.
 With a :class:`~denoise_imu_ros.data.envelope.Guard` (the model file's
-``input_envelope``), last, the output is the model's input plus a constant while the
-receptive field holds motion the model was not trained on, and the tracker's estimate is
-held through stretches where it turns faster than that (restored after each); it restarts
+``input_envelope``), last, the output is the model's input plus a constant, less the
+tracker's bias, while the receptive field holds motion the model was not trained on (what
+the tracker gives, not the model's guess), and the tracker's estimate is held through
+stretches where it turns faster than that (restored after each); it restarts
 with the network's history, and a gap ends a held stretch. With a
 :class:`~denoise_imu_ros.data.vertical.Vertical` (a model taught without its poses'
 heading), last of all, the output keeps only the part of its correction orthogonal to
@@ -255,13 +256,15 @@ class OnlineDenoiser:
             self.guard.check(fed)
         if not np.isfinite(corrected).all():  # never published: dropped as if lost
             return self._drop(Drop.NON_FINITE_OUTPUT)
+        bias = None
         if self.track is not None:
             if event in (Event.START, Event.TIME_JUMP):
                 self.track.reset()
-            corrected = corrected - self.track.update(
-                corrected, accel, self.guard is not None and self.guard.too_fast)
+            bias = self.track.update(corrected, accel,
+                                     self.guard is not None and self.guard.too_fast)
+            corrected = corrected - bias
         if self.guard is not None:
-            corrected = self.guard.apply(corrected, fed)
+            corrected = self.guard.apply(corrected, fed, bias)
         if self.vertical is not None:
             if event in (Event.START, Event.TIME_JUMP):
                 self.vertical.reset()

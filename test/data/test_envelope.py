@@ -43,6 +43,28 @@ def test_the_fallback_replaces_the_correction_for_a_receptive_field_after_a_samp
     assert guard_batch(output, fed, None, FIELD) is output
 
 
+def test_untrusted_the_output_falls_back_to_what_the_tracker_gives():
+    """Beyond the envelope: the input less the tracked bias, held through fast motion."""
+    from denoise_imu_ros.core.schema import BiasTracking
+    from denoise_imu_ros.data.envelope import finish
+    from denoise_imu_ros.data.rest_bias import tracked_bias
+    rng = np.random.default_rng(5)
+    n, rate = 8000, 200.0
+    fed = np.column_stack([rng.normal(0, 0.3, (n, 3)) + [0.01, -0.008, 0.004],
+                           rng.normal(0, 0.05, (n, 3)) + [0.0, 0.0, GRAVITY_M_S2]])
+    fed[6000:6200, :3] *= 20.0  # fast motion the model never saw
+    output = fed[:, :3] + 0.002 * np.sin(np.arange(n) / 50.0)[:, None]
+    bounds, settings = InputEnvelope(4.0, 5.0), BiasTracking(0.05, 30.0, 0.05)
+    hold = too_fast(fed, bounds, FIELD)
+    bias = tracked_bias(output, fed[:, 3:], rate, settings, hold)
+    assert np.abs(bias[5999]).max() > 1e-3  # it has learnt a bias by then
+    np.testing.assert_array_equal(bias[hold], np.tile(bias[5999], (int(hold.sum()), 1)))
+    done = finish(output, fed, rate, settings, bounds, FIELD)
+    bad = untrusted(fed, bounds, FIELD)
+    np.testing.assert_array_equal(done[bad], fed[bad, :3] - bias[bad])
+    np.testing.assert_array_equal(done[~bad], (output - bias)[~bad])
+
+
 def _online(guard: Guard, output: np.ndarray, fed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return the guarded outputs and the per-sample too-fast flags."""
     rows, fast = [], []
