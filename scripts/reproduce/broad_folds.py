@@ -1,0 +1,122 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""BROAD's next-power-on tables from a crossval's folds, against the classical pipeline."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+import shutil
+from typing import Any
+
+import numpy as np
+
+KEY = 'aoe_deg'
+BAR = 'tracker only'
+
+
+def ratios(recordings: dict[str, Any], names: list[str], row: str) -> dict[str, float]:
+    """Return a row's mean, the bar's, their ratio, the mean and worst per-recording ratios."""
+    got = np.array([recordings[n][row][KEY] for n in names])
+    bar = np.array([recordings[n][BAR][KEY] for n in names])
+    return {'mean': float(got.mean()), 'bar': float(bar.mean()),
+            'ratio': float(got.mean() / bar.mean()), 'mean_ratio': float((got / bar).mean()),
+            'worst_ratio': float((got / bar).max())}
+
+
+def open_loop(report: dict[str, Any]) -> list[str]:
+    """Markdown lines: each fold's held-out recordings, every row, each seed and the targets."""
+    seeds = report.get('seeds', [])
+    rows = [m for m in ('raw', 'rest bias', BAR, 'calibrated', 'network') if m in report['mean']]
+    lines = []
+    for i, held in enumerate(report['folds']):
+        per_seed = {s: report['per_seed'][str(s)]['recordings'] for s in seeds}
+        lines += [f'\nFold {i}: held out {", ".join(held)}; open loop AOE 3-D (deg)\n',
+                  '| trial | ' + ' | '.join(rows) + ''.join(f' | network seed {s}' for s in seeds)
+                  + ' |', '|---' * (len(rows) + len(seeds) + 1) + '|']
+        for n in held:
+            r = report['recordings'][n]
+            lines.append(f'| {n} | ' + ' | '.join(f'{r[m][KEY]:.2f}' for m in rows)
+                         + ''.join(f' | {per_seed[s][n]["network"][KEY]:.2f}' for s in seeds)
+                         + ' |')
+        for label, recs in [('ensemble', report['recordings'])] + [
+                (f'seed {s}', per_seed[s]) for s in seeds]:
+            for row in ('network', 'calibrated'):
+                t = ratios(recs, held, row)
+                lines.append(f'- {label}, {row}: mean {t["mean"]:.2f} against {t["bar"]:.2f} '
+                             f'({t["ratio"]:.2f}x), mean per-trial ratio {t["mean_ratio"]:.2f}, '
+                             f'worst {t["worst_ratio"]:.2f}')
+    return lines
+
+
+def fused(out: Path, dest: Path, data: str, report: dict[str, Any]) -> list[str]:
+    """Markdown lines: ``imu/data`` of each fold's seeds and ensemble against VQF's defaults."""
+    from denoise_imu_ros.core.modelfile import add_metadata
+    from denoise_imu_ros.evaluation.crossval import CANDIDATES
+    from denoise_imu_ros.evaluation.evaluate import evaluate
+    from denoise_imu_ros.learn.checkpoint import save_ensemble
+    seeds = report['seeds']
+    names = [f'seed{s}' for s in seeds] + ['ensemble']
+    lines = []
+    for i, held in enumerate(report['folds']):
+        choice = report['tracking']['per_fold'][str(i)]
+        for name in names:
+            folder = dest / f'fold{i}' / name
+            folder.mkdir(parents=True, exist_ok=True)
+            source = out / (f'seed{seeds[0]}' if name == 'ensemble' else name) / f'fold{i}'
+            shutil.copy(source / 'calibrated.safetensors', folder / 'calibrated.safetensors')
+            if name == 'ensemble':
+                if not (folder / 'network.safetensors').exists():
+                    save_ensemble(folder / 'network.safetensors', [
+                        str(out / f'seed{s}' / f'fold{i}' / 'network.safetensors')
+                        for s in seeds])
+            else:
+                shutil.copy(source / 'network.safetensors', folder / 'network.safetensors')
+            for row in ('network', 'calibrated'):  # the fold's own tracking
+                chosen = CANDIDATES[choice[row]]
+                add_metadata(folder / f'{row}.safetensors',
+                             bias_tracking=None if chosen is None else chosen.as_dict())
+            if not (folder / 'eval' / 'results.json').exists():
+                evaluate(str(folder / 'network.safetensors'), data, held, str(folder / 'eval'),
+                         baseline=str(folder / 'calibrated.safetensors'), plots=False,
+                         align_poses='auto')
+        got = {name: json.loads((dest / f'fold{i}' / name / 'eval' / 'results.json')
+                                .read_text())['fused'] for name in names}
+        lines += [f'\nFold {i}: `imu/data` AOE 3-D / tilt (deg)\n',
+                  '| trial | raw + VQF defaults | ' + ' | '.join(f'network {n}' for n in names)
+                  + ' |', '|---' * (len(names) + 2) + '|']
+        for n in held:
+            cell = got[names[0]][n]['raw + VQF defaults']
+            lines.append(f'| {n} | {cell["aoe_deg"]:.2f}/{cell["tilt_deg"]:.2f} | ' + ' | '.join(
+                f'{got[m][n]["network + VQF"]["aoe_deg"]:.2f}/'
+                f'{got[m][n]["network + VQF"]["tilt_deg"]:.2f}' for m in names) + ' |')
+        for m in names:
+            base = np.array([[got[m][n]['raw + VQF defaults'][k] for n in held]
+                             for k in ('aoe_deg', 'tilt_deg')]).mean(1)
+            net = np.array([[got[m][n]['network + VQF'][k] for n in held]
+                            for k in ('aoe_deg', 'tilt_deg')]).mean(1)
+            lines.append(f'- {m}: 3-D {net[0]:.2f} against {base[0]:.2f} '
+                         f'({net[0] / base[0]:.2f}x), tilt {net[1]:.2f} against {base[1]:.2f}')
+    return lines
+
+
+def main() -> None:
+    """Print the open-loop tables of OUT/crossval.json, and with --data the fused ones."""
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument('out', type=Path, help='a crossval --seeds ... --out folder')
+    parser.add_argument('--data', help='the recordings (../shared/data/broad): also imu/data')
+    parser.add_argument('--dest', type=Path, help='where the fold models with their tracking '
+                        'and their eval go (default: OUT/fused)')
+    args = parser.parse_args()
+    report = json.loads((args.out / 'crossval.json').read_text())
+    lines = [f'Verdict ({report["fold_kind"]}): {report["verdict"]}.',
+             f'Tracking chosen: {json.dumps(report["tracking"]["per_fold"])}']
+    lines += open_loop(report)
+    if args.data:
+        lines += fused(args.out, args.dest or args.out / 'fused', args.data, report)
+    print('\n'.join(lines))
+
+
+if __name__ == '__main__':
+    main()
