@@ -18,7 +18,8 @@ bias removed through a stretch where the receptive field turned faster than the
 envelope is the one from before it, and after it the tracker's estimate and covariance
 are restored to those from before it: a network's output beyond the rates it was trained
 on is off by more than a bias, and a tracker that kept what it learnt there carried the
-error on (BROAD's fast trials 07 and 29); accelerometer excursions alone (tapping) do not hold it. Measured worse
+error on (BROAD's fast trials 07 and 29); accelerometer excursions alone (tapping) do
+not hold it. Measured worse
 (``scripts/experiments/envelope_guard.py``, docs/experiments.md): holding the last
 correction (a correction taken in motion carries that motion's scale terms into faster
 motion), guarding before the tracking (its estimate then follows the fallback through

@@ -57,7 +57,8 @@ def drops_vertical(meta: ModelMeta, rest: str = 'model') -> bool:
     ``rest`` as :func:`~denoise_imu_ros.data.rest_bias.resolve`; a rest-only or
     tracker-only model corrects nothing to drop.
     """
-    return meta.kind not in NO_MODEL and drops(meta.heading_weight, resolve(meta, rest) is not None)
+    return (meta.kind not in NO_MODEL
+            and drops(meta.heading_weight, resolve(meta, rest) is not None))
 
 
 def _filter(rate_hz: float) -> VQF:

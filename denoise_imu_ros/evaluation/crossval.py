@@ -307,7 +307,8 @@ def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float, fed: np.
 
     Each gyro (over the recording's whole stream, as ``fed``) tracked and guarded by its
     row's input envelope, and its correction about the vertical dropped where the recipe's
-    is (``drop``; the tracker only corrects nothing to drop), as every path ends it (:func:`~denoise_imu_ros.data.envelope.finish`).
+    is (``drop``; the tracker only corrects nothing to drop), as every path ends it
+    (:func:`~denoise_imu_ros.data.envelope.finish`).
     """
     return {label: {m: score(seq, seq.on_poses(envelope.finish(
         g, fed, rate_hz, t, bounds[m], fields[m], drop and m != TRACKER_ONLY)))

@@ -111,8 +111,9 @@ def grid(kind: str, accel_bias: tuple[float, float, float] | None = None) -> lis
 def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
         stamp_ns: np.ndarray | None = None) -> np.ndarray:
     """
-    Orientation (N, 4) xyzw at every stamp; the step to stamp k at the mean of samples
-    k - 1 and k (:func:`~denoise_imu_ros.runtime.fusion.interval_rates`).
+    Orientation (N, 4) xyzw at every stamp, stepped to stamp k by samples k - 1 and k.
+
+    The step is at their mean (:func:`~denoise_imu_ros.runtime.fusion.interval_rates`).
 
     With ``stamp_ns``, VQF integrates the real intervals as the node does (the baselines
     step by one period: the recordings scored have none missing).

@@ -20,7 +20,9 @@ VIO pre-integrators), then corrects with sample k's accelerometer. Measured agai
 sample k alone over that interval, on poses moved onto the IMU's clock: lower tilt error
 on EuRoC's, TUM-VI's and BROAD's training recordings (docs/results.md). The paper's
 open-loop AOE keeps its own convention, sample k driving stamp k to k + 1
-(:mod:`denoise_imu_ros.core.metrics`). VQF steps by one nominal period; the gyro is scaled by the real interval in periods, so
+(:mod:`denoise_imu_ros.core.metrics`).
+
+VQF steps by one nominal period; the gyro is scaled by the real interval in periods, so
 that a lost message does not take its rotation out of the yaw (as the open-loop attitude,
 which integrates the real interval). Across a gap (the network restarts) and at the
 first sample after a reset there is no gyro step: the yaw is held, as the attitude is,
