@@ -83,20 +83,27 @@ def fused(out: Path, dest: Path, data: str, report: dict[str, Any]) -> list[str]
                          align_poses='auto')
         got = {name: json.loads((dest / f'fold{i}' / name / 'eval' / 'results.json')
                                 .read_text())['fused'] for name in names}
+        classical = ('raw + VQF defaults', 'tracker only + VQF')
         lines += [f'\nFold {i}: `imu/data` AOE 3-D / tilt (deg)\n',
-                  '| trial | raw + VQF defaults | ' + ' | '.join(f'network {n}' for n in names)
-                  + ' |', '|---' * (len(names) + 2) + '|']
+                  '| trial | ' + ' | '.join(classical) + ' | '
+                  + ' | '.join(f'network {n}' for n in names) + ' |',
+                  '|---' * (len(names) + 3) + '|']
+
+        def cell(row: dict[str, float]) -> str:
+            return f'{row["aoe_deg"]:.2f}/{row["tilt_deg"]:.2f}'
         for n in held:
-            cell = got[names[0]][n]['raw + VQF defaults']
-            lines.append(f'| {n} | {cell["aoe_deg"]:.2f}/{cell["tilt_deg"]:.2f} | ' + ' | '.join(
-                f'{got[m][n]["network + VQF"]["aoe_deg"]:.2f}/'
-                f'{got[m][n]["network + VQF"]["tilt_deg"]:.2f}' for m in names) + ' |')
+            lines.append(f'| {n} | ' + ' | '.join(cell(got[names[0]][n][c]) for c in classical)
+                         + ' | ' + ' | '.join(cell(got[m][n]['network + VQF']) for m in names)
+                         + ' |')
+        means = {c: np.array([[got[names[0]][n][c][k] for n in held]
+                              for k in ('aoe_deg', 'tilt_deg')]).mean(1) for c in classical}
+        lines.append('- ' + ', '.join(f'{c}: 3-D {v[0]:.2f}, tilt {v[1]:.2f}'
+                                      for c, v in means.items()))
+        base = means['raw + VQF defaults']
         for m in names:
-            base = np.array([[got[m][n]['raw + VQF defaults'][k] for n in held]
-                             for k in ('aoe_deg', 'tilt_deg')]).mean(1)
             net = np.array([[got[m][n]['network + VQF'][k] for n in held]
                             for k in ('aoe_deg', 'tilt_deg')]).mean(1)
-            lines.append(f'- {m}: 3-D {net[0]:.2f} against {base[0]:.2f} '
+            lines.append(f'- network {m}: 3-D {net[0]:.2f} against {base[0]:.2f} '
                          f'({net[0] / base[0]:.2f}x), tilt {net[1]:.2f} against {base[1]:.2f}')
     return lines
 

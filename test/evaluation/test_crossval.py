@@ -91,7 +91,7 @@ def test_a_learnt_row_never_loses_to_the_classical_pipeline_on_one_recording():
 
 
 def test_one_recording_where_the_tracker_diverges_does_not_make_the_rest_bias_the_bar():
-    """BROAD's session folds: tracker only wins 9 of 12 trials, loses its mean on one."""
+    """On BROAD's session folds tracker only wins 9 of 12 trials and loses its mean on one."""
     def rows(rest: float, tracker: float, net: float) -> dict[str, dict[str, float]]:
         return {m: {'aoe_deg': v, 'aoe_yaw_deg': v, 'tilt_deg': 1.0} for m, v in (
             ('raw', 40.0), ('rest bias', rest), ('tracker only', tracker), ('calibrated', 9.0),
