@@ -19,12 +19,11 @@ envelope is the one from before it, and after it the tracker's estimate and cova
 are restored to those from before it: a network's output beyond the rates it was trained
 on is off by more than a bias, and a tracker that kept what it learnt there carried the
 error on (BROAD's fast trials 07 and 29); accelerometer excursions alone (tapping) do
-not hold it. Measured worse
-(``scripts/experiments/envelope_guard.py``, docs/experiments.md): holding the last
-correction (a correction taken in motion carries that motion's scale terms into faster
-motion), guarding before the tracking (its estimate then follows the fallback through
-fast motion), holding the estimate wherever the guard is (what it learns through tapping
-is then discarded), and feeding the tracker the fallback through the held stretches.
+not hold it. Measured worse (docs/experiments.md): holding the last correction (a
+correction taken in motion carries that motion's scale terms into faster motion),
+guarding before the tracking (its estimate then follows the fallback through fast
+motion), holding the estimate wherever the guard is (what it learns through tapping is
+then discarded), and feeding the tracker the fallback through the held stretches.
 Every path uses it identically (:func:`finish` over arrays for ``eval``, ``correct`` and
 ``crossval``; :class:`Guard` per sample for the node and ``process-bag``; equal bit for
 bit). The node's ``envelope_guard`` parameter (``correct``'s and ``process-bag``'s

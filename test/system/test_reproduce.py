@@ -17,6 +17,13 @@ def _load(name: str):
     return module
 
 
+@pytest.mark.parametrize('name', sorted(p.stem for p in SCRIPTS.glob('*.py')))
+def test_every_reproduce_script_imports_and_has_a_main(name):
+    """What docs/results.md cites runs: nothing it imports has moved or gone."""
+    module = _load(name)
+    assert callable(module.main) and module.__doc__.strip()
+
+
 def _rows(net: float, tracker: float) -> dict:
     return {m: {'aoe_deg': v} for m, v in (('raw', 40.0), ('rest bias', 5.0),
                                            ('tracker only', tracker), ('calibrated', 3.0),

@@ -9,7 +9,7 @@ the same test is run on the poses as recorded, moving-averaged over +-K pose sam
 (no average across a hole), and moved onto the IMU clock and frame (``align: auto``);
 then the bias fitted on the other recordings (256 samples) is applied to each one,
 the most a constant correction learned elsewhere can do. AOE 3-D, degrees.
-Usage: .venv/bin/python scripts/experiments/supervision.py DATA_DIR NAME [NAME ...]
+Usage: .venv/bin/python scripts/reproduce/supervision.py DATA_DIR NAME [NAME ...]
 """
 
 import dataclasses

@@ -9,7 +9,7 @@ bias along its mean "up" (the accelerometer's mean direction over the stream) th
 lowers the model's open-loop AOE 3-D against POSES most, and the figures with it: what a
 perfect constant about the vertical would give, and whether a trajectory could teach it
 (its constants against those of the motion capture).
-Usage: .venv/bin/python scripts/experiments/vertical_constant.py MODEL DATA POSES|- NAME...
+Usage: .venv/bin/python scripts/reproduce/vertical_constant.py MODEL DATA POSES|- NAME...
 """
 
 import argparse

@@ -11,7 +11,7 @@ recordings' validation tails (``tune-fusion --attach``, never on the held-out on
 ``eval`` scores the held-out recordings. Prints one Markdown table: open loop (raw,
 calibrated, network) and fused (raw, calibrated and network + VQF, calibrated +
 imufusion and + Madgwick), AOE 3-D / tilt in degrees, per held-out recording and mean.
-Run: .venv/bin/python scripts/experiments/loro_fused.py CROSSVAL_DIR DATA_DIR
+Run: .venv/bin/python scripts/reproduce/loro_fused.py CROSSVAL_DIR DATA_DIR
 """
 
 import argparse

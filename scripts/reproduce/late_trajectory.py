@@ -8,7 +8,7 @@ with, where the turn-on bias is measured. Each ASL folder of DATA gets OUT/<name
 its poses from ``--after`` seconds past the first sample whose gyro is more than 10
 deg/s from the median of its first 1,000 samples. Give OUT as ``--poses`` or a recipe's
 ``poses``.
-Usage: .venv/bin/python scripts/experiments/late_trajectory.py DATA OUT [--after 2]
+Usage: .venv/bin/python scripts/reproduce/late_trajectory.py DATA OUT [--after 2]
 """
 
 import argparse

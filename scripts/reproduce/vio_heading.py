@@ -9,7 +9,7 @@ model's "rest bias" gyro (the raw gyro less its turn-on bias, integrated) are co
 with the motion capture's: the component of each error about the world's vertical, RMS
 over the recordings' windows, degrees. A trajectory whose figure is above the gyro's at
 every horizon has nothing to teach the gyro about its heading.
-Usage: .venv/bin/python scripts/experiments/vio_heading.py MODEL DATA POSES REC...
+Usage: .venv/bin/python scripts/reproduce/vio_heading.py MODEL DATA POSES REC...
 """
 
 from pathlib import Path

@@ -8,7 +8,7 @@ increment errors against the recording's own poses (``metrics.fit_constant_bias`
 check-data's supervision test) and prints the AOE before and after removing it, with
 the bias. Fitting on the recording's poses uses its ground truth: the "after" column is
 a bound on what a perfect per-recording constant would give, not something deployable.
-Usage: .venv/bin/python scripts/experiments/residual_bias.py MODEL DATA_DIR NAME [NAME ...]
+Usage: .venv/bin/python scripts/reproduce/residual_bias.py MODEL DATA_DIR NAME [NAME ...]
 """
 
 import dataclasses
