@@ -595,11 +595,11 @@ def main(argv: list[str] | None = None) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     """Run a parsed command: its errors as one line and an exit code."""
-    if args.command in TORCH_COMMANDS or getattr(args, 'engine', None) == 'batch':
-        import torch
-        # Denormal floats in the network's activations slow its CPU convolutions tenfold.
-        torch.set_flush_denormal(True)
     try:
+        if args.command in TORCH_COMMANDS or getattr(args, 'engine', None) == 'batch':
+            import torch  # seconds on a loaded machine: Ctrl-C there ends as anywhere
+            # Denormal floats in the network's activations slow its CPU convolutions tenfold.
+            torch.set_flush_denormal(True)
         _check_options(args)
         args.func(args)
     except DenoiseError as err:

@@ -242,3 +242,22 @@ def test_the_offline_tools_offer_the_node_s_rest_bias_and_guard_choices():
     from denoise_imu_ros.data import envelope, rest_bias
     assert REST_BIAS_OPTION['choices'] == rest_bias.CHOICES
     assert GUARD_OPTION['choices'] == envelope.CHOICES
+
+
+@pytest.mark.parametrize('signal_error, code, word', [
+    (KeyboardInterrupt, 130, 'interrupted'), (None, 143, 'terminated')])
+def test_a_signal_while_torch_imports_ends_in_one_line_and_its_exit_code(
+        monkeypatch, capsys, signal_error, code, word):
+    """Ctrl-C or SIGTERM in the first seconds of train (torch importing) as anywhere else."""
+    import builtins
+
+    from denoise_imu_ros.cli import Terminated
+    real_import = builtins.__import__
+
+    def slow_torch(name, *args, **kwargs):
+        if name == 'torch':
+            raise (signal_error or Terminated)()
+        return real_import(name, *args, **kwargs)
+    monkeypatch.setattr(builtins, '__import__', slow_torch)
+    assert main(['train', '--config', 'recipe.yaml']) == code
+    assert capsys.readouterr().err.strip() == f'denoise-imu train: {word}'

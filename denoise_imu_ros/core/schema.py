@@ -103,9 +103,22 @@ class RestBiasSettings:
                settings.prior_sigma_rad_s) <= 0:
             raise ModelFileError(f'{where}: rest_bias {value!r}: its thresholds, time '
                                  'constants and prior_sigma_rad_s must be positive')
+        if settings.bias_clip_deg_s > MAX_BIAS_CLIP_DEG_S:
+            raise ModelFileError(f'{where}: rest_bias.bias_clip_deg_s '
+                                 f'{settings.bias_clip_deg_s:g} is beyond any MEMS gyro\'s '
+                                 f'turn-on bias (at most {MAX_BIAS_CLIP_DEG_S:g} deg/s)')
+        clip = math.radians(settings.bias_clip_deg_s)
+        if max(map(abs, settings.prior_rad_s)) > clip:
+            raise ModelFileError(f'{where}: rest_bias.prior_rad_s {list(settings.prior_rad_s)} '
+                                 f'is beyond the bias it would ever estimate (bias_clip_deg_s '
+                                 f'{settings.bias_clip_deg_s:g} = {clip:.4g} rad/s): written '
+                                 'in deg/s?')
         return settings
 
 
+# the largest turn-on bias clip a model file may hold: consumer MEMS gyros are specified
+# at a few to 20 deg/s of zero-rate offset
+MAX_BIAS_CLIP_DEG_S = 60.0
 VQF_BIAS_SIGMA_INIT_DEG_S = 0.5  # VQF's biasSigmaInit default, for a raw gyro
 
 
@@ -368,13 +381,21 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
 
 
 def _settings(raw: dict[str, Any], key: str, where: str,
-              build: Callable[[dict[str, Any]], Any]) -> Any:
-    """Return ``build`` of a mapping entry (None where absent); its errors name the entry."""
+              build: Callable[[dict[str, Any]], Any], known: set[str]) -> Any:
+    """
+    Return ``build`` of a mapping entry (None where absent); its errors name the entry.
+
+    A key outside ``known`` is refused: a misspelt setting would otherwise be ignored.
+    """
     value = raw.get(key)
     if value is None:
         return None
     if not isinstance(value, dict):
         raise _fail(where, key, value, 'a mapping')
+    unknown = sorted(set(value) - known, key=str)
+    if unknown:
+        raise ModelFileError(f'{where}: {key} has unknown entries {unknown} (known: '
+                             f'{", ".join(sorted(known))})')
     try:
         return build(value)
     except ValueError as err:
@@ -413,9 +434,10 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         rest_bias=None if rest is None else RestBiasSettings.from_dict(rest, where),
         bias_tracking=_settings(raw, 'bias_tracking', where, lambda v: BiasTracking(
             v.get('sigma_motion_deg_s'), v.get('forgetting_s'),
-            v.get('sigma_init_deg_s', VQF_BIAS_SIGMA_INIT_DEG_S))),
+            v.get('sigma_init_deg_s', VQF_BIAS_SIGMA_INIT_DEG_S)),
+            {f.name for f in fields(BiasTracking)} | {'label', 'chosen_on'}),
         input_envelope=_settings(raw, 'input_envelope', where, lambda v: InputEnvelope(
             v.get('gyro_rad_s'), v.get('accel_offset_m_s2'),
-            v.get('fallback_rad_s', (0.0, 0.0, 0.0)))),
+            v.get('fallback_rad_s', (0.0, 0.0, 0.0))), {f.name for f in fields(InputEnvelope)}),
         code_version=_optional(raw, 'code_version', where, str, 'a version'),
         members=len(members))
