@@ -150,6 +150,7 @@ def _crossval(args: argparse.Namespace) -> None:
     if args.attach and args.fold is not None:
         raise OptionError('--attach with --fold: one fold is no verdict; attach when '
                           'crossval scores every fold (without --fold)')
+    _check_writable(args.out)  # before the first fold trains, not after
     for path in args.attach or []:  # before the folds train, not after
         check_attachable(path)
         why = attach_mismatches({'folds': [recipe.sequences], 'steps': recipe.steps,

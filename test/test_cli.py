@@ -151,6 +151,8 @@ def test_garbage_inputs_and_bad_options_are_one_line_errors(model_file, tmp_path
     cases.append((['train', '--config', recipe, '--out', '/proc/m.safetensors'],
                   '/proc: output folder is not writable'))
     cases.append((['crossval', '--config', 'x.yaml', '--seeds', '0', '-1'], '--seeds -1: must be'))
+    cases.append((['crossval', '--config', recipe, '--out', '/proc/cv'],
+                  '/proc/cv: cannot create the output folder'))
     for argv, message in cases:
         assert main(argv) == 1, argv
         err = _error(capsys)
