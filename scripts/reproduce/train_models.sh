@@ -64,8 +64,8 @@ for ds in euroc tumvi; do  # the filter settings, chosen on the training recordi
 done
 # BROAD: three trainings of its recipe and its calibration on both power-on sessions, the
 # leave-one-session-out verdict (the folds' ensembles of the three seeds), the filter
-# settings, and broad: the rest-only model the verdict recommends
-broad_b=02_undisturbed_slow_rotation_B,05_undisturbed_slow_rotation_with_breaks_B,11_undisturbed_slow_translation_B,14_undisturbed_slow_translation_with_breaks_B,16_undisturbed_fast_translation_B
+# settings, and broad: the tracker-only model the verdict recommends
+broad_b=02_undisturbed_slow_rotation_B,05_undisturbed_slow_rotation_with_breaks_B,07_undisturbed_fast_rotation_B,11_undisturbed_slow_translation_B,14_undisturbed_slow_translation_with_breaks_B,16_undisturbed_fast_translation_B,21_undisturbed_fast_combined,29_disturbed_stationary_magnet_B
 broad_c=03_undisturbed_slow_rotation_C,12_undisturbed_slow_translation_C,25_disturbed_tapping_B,27_disturbed_phone_vibration_B
 broad=()
 for seed in 0 1 2; do
@@ -83,7 +83,7 @@ run broad_calibrated --config config/train_broad.yaml --calibration-only
   --model "$out/broad_network.safetensors" --baseline "$out/broad_calibrated.safetensors" \
   --data "${DATA:-../shared/data}/broad" --attach --quiet > "$out/tune_broad.log" 2>&1
 [ -f "$out/broad.safetensors" ] || { "$bin/denoise-imu" rest-model \
-  --like "$out/broad_network.safetensors" --out "$out/broad.safetensors"
+  --like "$out/broad_network.safetensors" --tracker-only --out "$out/broad.safetensors"
   "$bin/denoise-imu" tune-fusion --model "$out/broad.safetensors" \
     --baseline "$out/broad_calibrated.safetensors" --data "${DATA:-../shared/data}/broad" \
     --attach --quiet > "$out/tune_broad_rest.log" 2>&1; }
