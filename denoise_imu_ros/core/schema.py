@@ -105,8 +105,8 @@ class RestBiasSettings:
                                  'constants and prior_sigma_rad_s must be positive')
         if settings.bias_clip_deg_s > MAX_BIAS_CLIP_DEG_S:
             raise ModelFileError(f'{where}: rest_bias.bias_clip_deg_s '
-                                 f'{settings.bias_clip_deg_s:g} is beyond any MEMS gyro\'s '
-                                 f'turn-on bias (at most {MAX_BIAS_CLIP_DEG_S:g} deg/s)')
+                                 f'{settings.bias_clip_deg_s:g} is beyond any MEMS gyro turn-on '
+                                 f'bias (at most {MAX_BIAS_CLIP_DEG_S:g} deg/s)')
         clip = math.radians(settings.bias_clip_deg_s)
         if max(map(abs, settings.prior_rad_s)) > clip:
             raise ModelFileError(f'{where}: rest_bias.prior_rad_s {list(settings.prior_rad_s)} '

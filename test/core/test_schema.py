@@ -50,7 +50,7 @@ def test_typed_entries_and_what_this_version_does_not_know_survive_a_copy():
     ({'rest_bias': {'prior_rad_s': [0.0, 0.0, 4.4], 'bias_clip_deg_s': 9.0}},
      'beyond the bias it would ever estimate'),
     ({'rest_bias': {'prior_rad_s': [50.0, 0.0, 0.0]}}, r'bias_clip_deg_s 2 = 0.03491 rad/s'),
-    ({'rest_bias': {'bias_clip_deg_s': 500.0}}, "beyond any MEMS gyro's turn-on bias"),
+    ({'rest_bias': {'bias_clip_deg_s': 500.0}}, 'beyond any MEMS gyro turn-on bias'),
     ({'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0, 'forget': 9.0}},
      r"bias_tracking has unknown entries \['forget'\]"),
     ({'input_envelope': {'gyro_rad_s': 5.0, 'accel_offset_m_s2': 9.0, 'gyro': 1.0}},
