@@ -13,8 +13,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 import os
 from pathlib import Path
+import secrets
 import shutil
-import tempfile
 from typing import Any
 
 from .errors import OutputError
@@ -35,12 +35,16 @@ def atomic_output(path: str | Path, overwrite: bool = False) -> Iterator[Path]:
                           'a folder: give another name, or remove it first')
     if path.exists() and not overwrite:
         raise OutputError(f'{path}: exists already')
+    # named before it exists, so that a signal right after its creation still removes it
+    scratch = path.parent / f'.{path.name}.{secrets.token_hex(4)}'
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        scratch = Path(tempfile.mkdtemp(prefix=f'.{path.name}.', dir=path.parent))
-    except OSError as err:
-        raise OutputError(f'{path}: cannot write here ({err.strerror})') from err
-    try:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            scratch.mkdir(mode=0o700)
+        except OSError as err:
+            if isinstance(err, FileExistsError):
+                scratch = None  # another writer's: not ours to remove
+            raise OutputError(f'{path}: cannot write here ({err.strerror})') from err
         yield scratch / path.name
         os.replace(scratch / path.name, path)
     except OSError as err:  # a full disk: name the output, not the scratch copy
@@ -48,7 +52,8 @@ def atomic_output(path: str | Path, overwrite: bool = False) -> Iterator[Path]:
             raise OutputError(f'{err.filename}: {err.strerror or err}') from err
         raise OutputError(f'{path}: cannot write ({err.strerror or err})') from err
     finally:
-        shutil.rmtree(scratch, ignore_errors=True)
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
 
 
 def write_text(path: str | Path, text: str) -> None:
