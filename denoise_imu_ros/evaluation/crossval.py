@@ -445,7 +445,7 @@ def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
     Judged on the ``key`` figure (:func:`judged_on`), never deploying a row whose heading
     is off (:func:`heading_off`), nor a learnt row that loses to the classical pipeline
     (the gyro less its turn-on bias, its bias tracked, no model; where that row is not
-    scored, the best on average of plain integration and the gyro less its turn-on bias)
+    scored, the better of plain integration and the gyro less its turn-on bias)
     by more than LOSS_LIMIT on any one recording: a mean can hide many small losses. The
     network only if it beats the baseline on most recordings and on average. The baseline
     is the classical row or the calibrated IMU of lowest geometric mean over the
@@ -456,14 +456,16 @@ def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
     bias is the raw gyro).
     """
     off = heading_off(mean, key)
+    order = (*CLASSICAL, 'calibrated')
+
+    def rank(m: str) -> tuple[float, int]:
+        return _geometric_mean(per_recording, m, key), order.index(m)
     classical = TRACKER_ONLY if TRACKER_ONLY in mean else min(
-        (m for m in CLASSICAL if m in mean), key=lambda m: (mean[m][key], CLASSICAL.index(m)))
+        (m for m in CLASSICAL if m in mean), key=rank)
     worst = {m: _worst_ratio(per_recording, m, classical, key)
              for m in ('calibrated', 'network') if m in mean}
     losing = [m for m, (ratio, _) in worst.items() if ratio > LOSS_LIMIT and m not in off]
-    order = (*CLASSICAL, 'calibrated')
-    base = min((m for m in order if m in mean and m not in off and m not in losing),
-               key=lambda m: (_geometric_mean(per_recording, m, key), order.index(m)))
+    base = min((m for m in order if m in mean and m not in off and m not in losing), key=rank)
     label = {'calibrated': 'the calibrated IMU', 'raw': 'plain integration',
              'rest bias': 'the raw gyro less its turn-on bias',
              TRACKER_ONLY: 'the classical pipeline (the gyro less its turn-on bias, its '
