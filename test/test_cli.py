@@ -53,6 +53,19 @@ def test_a_model_its_validation_advises_against_runs_with_a_warning(tmp_path, ca
                                'training IMU had it')
 
 
+def test_correct_and_process_bag_say_what_the_node_says_of_the_turn_on_bias(tmp_path, capsys):
+    for run in (['correct', '--input', str(SAMPLE), '--output', str(tmp_path / 'c.csv')],
+                ['process-bag', str(SAMPLE), str(tmp_path / 'out')]):
+        # EuRoC's 200 Hz against BROAD's 285.7: refused, after the warnings
+        assert main([*run, '--model', 'broad_network', '--rest-bias', 'off']) == 1
+        assert ('warning: rest_bias off: the model was trained on the gyro less its turn-on '
+                'bias, it now gets the raw gyro') in capsys.readouterr().err.splitlines()
+    assert main(['correct', '--model', 'euroc', '--rest-bias', 'on', '--input', str(SAMPLE),
+                 '--output', str(tmp_path / 'e.csv')]) == 0
+    assert 'euroc.safetensors was trained on the raw gyro and stores no turn-on bias' in (
+        capsys.readouterr().err)
+
+
 def test_errors_are_one_line_naming_the_file(model_file, tmp_path, capsys):
     assert main(['correct', '--model', str(tmp_path / 'nope.safetensors'), '--input',
                  str(SAMPLE), '--output', str(tmp_path / 'o.csv')]) == 1

@@ -69,15 +69,18 @@ class RestBiasSettings:
     The time constants were chosen on BROAD's session-B trials (docs/method.md):
     0.5 s of stillness and a 0.25 s low-pass start the estimate earlier than VQF's
     defaults (1.5 s, 0.5 s), which lowered the open-loop error of the rest-bias gyro;
-    the gyro and accelerometer thresholds are VQF's. ``bias_clip_deg_s`` also bounds
-    what counts as still: a steady turn faster than it is never taken for a bias.
+    the gyro and accelerometer thresholds are VQF's. ``bias_clip_deg_s`` bounds the
+    estimate's distance from the prior, and so what counts as still: a gyro level further
+    from the prior than that is a steady turn, never a bias. The accelerometer cannot tell
+    a still IMU from a steady turn about gravity: the gyro's level against the prior is
+    what can, and a turn within the clip of it stays ambiguous (said in ``/diagnostics``).
     """
 
     rest_min_s: float = 0.5               # stillness lasting this long is rest
     filter_tau_s: float = 0.25            # low-pass of the rest detector and estimate
     gyro_threshold_deg_s: float = 2.0     # gyro deviation from its low-pass
     accel_threshold_m_s2: float = 0.5     # accelerometer deviation from its low-pass
-    bias_clip_deg_s: float = 2.0          # largest bias estimated; faster is motion
+    bias_clip_deg_s: float = 2.0          # largest distance from the prior; beyond: motion
     prior_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the estimate before rest
     prior_sigma_rad_s: float = math.radians(0.5)  # its standard deviation (VQF's default)
 
@@ -107,17 +110,17 @@ class RestBiasSettings:
             raise ModelFileError(f'{where}: rest_bias.bias_clip_deg_s '
                                  f'{settings.bias_clip_deg_s:g} is beyond any MEMS gyro turn-on '
                                  f'bias (at most {MAX_BIAS_CLIP_DEG_S:g} deg/s)')
-        clip = math.radians(settings.bias_clip_deg_s)
-        if max(map(abs, settings.prior_rad_s)) > clip:
+        if max(map(abs, settings.prior_rad_s)) > math.radians(MAX_BIAS_CLIP_DEG_S):
             raise ModelFileError(f'{where}: rest_bias.prior_rad_s {list(settings.prior_rad_s)} '
-                                 f'is beyond the bias it would ever estimate (bias_clip_deg_s '
-                                 f'{settings.bias_clip_deg_s:g} = {clip:.4g} rad/s): written '
-                                 'in deg/s?')
+                                 f'is beyond any MEMS gyro turn-on bias (at most '
+                                 f'{MAX_BIAS_CLIP_DEG_S:g} deg/s = '
+                                 f'{math.radians(MAX_BIAS_CLIP_DEG_S):.4g} rad/s): '
+                                 'written in deg/s?')
         return settings
 
 
-# the largest turn-on bias clip a model file may hold: consumer MEMS gyros are specified
-# at a few to 20 deg/s of zero-rate offset
+# the largest turn-on bias (and clip about the prior) a model file may hold: consumer MEMS
+# gyros are specified at a few to 20 deg/s of zero-rate offset
 MAX_BIAS_CLIP_DEG_S = 60.0
 VQF_BIAS_SIGMA_INIT_DEG_S = 0.5  # VQF's biasSigmaInit default, for a raw gyro
 

@@ -6,12 +6,15 @@ The gyro's turn-on bias, estimated causally from the stillness a run starts with
 A consumer MEMS gyro's bias changes at every power-on and holds within one: a model
 file cannot carry it, the recording itself must measure it. VQF's rest detection
 (Laidig & Seel 2023, the ``vqf`` package) says when the IMU is still (gyro and
-accelerometer within thresholds of their low-passed values for ``rest_min_s``, the
-low-passed gyro under ``bias_clip_deg_s``), and its rest bias estimator (a Kalman filter
-on the low-passed gyro while still; its motion bias estimation is off) gives the bias and
-its standard deviation at every sample, from that sample and the ones before it only.
-Later still periods refine it. Before the first stillness the estimate is the
-``prior``: the mean rest bias of the model's training recordings (0 without a model).
+accelerometer within thresholds of their low-passed values for ``rest_min_s``), and its
+rest bias estimator (a Kalman filter on the low-passed gyro while still; its motion bias
+estimation is off) gives the bias and its standard deviation at every sample, from that
+sample and the ones before it only. Later still periods refine it. Before the first
+stillness the estimate is the ``prior``: the mean rest bias of the model's training
+recordings (0 without a model). VQF is fed the gyro less the prior, so that its clip
+(``bias_clip_deg_s``) bounds the distance from the prior: a steady turn about gravity
+looks still to the accelerometer, and only a gyro level no power-on's bias would have
+tells it from rest; a level within the clip is ambiguous (:attr:`RestBias.offset_deg_s`).
 
 Every path uses it identically: the model's input gyro is the raw gyro minus the
 estimate at that sample (:func:`remove_rest_bias` over arrays for training, ``eval``,
@@ -31,7 +34,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from typing import Iterable
+from typing import Iterable, NamedTuple
 
 import numpy as np
 from vqf import VQF
@@ -42,25 +45,26 @@ from ..core.modelfile import code_version, Described, ModelFile, sample_rate, wr
 from ..core.schema import BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings, TRACKER_ONLY
 
 __all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES',
-           'classical_tracking', 'estimator', 'model_input', 'nominal_bias',
+           'classical_tracking', 'estimator', 'model_input', 'Nominal', 'nominal_bias',
            'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch', 'RestBiasSettings',
            'track_bias', 'tracked_bias', 'tracker', 'tracker_only_gyro', 'tracking',
            'write_rest_only_model']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
+AMBIGUOUS_CLIP_FRACTION = 0.5  # a rest bias this far out in its clip may be a slow turn
 # the tracker-only row's settings where neither crossval nor the model chose any: what
 # crossval chose for BROAD's sessions (docs/results.md), started as sure of its 0 as that
 CLASSICAL_TRACKING = BiasTracking(0.05, 30.0, 0.05)
 
 
 def estimator(settings: RestBiasSettings, rate_hz: float) -> VQF:
-    """Return a VQF that estimates the rest bias alone, started at the prior."""
+    """Return a VQF that estimates the rest bias less the prior, alone, started at 0."""
     vqf = VQF(1.0 / rate_hz, motionBiasEstEnabled=False, restBiasEstEnabled=True,
               restMinT=settings.rest_min_s, restFilterTau=settings.filter_tau_s,
               restThGyr=settings.gyro_threshold_deg_s,
               restThAcc=settings.accel_threshold_m_s2, biasClip=settings.bias_clip_deg_s)
-    vqf.setBiasEstimate(np.array(settings.prior_rad_s, dtype=float), settings.prior_sigma_rad_s)
+    vqf.setBiasEstimate(np.zeros(3), settings.prior_sigma_rad_s)
     return vqf
 
 
@@ -139,9 +143,10 @@ class BiasTracker:
 class RestBias(BiasTracker):
     """The turn-on bias one sample at a time (the node, process-bag), and the rest seen."""
 
-    _start = staticmethod(estimator)  # from the prior, at rest only
+    _start = staticmethod(estimator)  # from the prior (an offset of 0), at rest only
 
     def __init__(self, settings: RestBiasSettings, rate_hz: float) -> None:
+        self._prior = np.array(settings.prior_rad_s, dtype=float)
         super().__init__(settings, rate_hz)
         self.still_samples = 0  # samples detected still since the last reset
 
@@ -152,9 +157,32 @@ class RestBias(BiasTracker):
 
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
         """Take one sample (rad/s, m/s^2); return the bias estimate after it (3,)."""
-        bias = super().update(gyro, accel)
+        np.subtract(gyro, self._prior, out=self._gyro)
+        self._accel[:] = accel
+        self._vqf.update(self._gyro, self._accel)
         self.still_samples += bool(self._vqf.getRestDetected())
-        return bias
+        return self._vqf.getBiasEstimate()[0] + self._prior
+
+    def estimate(self) -> tuple[np.ndarray, float]:
+        """Return the current bias (3,) and its standard deviation, both rad/s."""
+        offset, sigma = self._vqf.getBiasEstimate()
+        return offset + self._prior, float(sigma)
+
+    @property
+    def offset_deg_s(self) -> float:
+        """Return the estimate's largest distance from the prior on any axis, deg/s."""
+        return float(np.degrees(np.abs(self._vqf.getBiasEstimate()[0]).max()))
+
+    @property
+    def ambiguous(self) -> bool:
+        """
+        Whether the stillness found may have been a steady turn: over half the clip away.
+
+        Within the clip a still IMU with that bias and a turn about gravity at that rate
+        look alike to VQF's rest detection; near the prior the two differ by little.
+        """
+        return bool(self.still_samples) and (
+            self.offset_deg_s > AMBIGUOUS_CLIP_FRACTION * self.settings.bias_clip_deg_s)
 
     @property
     def seconds_still(self) -> float:
@@ -213,10 +241,11 @@ def rest_bias_batch(imu: np.ndarray, rate_hz: float, settings: RestBiasSettings
 
     Equal to :meth:`RestBias.update` sample by sample (one C++ update, the same order).
     """
+    prior = np.array(settings.prior_rad_s, dtype=float)
     out = estimator(settings, rate_hz).updateBatch(
-        np.ascontiguousarray(imu[:, :3], dtype=float),
+        np.ascontiguousarray(np.asarray(imu[:, :3], dtype=float) - prior),
         np.ascontiguousarray(imu[:, 3:], dtype=float))
-    return {'bias': out['bias'], 'sigma': out['biasSigma'],
+    return {'bias': out['bias'] + prior, 'sigma': out['biasSigma'],
             'rest': out['restDetected'].astype(bool)}
 
 
@@ -283,13 +312,21 @@ def model_input(loaded: Described, imu: np.ndarray, choice: str = 'model') -> np
     return remove_rest_bias(imu, sample_rate(loaded), settings)
 
 
+class Nominal(NamedTuple):
+    """The training recordings' turn-on biases: their mean, how many, their spread."""
+
+    prior_rad_s: tuple[float, float, float] | None  # None: no recording was still
+    still: int            # recordings still at some point
+    spread_rad_s: float   # the largest per-axis standard deviation among them (0: < 2)
+
+
 def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,
-                 settings: RestBiasSettings) -> tuple[tuple[float, float, float] | None, int]:
+                 settings: RestBiasSettings) -> Nominal:
     """
-    Return the mean rest bias of recordings, and how many were still at some point.
+    Return the mean rest bias of recordings, how many were still, and their spread.
 
     Each recording's figure is the estimate at its last still sample (prior-free: VQF's
-    own start of 0); recordings never still give none. None when no recording was still.
+    own start of 0); recordings never still give none.
     """
     start = replace(settings, prior_rad_s=(0.0, 0.0, 0.0),
                     prior_sigma_rad_s=RestBiasSettings.prior_sigma_rad_s)
@@ -299,9 +336,10 @@ def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,
         if est['rest'].any():
             found.append(est['bias'][np.flatnonzero(est['rest'])[-1]])
     if not found:
-        return None, 0
+        return Nominal(None, 0, 0.0)
     mean = np.mean(found, axis=0)
-    return (float(mean[0]), float(mean[1]), float(mean[2])), len(found)
+    return Nominal((float(mean[0]), float(mean[1]), float(mean[2])), len(found),
+                   float(np.std(found, axis=0).max()) if len(found) > 1 else 0.0)
 
 
 def write_rest_only_model(like: ModelFile, path: str | Path,

@@ -122,21 +122,23 @@ def without_turn_on_bias(cfg: TrainConfig, seqs: list[Sequence]
     each recording's whole IMU stream, not only where it has poses: a VIO's or a SLAM's
     trajectory starts after its initialisation, and stillness outside the poses is
     still the same power-on's; and each recording's estimate runs from its first IMU
-    sample (its ``lead_in`` included), as online. The bias clip (the largest bias, and
-    the slowest steady turn taken for motion) is VQF's 2 deg/s, or twice the largest
-    training rest bias where that is more (found with a wide clip). Returns the settings
-    the model file records, None without ``cfg.rest_bias``.
+    sample (its ``lead_in`` included), as online. The bias clip (the largest distance of
+    a turn-on bias from the prior, and so the slowest steady turn taken for motion) is
+    VQF's 2 deg/s, or four standard deviations of the training rest biases where that is
+    more (found with a wide clip). Returns the settings the model file records, None
+    without ``cfg.rest_bias``.
     """
     if not cfg.rest_bias:
         return seqs, None
     rate = float(np.median([s.rate_hz for s in seqs]))
     settings = rest_bias.RestBiasSettings()
-    prior, _ = rest_bias.nominal_bias(
+    nominal = rest_bias.nominal_bias(
         (load_imu(Path(cfg.data) / name, cfg.imu_topic).imu for name in cfg.sequences), rate,
         dataclasses.replace(settings, bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S))
-    if prior is not None:
-        clip = max(settings.bias_clip_deg_s, 2 * math.degrees(max(map(abs, prior))))
-        settings = dataclasses.replace(settings, prior_rad_s=prior, bias_clip_deg_s=clip)
+    if nominal.prior_rad_s is not None:
+        clip = max(settings.bias_clip_deg_s, 4 * math.degrees(nominal.spread_rad_s))
+        settings = dataclasses.replace(settings, prior_rad_s=nominal.prior_rad_s,
+                                       bias_clip_deg_s=clip)
     fed = [_less(s, rest_bias.remove_rest_bias(s.stream, rate, settings)) for s in seqs]
     return fed, settings
 

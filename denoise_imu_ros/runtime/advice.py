@@ -1,13 +1,14 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
-"""What a model's own cross-recording verdict says against running it: the node's warning."""
+"""What the node and process-bag warn of: a verdict against the model, a doubtful turn-on bias."""
 
 from __future__ import annotations
 
 from ..core.modelfile import ModelFile
-from ..core.schema import JUDGED, NO_MODEL, REST_ONLY, TRACKER_ONLY
+from ..core.schema import JUDGED, NO_MODEL, REST_ONLY, RestBiasSettings, TRACKER_ONLY
+from ..data.rest_bias import resolve, RestBias
 
-__all__ = ['deployment_warning', 'model_kind']
+__all__ = ['ambiguous_rest', 'deployment_warning', 'model_kind', 'rest_warnings']
 
 _ROWS = {'network': 'network', 'calibration': 'calibrated', REST_ONLY: 'rest bias',
          TRACKER_ONLY: 'tracker only', 'none': 'raw'}  # the report's row of each kind
@@ -36,5 +37,38 @@ def deployment_warning(loaded: ModelFile) -> str | None:
     label = {'none': 'no correction'}.get(verdict.deploy, verdict.deploy)
     said = (f' ({kind} {figures[0]:.2f}° against {label} {figures[1]:.2f}° in mean '
             f'{JUDGED[verdict.judged_on]} on unseen recordings)' if None not in figures else '')
+    if kind in NO_MODEL:  # the verdict's own words are about the learnt rows
+        return (f'{loaded.path.name} runs {kind} (no model), but the cross-recording '
+                f'validation of its recipe recommends {label}{said}')
     return (f'{loaded.path.name} is a {kind} model, but the cross-recording validation of '
             f'its recipe says{said}: {verdict.verdict}')
+
+
+def ambiguous_rest(rest: RestBias) -> str:
+    """Say that the turn-on bias found at rest may be a slow steady turn (its figures)."""
+    return (f'turn-on bias found at rest {rest.offset_deg_s:.2f} deg/s from the training '
+            f'prior (clip {rest.settings.bias_clip_deg_s:g} deg/s): a still IMU with that '
+            'bias and a steady turn about gravity at that rate look alike; if the robot was '
+            'turning, the gyro is off by that much until the next stillness')
+
+
+def rest_warnings(loaded: ModelFile, choice: str) -> list[str]:
+    """
+    Say what the turn-on bias settings of a run leave wrong or ambiguous (node, CLI alike).
+
+    ``choice`` is the node's ``rest_bias`` (``model``, ``on``, ``off``).
+    """
+    stored, settings = loaded.meta.rest_bias, resolve(loaded.meta, choice)
+    said = []
+    if settings is None and stored is not None:
+        said.append('rest_bias off: the model was trained on the gyro less its turn-on bias, '
+                    'it now gets the raw gyro')
+    if settings is not None and stored is None:
+        said.append(f'rest_bias on: {loaded.path.name} was trained on the raw gyro and stores '
+                    "no turn-on bias settings: VQF's defaults (a prior of 0, a "
+                    f'{settings.bias_clip_deg_s:g} deg/s clip) find a bias under that only, '
+                    'and the model now gets input it was not trained on')
+    if settings is not None and settings.bias_clip_deg_s > RestBiasSettings.bias_clip_deg_s:
+        said.append(f'turn-on bias clip {settings.bias_clip_deg_s:g} deg/s about the prior: a '
+                    'steady turn about gravity slower than that is taken for stillness')
+    return said

@@ -38,7 +38,7 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 import yaml
 
-from .advice import deployment_warning
+from .advice import ambiguous_rest, deployment_warning, rest_warnings
 from .fusion import FusionSettings, orientation_covariance
 from .online import Drop, DROP_CAUSES, Event, OnlineDenoiser
 from .outputs import Outputs
@@ -154,9 +154,10 @@ class GyroDenoiser(Node):
         fusion = settings if p('publish_fused').value else None
         rest = self._model_or_switch('rest_bias', (True, False))
         guard = self._model_or_switch('envelope_guard', (False,))
+        self._rest_choice = 'model' if rest is None else ('on' if rest else 'off')
         self._denoiser = OnlineDenoiser.from_model_file(
-            loaded, fusion, 'model' if rest is None else ('on' if rest else 'off'),
-            'model' if guard is None else 'off', accel_bias=settings.accel_bias_m_s2)
+            loaded, fusion, self._rest_choice, 'model' if guard is None else 'off',
+            accel_bias=settings.accel_bias_m_s2)
         self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
         self._not_recommended = deployment_warning(loaded)  # kept as a diagnostics WARN
@@ -222,9 +223,8 @@ class GyroDenoiser(Node):
             + f', {self._pub_att.topic_name}')
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)
-        if rest is None and loaded.meta.rest_bias is not None:
-            self.get_logger().warning('rest_bias off: the model was trained on the gyro less '
-                                      'its turn-on bias, it now gets the raw gyro')
+        for said in rest_warnings(loaded, self._rest_choice):
+            self.get_logger().warning(said)
         # rclpy ignores a value given for a parameter no node declares: say so, since a
         # misspelt name would otherwise run with the default (the QoS overrides are
         # declared by now, with the publishers and the subscription)
@@ -407,6 +407,9 @@ class GyroDenoiser(Node):
             status.level, status.message = DiagnosticStatus.WARN, 'warming up'
         elif self._not_recommended:
             status.level, status.message = DiagnosticStatus.WARN, self._not_recommended
+        elif self._denoiser.rest is not None and self._denoiser.rest.ambiguous:
+            status.level, status.message = DiagnosticStatus.WARN, ambiguous_rest(
+                self._denoiser.rest)
         infer = np.array(self._infer_s) if self._infer_s else np.zeros(1)
         values = {'input_rate_hz': f'{rate:.2f}', 'model_rate_hz': f'{self._model_rate:.2f}',
                   'seconds_since_input': '' if silent_s is None else f'{silent_s:.1f}',
@@ -438,6 +441,8 @@ class GyroDenoiser(Node):
             bias, sigma = rest.estimate()
             values.update({'rest_bias_seconds_still': f'{rest.seconds_still:.1f}',
                            'rest_bias_source': 'stillness' if rest.still_samples else 'prior',
+                           'rest_bias_from_prior_deg_s': f'{rest.offset_deg_s:.3f}',
+                           'rest_bias_ambiguous': str(rest.ambiguous),
                            'rest_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
                            'rest_bias_sigma_rad_s': f'{sigma:.6f}'})
         if track is not None:

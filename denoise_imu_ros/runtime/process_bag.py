@@ -22,6 +22,7 @@ from rosbags.convert import convert, ConverterError
 from rosbags.rosbag2 import (CompressionFormat, CompressionMode, StoragePlugin, Writer,
                              WriterError)
 
+from .advice import ambiguous_rest
 from .fusion import orientation_covariance
 from .online import Drop, DROP_CAUSES, FORWARD_JUMP_S, OnlineDenoiser
 from .outputs import Outputs
@@ -181,7 +182,8 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                 imu_topic: str | None = None, storage: str = 'mcap',
                 fixed_frame: str = 'odom', compress: bool | None = None,
                 namespace: str = '/', rest: str = 'model',
-                embed_attitude: bool = False, guard: str = 'model') -> dict[str, int]:
+                embed_attitude: bool = False, guard: str = 'model',
+                warn: Callable[[str], None] = lambda said: None) -> dict[str, int]:
     """
     Copy a bag, add the corrected IMU, orientation and attitude; return the counts.
 
@@ -196,7 +198,9 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     refused (the two would mix on one topic). ``rest``, ``guard`` and ``embed_attitude``
     are the node's ``rest_bias``, ``envelope_guard`` and ``embed_attitude``; what is
     written and withheld is the
-    node's, built by the same code (:mod:`denoise_imu_ros.runtime.outputs`).
+    node's, built by the same code (:mod:`denoise_imu_ros.runtime.outputs`). ``warn``
+    is told what the node's ``/diagnostics`` would say at the end (a turn-on bias that
+    may have been a slow turn).
     """
     src = Path(src)
     if not src.exists():
@@ -231,5 +235,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                             outputs.send(msg, res, received)
         except (*CORRUPT, WriterError, FileExistsError) as err:
             raise DatasetError(f'{src} -> {dst}: {err}') from err
+    if den.rest is not None and den.rest.ambiguous:
+        warn(ambiguous_rest(den.rest))
     return {**{k: v for k, v in den.counts.items() if v or k in DROP_CAUSES},
             **{k: v for k, v in outputs.outputs.counts.items() if v}}

@@ -71,6 +71,36 @@ def test_a_steady_turn_faster_than_the_clip_is_never_taken_for_a_bias():
     assert np.abs(est['bias']).max() == 0.0
 
 
+def test_a_slow_turn_after_a_still_start_keeps_the_still_starts_bias():
+    # EuRoC-like: a 4.5 deg/s turn-on bias about z, the prior near it, the clip VQF's 2
+    # deg/s about the prior; 3 s still, then turning in place at -5 deg/s for 20 s, the
+    # accelerometer steady: the gyro reads -0.5 deg/s, a bias a clip about 0 would take
+    bias_z, prior = math.radians(4.5), (0.0, 0.0, math.radians(4.4))
+    imu = _imu(3.0, 20.0, turn=math.radians(-5.0))
+    imu[:, 2] += bias_z - BIAS[2]
+    imu[int(3.0 * RATE):, 3:] = [0.0, 0.0, 9.81]
+    settings = RestBiasSettings(prior_rad_s=prior)
+    est = rest_bias.rest_bias_batch(imu, RATE, settings)
+    assert est['rest'][:int(3.0 * RATE)].any()  # the still start, 0.1 deg/s off the prior
+    assert not est['rest'][int(5.0 * RATE):].any()  # the turn: 4.9 deg/s off it
+    assert np.abs(np.degrees(est['bias'][:, 2] - bias_z))[int(3.0 * RATE):].max() < 0.05
+    online = RestBias(settings, RATE)
+    for sample in imu:
+        online.update(sample[:3], sample[3:])
+    assert online.offset_deg_s < 0.6 and not online.ambiguous  # x: BIAS, prior 0
+
+
+def test_a_bias_far_out_in_its_clip_is_said_to_be_ambiguous():
+    # a turn at 1.5 deg/s from the start, the accelerometer steady: taken for a bias
+    imu = _imu(0.0, 10.0, turn=math.radians(1.5))
+    imu[:, 3:] = [0.0, 0.0, 9.81]
+    online = RestBias(RestBiasSettings(), RATE)
+    for sample in imu:
+        online.update(sample[:3], sample[3:])
+    assert online.still_samples and online.ambiguous
+    assert 1.0 < online.offset_deg_s < 2.0
+
+
 def test_removing_it_subtracts_the_estimate_from_the_gyro_only():
     imu = _imu(3.0, 2.0)
     out = rest_bias.remove_rest_bias(imu, RATE, RestBiasSettings())
@@ -81,11 +111,11 @@ def test_removing_it_subtracts_the_estimate_from_the_gyro_only():
 
 
 def test_the_nominal_bias_is_the_mean_of_the_recordings_that_were_still():
-    prior, still = rest_bias.nominal_bias([_imu(3.0, 2.0, 0), _imu(0.0, 3.0, 1),
-                                           _imu(3.0, 2.0, 2)], RATE, RestBiasSettings())
-    assert still == 2
+    prior, still, spread = rest_bias.nominal_bias(
+        [_imu(3.0, 2.0, 0), _imu(0.0, 3.0, 1), _imu(3.0, 2.0, 2)], RATE, RestBiasSettings())
+    assert still == 2 and 0 <= spread < 6e-4
     assert np.abs(np.array(prior) - BIAS).max() < 6e-4
-    assert rest_bias.nominal_bias([_imu(0.0, 3.0)], RATE, RestBiasSettings()) == (None, 0)
+    assert rest_bias.nominal_bias([_imu(0.0, 3.0)], RATE, RestBiasSettings()) == (None, 0, 0.0)
 
 
 def test_the_model_file_choice_and_the_switches():

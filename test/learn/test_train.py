@@ -419,11 +419,12 @@ def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc
     wide = dataclasses.replace(rest_bias.RestBiasSettings(),
                                bias_clip_deg_s=rest_bias.WIDE_CLIP_DEG_S)
     rate = float(np.median([s.rate_hz for s in raw]))  # the model file's rate
-    prior, still = rest_bias.nominal_bias(
+    nominal = rest_bias.nominal_bias(
         [load_imu(euroc / name).imu for name in cfg.sequences], rate, wide)
-    assert still >= 1 and settings.prior_rad_s == prior
-    # EuRoC's ADIS16448 has a 4.6 deg/s turn-on bias about z: the clip follows it
-    assert settings.bias_clip_deg_s == pytest.approx(2 * np.degrees(np.abs(prior).max()))
+    assert nominal.still >= 1 and settings.prior_rad_s == nominal.prior_rad_s
+    # EuRoC's ADIS16448 has a 4.6 deg/s turn-on bias about z, its power-ons within a few
+    # tenths of each other: the clip about the prior is VQF's 2 deg/s, or their spread's
+    assert settings.bias_clip_deg_s == max(2.0, 4 * np.degrees(nominal.spread_rad_s))
     for s, r in zip(seqs, raw):  # the estimate runs from the first IMU sample, as online
         stream = rest_bias.remove_rest_bias(r.stream, rate, settings)
         assert len(r.lead_in) and np.array_equal(s.stream, stream)
