@@ -139,6 +139,35 @@ def is_compressed(reader: AnyReader) -> bool:
     return False
 
 
+def messages_as_written(reader: AnyReader) -> Iterator[tuple[Any, int, bytes]]:
+    """
+    Yield a bag's messages (connection, receive time, raw) in the order they were written.
+
+    That is what a live subscriber saw, where the receive times may not say it: a host
+    clock stepped back while recording (NTP, chrony) steps them as well, and rosbags'
+    reader, which sorts by them, would interleave the stretches before and after. A ROS 2
+    bag keeps its write order (SQLite rows, MCAP records, split files in turn); a ROS 1
+    bag (converted first) and a storage rosbags does not expose come in receive order.
+    """
+    storages = [storage for bag in reader.readers
+                for storage in getattr(getattr(bag, 'storage', None), 'storages', ())]
+    if not storages or not all(hasattr(s, 'dbconn') or hasattr(s, 'messages_scan')
+                               for s in storages):
+        yield from reader.messages()
+        return
+    known = {(c.topic, c.msgtype): c for c in reader.connections}
+    for storage in storages:
+        local = {c.id: known[c.topic, c.msgtype] for c in storage.connections}
+        if hasattr(storage, 'dbconn'):
+            rows = storage.dbconn.execute(
+                'SELECT topic_id, timestamp, data FROM messages ORDER BY id')
+            for cid, stamp, raw in rows:
+                yield local[cid], stamp, raw
+        else:
+            for conn, stamp, raw in storage.messages_scan(storage.connections):
+                yield local[conn.id], stamp, raw
+
+
 def read_bag(path: str | Path, imu_topic: str | None = None,
              pose_topic: str | None = None, with_pose: bool = True) -> Recording:
     """

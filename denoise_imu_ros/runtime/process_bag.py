@@ -31,8 +31,8 @@ from ..core.errors import DatasetError
 from ..core.limits import check_rate
 from ..core.modelfile import gyro_covariance, ModelFile, read_model_file
 from ..core.msgs import stamp_ns
-from ..data.bags import (BAG_TYPES, CORRUPT, IMU_TYPE, is_compressed, open_bag,
-                         pick_connections, TYPESTORE)
+from ..data.bags import (BAG_TYPES, CORRUPT, IMU_TYPE, is_compressed, messages_as_written,
+                         open_bag, pick_connections, TYPESTORE)
 
 OUTPUT_TOPICS = ('imu/corrected', 'imu/data', 'imu/attitude')  # the node's, relative
 MAX_CLOCK_JUMPS = 10  # stamp jumps of over FORWARD_JUMP_S a bag may hold (restarts)
@@ -70,9 +70,10 @@ def stamp_order(stamps: np.ndarray, jump_ns: int) -> np.ndarray:
     """
     Return the order the pipeline takes IMU messages in: by stamp within each session.
 
-    A stamp more than ``jump_ns`` behind the newest of its session (in receive order)
-    starts a new session (a clock set back, a driver restarted): sorting across it would
-    interleave two recordings; the pipeline resets there instead, as the node does.
+    A stamp more than ``jump_ns`` behind the newest of its session (in the order the bag
+    was written, as the node received them) starts a new session (a clock set back, a
+    driver restarted): sorting across it would interleave two recordings; the pipeline
+    resets there instead, as the node does.
     """
     session = np.zeros(len(stamps), dtype=np.int64)
     k, newest = 0, None
@@ -160,7 +161,7 @@ def _in_stamp_order(rd: Any, wr: Writer, copy: dict[int, Any], imu_ids: set[int]
     """
     waiting: dict[int, tuple[Any, int]] = {}  # received, its turn not come
     k, done = -1, 0
-    for conn, stamp, raw in rd.messages():
+    for conn, stamp, raw in messages_as_written(rd):
         wr.write(copy[conn.id], stamp, raw)
         if conn.id not in imu_ids:
             continue
@@ -187,20 +188,23 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     """
     Copy a bag, add the corrected IMU, orientation and attitude; return the counts.
 
-    The IMU samples go through the pipeline in header-stamp order (a recorder's transport
-    latency reorders receive times, and the pipeline would drop every late one), and each
-    output is written with its input's receive time (a reader sorts by it). A first pass
-    reads only the stamps; the second holds a message only until its turn in stamp order
-    comes, so memory follows how far the bag is out of order, not its length (a clock
-    set back starts a new session, :func:`stamp_order`). Copied
+    The bag is read in the order it was written, what the node received
+    (:func:`~denoise_imu_ros.data.bags.messages_as_written`: a host clock stepped back
+    steps the receive times too). Its IMU samples go through the pipeline in header-stamp
+    order within each run (a recorder's transport latency reorders receive times, and the
+    pipeline would drop every late one); a stamp set back starts a new run, as in the
+    node (:func:`stamp_order`; said through ``warn``). Each output is written with its
+    input's receive time. A first pass reads only the stamps; the second holds a message
+    only until its turn comes, so memory follows how far the bag is out of order, not its
+    length. Copied
     topics keep their recorded QoS; ``compress`` (zstd) defaults to the input's compression.
     The outputs are the node's topics in ``namespace``; a bag that has one already is
     refused (the two would mix on one topic). ``rest``, ``guard`` and ``embed_attitude``
     are the node's ``rest_bias``, ``envelope_guard`` and ``embed_attitude``; what is
     written and withheld is the
     node's, built by the same code (:mod:`denoise_imu_ros.runtime.outputs`). ``warn``
-    is told what the node's ``/diagnostics`` would say at the end (a turn-on bias that
-    may have been a slow turn).
+    is also told what the node's ``/diagnostics`` would say at the end (a turn-on bias
+    that may have been a slow turn).
     """
     src = Path(src)
     if not src.exists():
@@ -217,10 +221,15 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                                                           src)}
                 # all topics, as the second pass reads them: the same order, ties included
                 stamps = np.array([stamp_ns(rd.deserialize(raw, c.msgtype).header)
-                                   for c, _, raw in rd.messages() if c.id in imu_ids],
-                                  dtype=np.int64)
+                                   for c, _, raw in messages_as_written(rd)
+                                   if c.id in imu_ids], dtype=np.int64)
                 turn = stamp_order(stamps, round(den.time_jump_s * 1e9))  # the i-th to go
                 check_one_clock(stamps, turn, src)
+                back = int((np.diff(stamps[turn]) < 0).sum())
+                if back:
+                    warn(f'{src}: its IMU stamps step back {back} time{"s" * (back > 1)} as '
+                         'written (a clock set back, a driver restarted): each starts a new '
+                         'run, as the node that received them did')
                 check_rate(stamps[turn], den.rate_hz, src)
                 with _writer(partial, rd, plugin, compress) as wr:
                     copy = {c.id: wr.add_connection(

@@ -337,6 +337,47 @@ def test_a_clock_set_back_mid_bag_is_two_sessions_not_one_interleaved(tmp_path, 
     assert order.tolist() == [1, 2, 0, 4, 3, 6, 5]  # the 2 starts a session
 
 
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_a_host_clock_stepped_back_is_read_as_the_node_received_it(tmp_path, model_file,
+                                                                   storage):
+    """NTP steps header stamps and receive times alike: the bag's write order is the node's."""
+    from denoise_imu_ros.core import msgs
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.data.bags import (BAG_TYPES, IMU_TYPE, messages_as_written,
+                                           open_bag, TYPESTORE)
+    from denoise_imu_ros.runtime.online import OnlineDenoiser
+    from denoise_imu_ros.runtime.player import read_imu_messages
+    from denoise_imu_ros.runtime.process_bag import process_bag
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    imu = read_imu_messages(SAMPLE)[:1200]
+    t0 = msgs.stamp_ns(imu[0].header)
+    stamps = [t0 + 5_000_000 * k for k in range(600)]  # 3 s, then the clock goes back 2 s
+    stamps += [t0 + 1_000_000_000 + 5_000_000 * k for k in range(600)]
+    sent = []
+    with Writer(tmp_path / 'in', version=9, storage_plugin=StoragePlugin[storage.upper()]) as w:
+        conn = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        for m, t in zip(imu, stamps):
+            m = msgs.copy_imu(BAG_TYPES, m)
+            m.header = msgs.header(BAG_TYPES, t, 'imu0')
+            w.write(conn, t + 2_000_000, TYPESTORE.serialize_cdr(m, IMU_TYPE))
+            sent.append(m)
+    warned = []
+    counts = process_bag(tmp_path / 'in', tmp_path / 'out', str(model_file), storage=storage,
+                         warn=warned.append)
+    assert counts['accepted'] == 1200 and counts['time_jump_resets'] == 1
+    assert counts['duplicate_stamp'] == counts['out_of_order'] == 0
+    assert warned == [f'{tmp_path / "in"}: its IMU stamps step back 1 time as written (a '
+                      'clock set back, a driver restarted): each starts a new run, as the '
+                      'node that received them did']
+    loaded = read_model_file(model_file)
+    node = OnlineDenoiser.from_model_file(loaded, loaded.meta.fusion.chosen)
+    expected = [node.process_imu(m).gyro for m in sent]  # as the node received them
+    with open_bag(tmp_path / 'out') as rd:
+        written = [rd.deserialize(raw, c.msgtype).angular_velocity
+                   for c, _, raw in messages_as_written(rd) if c.topic == '/imu/corrected']
+    assert np.array_equal(np.array([[v.x, v.y, v.z] for v in written]), np.array(expected))
+
+
 def test_imu_stamps_on_two_clocks_are_refused_in_one_line_and_nothing_is_written(
         tmp_path, model_file, capsys):
     """Every 10th message 12 years later: not 800 one-sample recordings, exit 0."""
