@@ -31,6 +31,7 @@ MAX_GYRO_RAD_S = 100.0    # ~5,700 deg/s
 MAX_ACCEL_M_S2 = 2000.0   # ~200 g
 MOUNTING_TOLERANCE_DEG = 45.0  # gravity this far from the model's training IMU's: warned
 MAX_RATE_HZ = 100e3       # above, stamps are not nanoseconds (microseconds give 200 kHz)
+MAX_POSITION_M = 1e7      # a coordinate beyond 10,000 km is no robot's (ECEF included)
 
 
 def in_range(gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:

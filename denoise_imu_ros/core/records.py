@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import DatasetError
-from .limits import describe, in_range, MAX_RATE_HZ, stream_rate_hz
+from .limits import describe, in_range, MAX_POSITION_M, MAX_RATE_HZ, stream_rate_hz
 
 
 @dataclass(frozen=True)
@@ -127,6 +127,11 @@ def check_recording(rec: Recording, imu_file: object = None, gt_file: object = N
             raise DatasetError(f'{where}: {what} stamps {step:g} apart, {rate:.3g} Hz if they '
                                'are nanoseconds: stamps in microseconds or milliseconds? '
                                '(nanoseconds expected)')
+    far = np.flatnonzero(np.abs(rec.gt_pos).max(axis=1, initial=0.0) > MAX_POSITION_M)
+    if len(far):
+        raise DatasetError(f'{gt_file or rec.source}: ground-truth position beyond '
+                           f'{MAX_POSITION_M:g} m in sample {far[0]}: '
+                           f'{rec.gt_pos[far[0]].tolist()} ({len(far)} such samples)')
     bad = np.flatnonzero(~in_range(rec.imu[:, :3], rec.imu[:, 3:]))
     if len(bad):
         raise DatasetError(f'{imu_file or rec.source}: IMU values out of the physical range '

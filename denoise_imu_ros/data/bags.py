@@ -205,8 +205,8 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
     gt_stamps, gt_arr = gt_stamps[gt_order], np.array(gt, dtype=np.float64).reshape(-1, 7)[
         gt_order]
     dropped: dict[str, int] = {}
-    gt_stamps, gt_arr = drop_rows(not_poses(gt_arr, gt_arr[:, :4], BAG_UNIT_TOLERANCE),
-                                  dropped, gt_stamps, gt_arr)
+    gt_stamps, gt_arr = drop_rows(not_poses(gt_arr, gt_arr[:, :4], gt_arr[:, 4:],
+                                            BAG_UNIT_TOLERANCE), dropped, gt_stamps, gt_arr)
     gt_stamps, gt_arr = drop_rows(out_of_order(gt_stamps), dropped, gt_stamps, gt_arr)
     if dropped:
         unset = dropped.get('duplicate stamps', 0) > len(gt_stamps)  # most share one stamp

@@ -34,6 +34,7 @@ import numpy as np
 from .asl import text_lines
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
+from ..core.limits import MAX_POSITION_M
 from ..core.records import Recording
 
 SUFFIXES = ('.txt', '.tum', '.csv')  # a folder of trajectories holds <recording><suffix>
@@ -107,7 +108,8 @@ def read_tum(path: str | Path) -> Trajectory:
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
         read_as.append(f'quaternions read w first, {w_first}')
     dropped: dict[str, int] = {}
-    rows, stamps = drop_rows(not_poses(rows, rows[:, 4:8]), dropped, rows, stamps)
+    rows, stamps = drop_rows(not_poses(rows, rows[:, 4:8], rows[:, 1:4]), dropped, rows,
+                             stamps)
     if len(rows) < 2:
         raise DatasetError(f'{path}: fewer than two usable poses')
     large = np.abs(rows[:, 0]) >= NANOSECOND_STAMPS
@@ -131,13 +133,21 @@ def read_tum(path: str | Path) -> Trajectory:
     return Trajectory(path, stamp_ns, quat, rows[:, 1:4], dropped, tuple(read_as))
 
 
-def not_poses(rows: np.ndarray, quat: np.ndarray,
+def not_poses(rows: np.ndarray, quat: np.ndarray, pos: np.ndarray,
               tolerance: float = UNIT_TOLERANCE) -> dict[str, np.ndarray]:
-    """Rows that are no pose, by reason: non-finite, or ``quat`` off unit beyond ``tolerance``."""
+    """
+    Return the rows that are no pose, by reason.
+
+    Non-finite, ``pos`` beyond MAX_POSITION_M on an axis (the first such row named,
+    counted from 1), or ``quat`` off unit beyond ``tolerance``.
+    """
     finite = np.isfinite(rows).all(axis=1)
     unit = np.abs(np.linalg.norm(np.where(finite[:, None], quat, 1.0), axis=1) - 1)
+    far = finite & (np.abs(np.where(finite[:, None], pos, 0.0)).max(axis=1) > MAX_POSITION_M)
+    first = f' (the first: pose {np.flatnonzero(far)[0] + 1})' if far.any() else ''
     return {'non-finite rows': ~finite,
-            'rows whose quaternion is not a unit one': finite & (unit > tolerance)}
+            f'rows whose position is beyond {MAX_POSITION_M:g} m{first}': far,
+            'rows whose quaternion is not a unit one': finite & ~far & (unit > tolerance)}
 
 
 def out_of_order(stamp_ns: np.ndarray) -> dict[str, np.ndarray]:

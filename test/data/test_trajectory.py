@@ -4,6 +4,7 @@
 
 from pathlib import Path
 import re
+import warnings
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError, DataWarning
@@ -133,11 +134,15 @@ def test_duplicate_backward_non_finite_and_non_unit_rows_are_dropped_and_counted
         f'1.2 {POSE}', f'1.15 {POSE}',                  # a step back
         '1.3 nan 0 0 0 0 0 1',                          # not a pose
         '1.4 0 0 0 0 0 0 0',                            # no rotation
+        '1.45 1e300 0 0 0 0 0 1',                       # nowhere, squared to infinity
         f'1.5 {POSE}'])
-    traj = read_tum(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')  # no numpy overflow warning leaks
+        traj = read_tum(path)
     assert traj.stamp_ns.tolist() == [1_000_000_000, 1_100_000_000, 1_200_000_000,
                                       1_500_000_000]
     assert traj.dropped == {'non-finite rows': 1, 'rows whose quaternion is not a unit one': 1,
+                            'rows whose position is beyond 1e+07 m (the first: pose 8)': 1,
                             'duplicate stamps': 1, 'stamps earlier than a previous one': 1}
     assert traj.summary().startswith(f'{path}: 4 poses kept; dropped 1 non-finite rows')
 
