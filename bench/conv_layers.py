@@ -32,20 +32,20 @@ def best_of(fn: Callable[[], None], repeats: int = 3) -> float:
 
 
 def layer(c_in: int, c_out: int, k: int, d: int, length: int, dtype: torch.dtype,
-          taps: bool) -> float:
-    """Forward and backward time of one dilated convolution layer."""
-    x = torch.randn(WINDOWS, c_in, length, dtype=dtype, requires_grad=True)
+          taps: bool, windows: int = WINDOWS, input_grad: bool = True) -> float:
+    """Time one dilated convolution layer forward and backward (a first: no input gradient)."""
+    x = torch.randn(windows, c_in, length, dtype=dtype, requires_grad=input_grad)
     w = torch.randn(c_out, c_in, k, dtype=dtype, requires_grad=True)
     b = torch.randn(c_out, dtype=dtype, requires_grad=True)
     out = length - d * (k - 1)
-    grad = torch.randn(WINDOWS, c_out, out, dtype=dtype)
+    grad = torch.randn(windows, c_out, out, dtype=dtype)
 
     def onednn() -> None:
         F.conv1d(x, w, b, dilation=d).backward(grad)
 
     def gathered() -> None:
         cols = torch.stack([x[:, :, j * d:j * d + out] for j in range(k)], 2)
-        y = torch.matmul(w.reshape(c_out, c_in * k), cols.reshape(WINDOWS, c_in * k, out))
+        y = torch.matmul(w.reshape(c_out, c_in * k), cols.reshape(windows, c_in * k, out))
         (y + b[:, None]).backward(grad)
     return best_of(gathered if taps else onednn)
 

@@ -26,12 +26,11 @@ from pathlib import Path
 import statistics
 import time
 
-from conv_layers import best_of  # bench/, beside this script
+from conv_layers import best_of, layer  # bench/, beside this script
 from denoise_imu_ros.core.architecture import ModelConfig
 from denoise_imu_ros.learn.config import load_config, usable_cores
 from denoise_imu_ros.learn.train import train
 import torch
-import torch.nn.functional as F  # noqa: N812
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -51,15 +50,6 @@ def seconds_per_step(steps: int, **variant: object) -> float:
         train(cfg, progress=False)
         times.append(time.perf_counter() - t)
     return (times[1] - times[0]) / steps
-
-
-def onednn_seconds(windows: int, c_in: int, c_out: int, k: int, d: int, length: int,
-                   first: bool) -> float:
-    """Best time of one dilated convolution forward and backward, as training runs it."""
-    x = torch.randn(windows, c_in, length, requires_grad=not first)
-    w = torch.randn(c_out, c_in, k, requires_grad=True)
-    grad = torch.randn(windows, c_out, length - d * (k - 1))
-    return best_of(lambda: F.conv1d(x, w, dilation=d).backward(grad))
 
 
 def layer_shapes(windows: int, window: int) -> list[tuple[int, int, int, int, int]]:
@@ -91,7 +81,7 @@ def layer_seconds(windows: int, shapes: list) -> dict[str, tuple[float, float, f
             products.append(lambda: torch.mm(w.T, grad))
         out[f'{c_in}->{c_out} d={d}'] = (
             sum(best_of(p) for p in products),
-            onednn_seconds(windows, c_in, c_out, k, d, length, i == 0),
+            layer(c_in, c_out, k, d, length, torch.float32, False, windows, i > 0),
             float(len(products) * n * c_in * c_out * k))
     return out
 

@@ -265,7 +265,7 @@ def _noise(args: argparse.Namespace) -> None:
     sys.stdout.write(yaml_snippet(report['pooled'], ', '.join(report['recordings'])))
 
 
-def _warn_if_not_recommended(model: str, rest: str = 'model') -> None:
+def _start_up_warnings(model: str, rest: str = 'model') -> None:
     """Say what the node says at start-up of a model run so: its verdict, its turn-on bias."""
     from .core.modelfile import read_model_file
     from .runtime.advice import deployment_warning, rest_warnings
@@ -279,7 +279,7 @@ def _correct(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file
     from .evaluation.correct import correct_to_csv
     _guard_output(args.output, [args.input, read_model_file(args.model).path], args.overwrite)
-    _warn_if_not_recommended(args.model, args.rest_bias)
+    _start_up_warnings(args.model, args.rest_bias)
     n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic,
                        engine=args.engine, rest=args.rest_bias, guard=args.envelope_guard)
     print(f'wrote {n} corrected gyro samples to {args.output}')
@@ -306,7 +306,7 @@ def _process_bag(args: argparse.Namespace) -> None:
     from .runtime.process_bag import process_bag
     _guard_output(args.output, [args.input, read_model_file(args.model).path], False,
                   NEVER_OVER_A_BAG)
-    _warn_if_not_recommended(args.model, args.rest_bias)
+    _start_up_warnings(args.model, args.rest_bias)
     counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
                          storage=args.storage, fixed_frame=args.fixed_frame,
                          compress=args.compress, namespace=args.namespace,

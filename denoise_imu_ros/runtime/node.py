@@ -154,9 +154,9 @@ class GyroDenoiser(Node):
         fusion = settings if p('publish_fused').value else None
         rest = self._model_or_switch('rest_bias', (True, False))
         guard = self._model_or_switch('envelope_guard', (False,))
-        self._rest_choice = 'model' if rest is None else ('on' if rest else 'off')
+        rest_choice = 'model' if rest is None else ('on' if rest else 'off')
         self._denoiser = OnlineDenoiser.from_model_file(
-            loaded, fusion, self._rest_choice, 'model' if guard is None else 'off',
+            loaded, fusion, rest_choice, 'model' if guard is None else 'off',
             accel_bias=settings.accel_bias_m_s2)
         self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
@@ -223,7 +223,7 @@ class GyroDenoiser(Node):
             + f', {self._pub_att.topic_name}')
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)
-        for said in rest_warnings(loaded, self._rest_choice):
+        for said in rest_warnings(loaded, rest_choice):
             self.get_logger().warning(said)
         # rclpy ignores a value given for a parameter no node declares: say so, since a
         # misspelt name would otherwise run with the default (the QoS overrides are

@@ -86,21 +86,24 @@ def stamp_order(stamps: np.ndarray, jump_ns: int) -> np.ndarray:
     return np.lexsort((stamps, session))
 
 
-def check_one_clock(stamps: np.ndarray, turn: np.ndarray, src: object) -> None:
+def check_one_clock(stamps: np.ndarray, turn: np.ndarray, src: object) -> int:
     """
     Refuse IMU stamps that jump between clocks, back and forth, on one topic.
 
     A clock set back or a driver restarted is a new session, and a bag may hold a few;
     more than MAX_CLOCK_JUMPS jumps of over a minute (either way, in stamp order within
     sessions) is two clocks mixed on one topic (two drivers, or one mixing clocks): the
-    outputs would be as many one-sample recordings.
+    outputs would be as many one-sample recordings. Returns how many sessions begin
+    after the first (stamps set back).
     """
     steps = np.diff(stamps[turn])
-    jumps = int((steps > FORWARD_JUMP_S * 1e9).sum() + (steps < 0).sum())  # < 0: a session
+    back = int((steps < 0).sum())  # each a session
+    jumps = int((steps > FORWARD_JUMP_S * 1e9).sum()) + back
     if jumps > MAX_CLOCK_JUMPS:
         raise DatasetError(f'{src}: its IMU stamps jump between clocks {jumps} times (more '
                            f'than {FORWARD_JUMP_S:g} s, back and forth): two clocks on one '
                            'topic? Re-stamp the IMU on one clock, or keep one publisher')
+    return back
 
 
 def _check_free(rd: Any, names: tuple[str, ...], src: Path) -> None:
@@ -224,8 +227,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                                    for c, _, raw in messages_as_written(rd)
                                    if c.id in imu_ids], dtype=np.int64)
                 turn = stamp_order(stamps, round(den.time_jump_s * 1e9))  # the i-th to go
-                check_one_clock(stamps, turn, src)
-                back = int((np.diff(stamps[turn]) < 0).sum())
+                back = check_one_clock(stamps, turn, src)
                 if back:
                     warn(f'{src}: its IMU stamps step back {back} time{"s" * (back > 1)} as '
                          'written (a clock set back, a driver restarted): each starts a new '
