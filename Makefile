@@ -10,7 +10,7 @@ BIN := $(VENV)/bin
 ROS_ENV := ROS_DOMAIN_ID=$${ROS_DOMAIN_ID:-42} ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST \
 	FASTDDS_BUILTIN_TRANSPORTS=UDPv4
 
-$(VENV)/.installed: requirements.txt setup.py denoise_imu_ros/runtime/_step.c denoise_imu_ros/learn/_block.c
+$(VENV)/.installed: requirements.txt setup.py denoise_imu_ros/pipeline/_step.c denoise_imu_ros/learn/_block.c
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip==25.3
 	$(BIN)/pip install --quiet -r requirements.txt

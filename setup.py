@@ -14,8 +14,8 @@ setup(
     packages=find_packages(exclude=['test']),
     # the streaming network's per-sample step in C (loaded with ctypes, no Python API);
     # optional: without a compiler the numpy step runs instead
-    ext_modules=[Extension(package_name + '.runtime._step',
-                           sources=['denoise_imu_ros/runtime/_step.c'],
+    ext_modules=[Extension(package_name + '.pipeline._step',
+                           sources=['denoise_imu_ros/pipeline/_step.c'],
                            extra_compile_args=['-O3', '-fopenmp-simd'], libraries=['m'],
                            optional=True),
                  # training's fused BatchNorm, GELU and dropout (learn/fused.py), optional

@@ -22,11 +22,11 @@ from pathlib import Path
 import time
 
 from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
-from denoise_imu_ros.data.envelope import Guard
 from denoise_imu_ros.data.load import load_imu
-from denoise_imu_ros.data.rest_bias import BiasTracker, resolve, RestBias
-from denoise_imu_ros.data.vertical import Vertical
-from denoise_imu_ros.runtime.online import OnlineDenoiser
+from denoise_imu_ros.pipeline.envelope import Guard
+from denoise_imu_ros.pipeline.online import OnlineDenoiser
+from denoise_imu_ros.pipeline.rest_bias import BiasTracker, resolve, RestBias
+from denoise_imu_ros.pipeline.vertical import Vertical
 import numpy as np
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'broad'

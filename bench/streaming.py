@@ -24,7 +24,7 @@ from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
 from denoise_imu_ros.learn.model import merge
-from denoise_imu_ros.runtime.streaming import StreamingCorrector
+from denoise_imu_ros.pipeline.streaming import StreamingCorrector
 import numpy as np
 import torch
 

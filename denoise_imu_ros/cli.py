@@ -219,7 +219,7 @@ def _ensemble(args: argparse.Namespace) -> None:
 
 def _rest_model(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file, sample_rate
-    from .data.rest_bias import classical_tracking, write_rest_only_model
+    from .pipeline.rest_bias import classical_tracking, write_rest_only_model
     like = read_model_file(args.like)
     _guard_output(args.out, [like.path], args.overwrite)
     tracking = classical_tracking(like.meta) if args.tracker_only else None
@@ -302,7 +302,7 @@ def _convert(args: argparse.Namespace) -> None:
 
 def _process_bag(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file
-    from .runtime.online import DROP_CAUSES
+    from .pipeline.online import DROP_CAUSES
     from .runtime.process_bag import process_bag
     _guard_output(args.output, [args.input, read_model_file(args.model).path], False,
                   NEVER_OVER_A_BAG)

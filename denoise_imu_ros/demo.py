@@ -46,10 +46,10 @@ from .core.msgs import stamp_ns
 from .core.records import Sequence
 from .data.load import load_sequence
 from .evaluation.plots import plot_errors
-from .runtime.fusion import fuse, step_periods
+from .pipeline.fusion import fuse, step_periods
+from .pipeline.streaming import StreamingCorrector
 from .runtime.node import shutdown_rclpy
 from .runtime.player import Player, read_imu_messages
-from .runtime.streaming import StreamingCorrector
 
 SAMPLE = Path(__file__).parent / 'sample' / 'euroc_V1_03_90s'
 OPEN_LOOP, FUSED = 'imu/attitude', 'imu/data'

@@ -91,7 +91,7 @@ def shaken_start() -> tuple[np.ndarray, np.ndarray]:
 
 def learnt_on_a_shaken_start(settings) -> float:
     """Return the largest bias (deg/s) an output tracker learns where there is none."""
-    from denoise_imu_ros.data.rest_bias import track_bias
+    from denoise_imu_ros.pipeline.rest_bias import track_bias
     gyro, accel = shaken_start()
     return math.degrees(np.abs(gyro - track_bias(gyro, accel, 200.0, settings)).max())
 

@@ -4,8 +4,8 @@
 
 import time
 
+from denoise_imu_ros.pipeline.online import DROP_CAUSES
 from denoise_imu_ros.runtime.node import GyroDenoiser
-from denoise_imu_ros.runtime.online import DROP_CAUSES
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import QuaternionStamped
 from helpers import DOMAIN

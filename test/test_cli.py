@@ -254,7 +254,7 @@ def test_version_is_the_code_version_a_model_file_records(capsys):
 def test_the_offline_tools_offer_the_node_s_rest_bias_and_guard_choices():
     """The options are spelt out in cli.py (no numpy at start-up): they must not drift."""
     from denoise_imu_ros.cli import GUARD_OPTION, REST_BIAS_OPTION
-    from denoise_imu_ros.data import envelope, rest_bias
+    from denoise_imu_ros.pipeline import envelope, rest_bias
     assert REST_BIAS_OPTION['choices'] == rest_bias.CHOICES
     assert GUARD_OPTION['choices'] == envelope.CHOICES
 

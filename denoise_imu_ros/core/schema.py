@@ -164,7 +164,7 @@ class InputEnvelope:
     over its training recordings. A network fed motion faster than any it was trained on
     extrapolates (BROAD: networks of a slow session fail on another session's fast
     trials); where a sample of its receptive field leaves the envelope, the output is
-    its input gyro plus a constant correction instead (``data/envelope.py``).
+    its input gyro plus a constant correction instead (``pipeline/envelope.py``).
     """
 
     gyro_rad_s: float           # the largest |gyro| trained on

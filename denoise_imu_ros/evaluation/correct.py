@@ -17,9 +17,8 @@ from ..core.atomic import atomic_output
 from ..core.compat import check_stream
 from ..core.errors import DatasetError
 from ..core.modelfile import ModelFile, read_model_file, sample_rate
-from ..data import envelope, rest_bias
 from ..data.load import load_imu
-from ..runtime.streaming import StreamingCorrector
+from ..pipeline import stages
 
 
 def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch',
@@ -31,14 +30,12 @@ def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch',
     gyro first and the output's bias tracked, as the node's ``rest_bias`` parameter;
     ``guard`` (``model``, ``off``) as its ``envelope_guard``.
     """
-    fed = rest_bias.model_input(mf, imu, rest)
     if engine == 'streaming':
-        gyro = StreamingCorrector(mf.config, mf.arrays).process(fed)
-    else:
-        from ..learn.checkpoint import load_model  # torch: the batch engine only
-        from ..learn.model import correct_gyro
-        gyro = correct_gyro(load_model(mf.path).model, fed)
-    return envelope.finished(mf, gyro, fed, rest, guard)
+        return stages.corrected(mf, imu, rest, guard)
+    from ..learn.checkpoint import load_model  # torch: the batch engine only
+    from ..learn.model import correct_gyro
+    net = load_model(mf.path).model
+    return stages.corrected(mf, imu, rest, guard, lambda fed: correct_gyro(net, fed))
 
 
 def correct_to_csv(model_spec: str, source: str, output: str,

@@ -9,7 +9,7 @@ recordings are split into folds by recording; each fold trains the network and t
 12-parameter calibrated-IMU baseline on the other recordings and scores the held-out
 ones whole (AOE from the ground truth at their first stamp), against the classical
 pipeline a practitioner runs with no training: plain integration of the input gyro, the
-input gyro less its turn-on bias (estimated from stillness, ``data/rest_bias.py``), and
+input gyro less its turn-on bias (estimated from stillness, ``pipeline/rest_bias.py``), and
 that with its remaining bias tracked ("tracker only"). The verdict says which of the five
 to deploy; a learnt one never loses to the classical pipeline on one recording by more
 than LOSS_LIMIT.
@@ -44,13 +44,13 @@ from ..core.metrics import score
 from ..core.modelfile import sample_rate
 from ..core.schema import (BiasTracking, InputEnvelope, JUDGED, judged_on, ModelMeta,
                            parse_meta, REST_ONLY, TRACKER_ONLY)
-from ..data import envelope, rest_bias, vertical
 from ..data.load import load_sequence
 from ..learn import parallel
 from ..learn.checkpoint import load_model, LoadedModel
 from ..learn.config import load_config
 from ..learn.model import correct_gyro
 from ..learn.train import train
+from ..pipeline import envelope, rest_bias, stages, vertical
 
 
 # the rows whose output bias may be tracked: the classical pipeline's (no model) too
@@ -220,7 +220,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
             rest = rest_bias.baseline_gyro(models[0][0], seq.stream)
             raw_rows[name] = {'raw': score(seq, seq.imu[:, :3]),
                               'rest bias': score(seq, seq.on_poses(rest))}
-            fed = rest_bias.model_input(models[0][0], seq.stream)  # one recipe, one input
+            fed = stages.model_input(models[0][0], seq.stream)  # one recipe, one input
             gyros = [{TRACKER_ONLY: rest, 'calibrated': correct_gyro(calib.model, fed),
                       'network': correct_gyro(net.model, fed)} for net, calib in models]
             rate, drop = sample_rate(models[0][0]), vertical.drops_vertical(models[0][0].meta)
@@ -308,9 +308,9 @@ def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float, fed: np.
     Each gyro (over the recording's whole stream, as ``fed``) tracked and guarded by its
     row's input envelope, and its correction about the vertical dropped where the recipe's
     is (``drop``; the tracker only corrects nothing to drop), as every path ends it
-    (:func:`~denoise_imu_ros.data.envelope.finish`).
+    (:func:`~denoise_imu_ros.pipeline.stages.finish`).
     """
-    return {label: {m: score(seq, seq.on_poses(envelope.finish(
+    return {label: {m: score(seq, seq.on_poses(stages.finish(
         g, fed, rate_hz, t, bounds[m], fields[m], drop and m != TRACKER_ONLY)))
         for m, g in gyros.items()} for label, t in CANDIDATES.items()}
 

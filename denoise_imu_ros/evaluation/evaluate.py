@@ -31,12 +31,12 @@ from ..core.metrics import (align_yaw, error_components, sequence_errors,
 from ..core.modelfile import sample_rate, shipped_models
 from ..core.records import Sequence
 from ..core.schema import ModelMeta, REST_ONLY
-from ..data import rest_bias
 from ..data.check import label_noise
 from ..data.load import load_sequence
 from ..data.pose_alignment import offset_text
 from ..data.pose_jumps import JUMP_WINDOW_S
 from ..learn.checkpoint import load_model, LoadedModel
+from ..pipeline import rest_bias
 
 
 def default_baseline(meta: ModelMeta, baseline: str | None) -> str | None:
@@ -65,8 +65,8 @@ def gyros_of(seq: Sequence, models: dict[str, LoadedModel]) -> dict[str, np.ndar
     (:attr:`~denoise_imu_ros.core.records.Sequence.stream`, the samples before its poses
     included), each model fed as it runs online (its rest-bias settings, if it has them).
     The classical rows: raw; rest bias
-    (:func:`~denoise_imu_ros.data.rest_bias.baseline_gyro`); tracker only, that with its
-    bias tracked (:func:`~denoise_imu_ros.data.rest_bias.tracker_only_gyro`).
+    (:func:`~denoise_imu_ros.pipeline.rest_bias.baseline_gyro`); tracker only, that with its
+    bias tracked (:func:`~denoise_imu_ros.pipeline.rest_bias.tracker_only_gyro`).
     """
     net, stream = models['network'], seq.stream
     gyros = {'raw': stream[:, :3], 'rest bias': rest_bias.baseline_gyro(net, stream),
@@ -80,7 +80,7 @@ def rest_note(rest_input: dict[str, bool], rest_only: bool) -> str:
     said = [f'the {m} row, {"the gyro less its turn-on bias" if on else "the raw gyro"}'
             for m, on in rest_input.items()]
     return ('\nRest bias: the raw gyro less its turn-on bias, estimated causally from '
-            'stillness (data/rest_bias.py). Fed to the models: ' + '; '.join(said) + '.'
+            'stillness (pipeline/rest_bias.py). Fed to the models: ' + '; '.join(said) + '.'
             + (' The model is rest-only (no network): its "network" row is the rest bias.'
                if rest_only else '') + '\n')
 

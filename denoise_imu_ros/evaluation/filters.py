@@ -3,7 +3,7 @@
 """
 Gravity-aided filters offline: their settings chosen on training data, and their scores.
 
-The product's filter is VQF (:mod:`denoise_imu_ros.runtime.fusion`); for comparison the
+The product's filter is VQF (:mod:`denoise_imu_ros.pipeline.fusion`); for comparison the
 calibrated gyro is also fed to two other standard filters, each from its library:
 ``imufusion`` (x-io's AHRS, C core) and ``ahrs``'s Madgwick. Every filter's settings are
 chosen the same way (``denoise-imu tune-fusion``): on the validation tails of the
@@ -38,7 +38,7 @@ from ..core.rotation import from_gravity
 from ..core.schema import JUDGED, judged_on, MAX_ACCEL_BIAS_M_S2, ModelMeta
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model
-from ..runtime.fusion import fuse, FusionSettings, interval_rates, step_periods
+from ..pipeline.fusion import fuse, FusionSettings, interval_rates, step_periods
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
@@ -113,7 +113,7 @@ def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
     """
     Orientation (N, 4) xyzw at every stamp, stepped to stamp k by samples k - 1 and k.
 
-    The step is at their mean (:func:`~denoise_imu_ros.runtime.fusion.interval_rates`).
+    The step is at their mean (:func:`~denoise_imu_ros.pipeline.fusion.interval_rates`).
 
     With ``stamp_ns``, VQF integrates the real intervals as the node does (the baselines
     step by one period: the recordings scored have none missing).

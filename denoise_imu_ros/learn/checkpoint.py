@@ -21,7 +21,7 @@ from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
 from ..core.modelfile import code_version, read_model_file, sample_rate, write_model_file
 from ..core.schema import ModelMeta
-from ..data import envelope, rest_bias
+from ..pipeline import envelope, stages
 
 
 # imu/data's filter settings (tune-fusion), the cross-recording verdict and the output
@@ -44,12 +44,11 @@ class LoadedModel(NamedTuple):
 
     def correct(self, imu: np.ndarray) -> np.ndarray:
         """Corrected gyro (N, 3) of a recording's raw samples (N, 6), as online."""
-        fed = rest_bias.model_input(self, imu)
-        return envelope.finished(self, correct_gyro(self.model, fed), fed)
+        return stages.corrected(self, imu, batch=lambda fed: correct_gyro(self.model, fed))
 
     def untracked(self, imu: np.ndarray) -> np.ndarray:
         """Return the model's output (N, 3) before its tracking, envelope and vertical drop."""
-        return correct_gyro(self.model, rest_bias.model_input(self, imu))
+        return correct_gyro(self.model, stages.model_input(self, imu))
 
 
 def save_model(path: str | Path, model: GyroNet, meta: dict[str, Any]) -> None:

@@ -92,7 +92,7 @@ class TrainConfig:
     dropout: float = 0.1
     calibration_only: bool = False     # the 12-parameter "calibrated IMU" baseline
     # True: the model's input gyro is each recording's own gyro less its turn-on bias,
-    # estimated causally from stillness (data/rest_bias.py), in training and wherever
+    # estimated causally from stillness (pipeline/rest_bias.py), in training and wherever
     # the model runs; what is learnt then holds across power-ons
     rest_bias: bool = False
     # True (with rest_bias): each training recording has its own constant gyro bias, learnt

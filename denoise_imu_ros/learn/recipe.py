@@ -68,10 +68,10 @@ from .config import TrainConfig
 from ..core.atomic import write_text
 from ..core.errors import DatasetError
 from ..core.limits import common_rate
-from ..data import rest_bias
 from ..data.check import (check, INTERPOLATION_LIMIT_PERCENT, interpolation_worst,
                           paper_increments)
 from ..data.load import load_recording, no_such
+from ..pipeline import rest_bias
 
 WINDOW_S = 80.0
 START_STILL_S = 5.0  # a recording still within this many seconds of its start starts still

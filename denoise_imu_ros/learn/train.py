@@ -42,9 +42,9 @@ from ..core.limits import common_rate
 from ..core.metrics import increment_residuals, increments, RESIDUAL_BLOCK, sequence_errors
 from ..core.modelfile import code_version
 from ..core.records import Sequence
-from ..data import envelope, rest_bias
 from ..data.load import load_imu, load_sequence
-from ..data.vertical import drop_vertical, drops
+from ..pipeline import envelope, rest_bias
+from ..pipeline.vertical import drop_vertical, drops
 
 RANK_SEED_STRIDE = 7919  # data-parallel process r draws its dropout masks from seed + r * this
 
@@ -288,7 +288,7 @@ def validate(model: GyroNet, seqs: list[Sequence], start: int,
     start too) gives the tail's outputs their real causal context, as the online node
     has. With ``drop`` (a heading-less model fed the gyro less its turn-on bias) the AOE
     and the residual are of its output as every path ends it, less its correction about
-    the vertical (:func:`~denoise_imu_ros.data.vertical.drop_vertical`); the loss never
+    the vertical (:func:`~denoise_imu_ros.pipeline.vertical.drop_vertical`); the loss never
     sees that.
     """
     was_training = model.training

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from ..core.modelfile import ModelFile
 from ..core.schema import JUDGED, NO_MODEL, REST_ONLY, RestBiasSettings, TRACKER_ONLY
-from ..data.rest_bias import resolve, RestBias
+from ..pipeline.rest_bias import resolve, RestBias
 
 __all__ = ['ambiguous_rest', 'deployment_warning', 'model_kind', 'rest_warnings']
 

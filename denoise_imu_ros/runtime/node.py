@@ -8,7 +8,7 @@ gravity-aided orientation of the corrected gyro, with its covariance, the correc
 angular velocity and the accelerometer passed through. ``imu/attitude`` is the paper's
 open-loop integral of the corrected gyro.
 
-A thin ROS wrapper around :class:`~denoise_imu_ros.runtime.online.OnlineDenoiser`: it converts
+A thin ROS wrapper around :class:`~denoise_imu_ros.pipeline.online.OnlineDenoiser`: it converts
 messages, owns the parameters and topics, and reports on ``/diagnostics``. Header stamps
 and frame ids are copied from the input, never re-stamped.
 """
@@ -39,8 +39,6 @@ from std_srvs.srv import Trigger
 import yaml
 
 from .advice import ambiguous_rest, deployment_warning, rest_warnings
-from .fusion import FusionSettings, orientation_covariance
-from .online import Drop, DROP_CAUSES, Event, OnlineDenoiser
 from .outputs import Outputs
 from .rclpy_internals import (given_parameters, integer_given_for_double, RCLError,
                               RCLInvalidROSArgsError, take_waiting)
@@ -48,6 +46,8 @@ from ..core import msgs
 from ..core.errors import DenoiseError
 from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import gyro_covariance, ModelFile, read_model_file
+from ..pipeline.fusion import FusionSettings, orientation_covariance
+from ..pipeline.online import Drop, DROP_CAUSES, Event, OnlineDenoiser
 
 
 def _param(description: str, read_only: bool = False, floats: tuple | None = None,

@@ -24,8 +24,8 @@ from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
-from .online import Event, Output
 from ..core import msgs
+from ..pipeline.online import Event, Output
 
 Send = Callable[[Any], None]
 

@@ -5,7 +5,7 @@ Offline bag processing with the online pipeline: ``denoise-imu process-bag``.
 
 The output bag holds every input topic unchanged plus ``/imu/corrected``, ``/imu/data``
 (the gravity-aided orientation, with the model file's filter settings) and
-``/imu/attitude``, computed by the same :class:`~denoise_imu_ros.runtime.online.OnlineDenoiser`
+``/imu/attitude``, computed by the same :class:`~denoise_imu_ros.pipeline.online.OnlineDenoiser`
 the node runs, so the numbers are those the node would publish for that input.
 ROS 1 bags are first converted to ROS 2 with ``rosbags.convert``.
 """
@@ -23,8 +23,6 @@ from rosbags.rosbag2 import (CompressionFormat, CompressionMode, StoragePlugin, 
                              WriterError)
 
 from .advice import ambiguous_rest
-from .fusion import orientation_covariance
-from .online import Drop, DROP_CAUSES, FORWARD_JUMP_S, OnlineDenoiser
 from .outputs import Outputs
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
@@ -33,6 +31,8 @@ from ..core.modelfile import gyro_covariance, ModelFile, read_model_file
 from ..core.msgs import stamp_ns
 from ..data.bags import (BAG_TYPES, CORRUPT, IMU_TYPE, is_compressed, messages_as_written,
                          open_bag, pick_connections, TYPESTORE)
+from ..pipeline.fusion import orientation_covariance
+from ..pipeline.online import Drop, DROP_CAUSES, FORWARD_JUMP_S, OnlineDenoiser
 
 OUTPUT_TOPICS = ('imu/corrected', 'imu/data', 'imu/attitude')  # the node's, relative
 MAX_CLOCK_JUMPS = 10  # stamp jumps of over FORWARD_JUMP_S a bag may hold (restarts)

@@ -8,10 +8,10 @@ import sys
 
 from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.modelfile import add_metadata, read_model_file
-from denoise_imu_ros.data import envelope, rest_bias
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.pipeline import envelope, stages
 
 
 def _members_data(members: list[dict]) -> str | None:
@@ -44,7 +44,7 @@ def main() -> None:
                                 meta.recipe('pose_topic'), meta.recipe('max_gt_gap_s'),
                                 align_poses=meta.recipe('align', 'none'),
                                 poses=meta.recipe('poses'))
-            fed = seq.on_poses(rest_bias.model_input(loaded, seq.stream))[:meta.training_span]
+            fed = seq.on_poses(stages.model_input(loaded, seq.stream))[:meta.training_span]
             imus.append(fed)
             corrections.append(correct_gyro(loaded.model, fed) - fed[:, :3])
         # as training: the mean correction is the fallback where the turn-on bias is not

@@ -18,7 +18,7 @@ import sys
 from denoise_imu_ros.core.metrics import integrate
 from denoise_imu_ros.core.modelfile import read_model_file
 from denoise_imu_ros.data.load import load_sequence
-from denoise_imu_ros.data.rest_bias import baseline_gyro
+from denoise_imu_ros.pipeline.rest_bias import baseline_gyro
 import numpy as np
 from scipy.spatial.transform import Rotation
 

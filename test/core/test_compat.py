@@ -6,7 +6,7 @@ from denoise_imu_ros.core.compat import check_baseline, check_stream
 from denoise_imu_ros.core.errors import DatasetError, ModelFileError
 from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
 from denoise_imu_ros.data.load import load_imu
-from denoise_imu_ros.data.rest_bias import write_rest_only_model
+from denoise_imu_ros.pipeline.rest_bias import write_rest_only_model
 from helpers import SAMPLE
 import pytest
 

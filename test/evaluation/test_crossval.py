@@ -311,7 +311,7 @@ def test_held_out_recordings_are_aligned_like_the_training_ones(tmp_path):
 def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     from denoise_imu_ros.core.metrics import score
     from denoise_imu_ros.data.load import load_sequence
-    from denoise_imu_ros.data.rest_bias import track_bias
+    from denoise_imu_ros.pipeline.rest_bias import track_bias
     from denoise_imu_ros.evaluation.crossval import CANDIDATES
     from denoise_imu_ros.learn.model import correct_gyro, merge
     data = tmp_path / 'data'
@@ -447,7 +447,7 @@ def test_held_out_poses_that_start_after_the_stillness_are_scored_from_the_first
     """A VIO's trajectories, each starting after its still start: the node's turn-on bias."""
     from denoise_imu_ros.core.metrics import score
     from denoise_imu_ros.data.load import load_sequence
-    from denoise_imu_ros.data.rest_bias import baseline_gyro
+    from denoise_imu_ros.pipeline.rest_bias import baseline_gyro
     from helpers import write_late_trajectory
     data, late = tmp_path / 'data', tmp_path / 'vio'
     for i, bias in enumerate((0.010, 0.016)):

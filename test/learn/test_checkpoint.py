@@ -271,7 +271,7 @@ def test_a_model_trained_on_whole_recordings_has_no_unseen_tail():
 
 
 def test_an_ensemble_keeps_its_members_turn_on_bias_settings_or_refuses_two(tmp_path):
-    from denoise_imu_ros.data.rest_bias import RestBiasSettings
+    from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
     from helpers import untrained_model
     paths = []
     for name, prior in (('a', 0.01), ('b', 0.01), ('c', 0.02)):

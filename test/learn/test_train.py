@@ -125,7 +125,7 @@ def test_a_network_that_diverged_on_its_validation_tails_is_one_line(tmp_path):
 def test_a_heading_less_model_is_validated_as_every_path_ends_it():
     """Its AOE on the tails is of its output less its correction about the vertical."""
     from denoise_imu_ros.core.metrics import sequence_errors
-    from denoise_imu_ros.data.vertical import drop_vertical
+    from denoise_imu_ros.pipeline.vertical import drop_vertical
     from denoise_imu_ros.learn.loss import LossConfig
     from denoise_imu_ros.learn.model import correct_gyro
     from helpers import SAMPLE, untrained_model
@@ -387,7 +387,7 @@ def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path, capsys, monkeypa
 def test_the_prior_and_the_turn_on_bias_are_measured_before_the_poses_start_too(
         euroc, tmp_path):
     """A trajectory that starts after the still start (a VIO's initialisation): same input."""
-    from denoise_imu_ros.data import rest_bias
+    from denoise_imu_ros.pipeline import rest_bias
     mav = tmp_path / 'MH_01_easy' / 'mav0'
     (mav / 'state_groundtruth_estimate0').mkdir(parents=True)
     (mav / 'imu0').symlink_to(euroc / 'MH_01_easy' / 'mav0' / 'imu0')
@@ -412,7 +412,7 @@ def test_the_prior_and_the_turn_on_bias_are_measured_before_the_poses_start_too(
 
 
 def test_a_rest_bias_recipe_trains_on_each_recording_less_its_turn_on_bias(euroc, tmp_path):
-    from denoise_imu_ros.data import rest_bias
+    from denoise_imu_ros.pipeline import rest_bias
     cfg = _short(euroc, rest_bias=True, steps=12, val_every=12, swa_start=0, select='final')
     raw = train_module.load_sequences(cfg)
     seqs, settings = train_module.without_turn_on_bias(cfg, raw)

@@ -8,8 +8,8 @@ import re
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.learn.checkpoint import load_model, save_model
 from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.pipeline.online import DROP_CAUSES
 from denoise_imu_ros.runtime.node import main, PARAMETERS
-from denoise_imu_ros.runtime.online import DROP_CAUSES
 from diagnostic_msgs.msg import DiagnosticStatus
 from helpers import DOMAIN, imu_msg, ROOT, SAMPLE, untrained_model
 import numpy as np
@@ -71,7 +71,7 @@ def test_imu_data_is_the_imu_tools_contract_with_the_fused_orientation(
         harness, model_file, accel_bias):
     """imu/data: header copied, VQF orientation with its covariance, corrected gyro."""
     from denoise_imu_ros.core.modelfile import add_metadata
-    from denoise_imu_ros.runtime.fusion import fuse, FusionSettings, step_periods
+    from denoise_imu_ros.pipeline.fusion import fuse, FusionSettings, step_periods
     stored = FusionSettings(3.0, False, (0.02, -0.1, 0.05))  # the node overrides tau_acc
     add_metadata(model_file, fusion={'settings': stored.as_dict()})
     rec = load_imu(SAMPLE)
@@ -103,7 +103,7 @@ def test_imu_data_is_the_imu_tools_contract_with_the_fused_orientation(
 def test_the_filter_switches_take_the_model_file_or_a_switch(harness, model_file, value,
                                                              estimated, accel):
     from denoise_imu_ros.core.modelfile import add_metadata
-    from denoise_imu_ros.runtime.fusion import FusionSettings
+    from denoise_imu_ros.pipeline.fusion import FusionSettings
     stored = FusionSettings(3.0, True, (0.02, -0.1, 0.05))  # not the defaults, either of them
     add_metadata(model_file, fusion={'settings': stored.as_dict()})
     h = harness(fusion_bias_estimation=value, fusion_accel_bias=accel)

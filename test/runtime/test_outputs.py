@@ -4,7 +4,7 @@
 
 from denoise_imu_ros.core import msgs
 from denoise_imu_ros.data.bags import BAG_TYPES
-from denoise_imu_ros.runtime.online import Event, Output
+from denoise_imu_ros.pipeline.online import Event, Output
 from denoise_imu_ros.runtime.outputs import Decision, Outputs, Withheld, withheld
 import numpy as np
 import pytest

@@ -30,8 +30,8 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     """
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core.modelfile import add_metadata
-    from denoise_imu_ros.data.rest_bias import RestBiasSettings
-    from denoise_imu_ros.runtime.fusion import FusionSettings
+    from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
+    from denoise_imu_ros.pipeline.fusion import FusionSettings
     from rosbags.highlevel import AnyReader
     # settings stored as tune-fusion stores them: both paths must apply all of them
     add_metadata(model_file, fusion={'settings': FusionSettings(
@@ -345,7 +345,7 @@ def test_a_host_clock_stepped_back_is_read_as_the_node_received_it(tmp_path, mod
     from denoise_imu_ros.core.modelfile import read_model_file
     from denoise_imu_ros.data.bags import (BAG_TYPES, IMU_TYPE, messages_as_written,
                                            open_bag, TYPESTORE)
-    from denoise_imu_ros.runtime.online import OnlineDenoiser
+    from denoise_imu_ros.pipeline.online import OnlineDenoiser
     from denoise_imu_ros.runtime.player import read_imu_messages
     from denoise_imu_ros.runtime.process_bag import process_bag
     from rosbags.rosbag2 import StoragePlugin, Writer

@@ -7,8 +7,8 @@ from denoise_imu_ros.core.schema import BiasTracking, NO_MODEL
 from denoise_imu_ros.evaluation import evaluate as evaluate_module
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.pipeline.streaming import StreamingCorrector
 from denoise_imu_ros.runtime.advice import deployment_warning
-from denoise_imu_ros.runtime.streaming import StreamingCorrector
 from helpers import SAMPLE
 import numpy as np
 import pytest

@@ -8,7 +8,7 @@ import subprocess
 import sys
 import time
 
-from denoise_imu_ros.data.rest_bias import RestBiasSettings
+from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
 from helpers import DOMAIN, SAMPLE, write_asl, write_untrained_model
 import pytest
 

@@ -4,8 +4,8 @@
 
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.schema import parse_meta, REST_ONLY, RestBiasSettings
-from denoise_imu_ros.data.envelope import finish
-from denoise_imu_ros.data.vertical import drop_vertical, drops_vertical, up_in_body, Vertical
+from denoise_imu_ros.pipeline.stages import finish
+from denoise_imu_ros.pipeline.vertical import drop_vertical, drops_vertical, up_in_body, Vertical
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation

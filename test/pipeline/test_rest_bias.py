@@ -5,8 +5,8 @@
 import math
 
 from denoise_imu_ros.core.schema import parse_meta
-from denoise_imu_ros.data import rest_bias
-from denoise_imu_ros.data.rest_bias import RestBias, RestBiasSettings
+from denoise_imu_ros.pipeline import rest_bias
+from denoise_imu_ros.pipeline.rest_bias import RestBias, RestBiasSettings
 import numpy as np
 import pytest
 
@@ -145,7 +145,7 @@ def test_a_rest_only_model_runs_anywhere_a_model_does_and_corrects_nothing_else(
     from denoise_imu_ros.cli import main
     from denoise_imu_ros.core.modelfile import add_metadata, read_model_file
     from denoise_imu_ros.runtime.advice import deployment_warning
-    from denoise_imu_ros.runtime.online import OnlineDenoiser
+    from denoise_imu_ros.pipeline.online import OnlineDenoiser
     from helpers import write_untrained_model
     settings = RestBiasSettings(prior_rad_s=(0.001, 0.002, 0.003))
     report = {'deploy': 'rest bias', 'verdict': 'the network does not beat the raw gyro less '
@@ -175,7 +175,7 @@ def test_a_tracker_only_model_runs_the_classical_pipeline_as_eval_scores_it(tmp_
     from denoise_imu_ros.core.modelfile import read_model_file
     from denoise_imu_ros.learn.checkpoint import load_model
     from denoise_imu_ros.runtime.advice import deployment_warning, model_kind
-    from denoise_imu_ros.runtime.online import OnlineDenoiser
+    from denoise_imu_ros.pipeline.online import OnlineDenoiser
     from helpers import write_untrained_model
     settings = RestBiasSettings(prior_rad_s=(0.001, 0.002, 0.003))
     chosen = {'sigma_motion_deg_s': 0.1, 'forgetting_s': 100.0, 'sigma_init_deg_s': 0.1,

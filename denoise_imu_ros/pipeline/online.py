@@ -1,25 +1,26 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
 """
-The online correction pipeline without ROS: input checks, streaming network, attitude.
+Each incoming sample checked, then through the stage table: the node's and process-bag's pipeline.
 
 :class:`OnlineDenoiser` takes one IMU sample at a time (stamp, gyro, accel) and either
-returns the corrected gyro with the integrated (open-loop) attitude and, with a
-:class:`~denoise_imu_ros.runtime.fusion.GravityFilter`, the gravity-aided orientation,
-or a counted drop. The ROS node and the bag processor both drive it, so they publish
-identical numbers.
+returns the corrected gyro with the integrated (open-loop) attitude and, with fusion
+settings, the gravity-aided orientation, or a counted drop. The ROS node and the bag
+processor both drive it, so they publish identical numbers. What happens to an accepted
+sample, in which order, and what each event resets, is the table of
+:mod:`denoise_imu_ros.pipeline.stages`; this module decides the drops and the events.
 
 Policies (each counted in :attr:`OnlineDenoiser.counts`):
 - a non-finite field, a value beyond the physical range (:mod:`denoise_imu_ros.core.limits`),
   a zero stamp, a duplicate or out-of-order stamp: sample dropped; so is a sample whose
   correction is not finite (a model file that passed its checks and still overflows);
-- a stamp more than ``time_jump_s`` behind the last one (bag loop, clock reset): full
-  reset (network history and attitude), the sample is the first of a new recording;
+- a stamp more than ``time_jump_s`` behind the last one (bag loop, clock reset): a time
+  jump, everything reset, the sample is the first of a new recording;
 - a gap longer than ``max_gap_factor`` nominal periods: the network history restarts
-  (as at start-up) and the attitude is held across the gap, which cannot be integrated;
+  (as at start-up), the attitude is held across the gap, which cannot be integrated, and
   the gravity-aided orientation goes on (gravity corrects its tilt; its yaw is held);
 - a stamp more than FORWARD_JUMP_S ahead (a second publisher on another clock, a clock
-  set): full reset as for a backward jump, and no periods counted as skipped;
+  set): a time jump as for a backward one, and no periods counted as skipped;
 - every nominal period without a sample is counted (``skipped_periods``): samples lost
   upstream or in a subscription queue show there, not only as a lower rate; so is every
   period of the stream's own rate (``skipped_input_periods``, the median of its recent
@@ -31,23 +32,6 @@ Policies (each counted in :attr:`OnlineDenoiser.counts`):
   model's, until a window is on rate again. The node withholds its corrections, attitudes
   and orientations while it holds, and says so in ``/diagnostics``; process-bag does not
   write them.
-
-With a :class:`~denoise_imu_ros.data.rest_bias.RestBias`, the gyro the model sees is the
-raw gyro less the turn-on bias estimated from stillness up to that sample (the model's
-training input); a full reset starts the estimate again from its prior (another run,
-perhaps another power-on), a gap does not (the same run). With a
-:class:`~denoise_imu_ros.data.rest_bias.BiasTracker` (the model file's ``bias_tracking``),
-the model's output less its tracked bias is what every output carries, the open-loop
-attitude and the gravity-aided orientation included; it restarts with the estimate.
-With a :class:`~denoise_imu_ros.data.envelope.Guard` (the model file's
-``input_envelope``), last, the output is the model's input plus a constant, less the
-tracker's bias, while the receptive field holds motion the model was not trained on (what
-the tracker gives, not the model's guess), and the tracker's estimate is held through
-stretches where it turns faster than that (restored after each); it restarts
-with the network's history, and a gap ends a held stretch. With a
-:class:`~denoise_imu_ros.data.vertical.Vertical` (a model taught without its poses'
-heading), last of all, the output keeps only the part of its correction orthogonal to
-the vertical; it restarts with the turn-on bias's estimate.
 """
 
 from __future__ import annotations
@@ -58,14 +42,15 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from . import envelope, rest_bias
 from .fusion import FusionSettings, GravityFilter
+from .stages import (Attitude, BiasTrackingStage, correction, EnvelopeCheck, Event, Flow,
+                     Network, Orientation, Pipeline, TurnOnBias, VerticalDrop)
 from .streaming import StreamingCorrector
-from ..core import rotation
+from .vertical import Vertical
 from ..core.limits import in_range, MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import ModelFile, sample_rate
 from ..core.msgs import finite_covariance, imu_fields, UNKNOWN_COVARIANCE
-from ..data import envelope, rest_bias
-from ..data.vertical import drops_vertical, Vertical
 
 
 class Drop(str, Enum):
@@ -77,14 +62,6 @@ class Drop(str, Enum):
     DUPLICATE_STAMP = 'duplicate_stamp'
     OUT_OF_ORDER = 'out_of_order'
     NON_FINITE_OUTPUT = 'non_finite_output'  # the model's correction: a broken model file
-
-
-class Event(str, Enum):
-    """A reset of the pipeline's state at an accepted sample."""
-
-    START = 'start'          # first sample: network warm-up, attitude from gravity
-    GAP = 'gap'              # stamps too far apart: network warm-up, attitude held
-    TIME_JUMP = 'time_jump'  # stamps jumped back, or a minute ahead: everything reset
 
 
 DROP_CAUSES = tuple(d.value for d in Drop)
@@ -107,26 +84,17 @@ class Output(NamedTuple):
 
 @dataclass
 class OnlineDenoiser:
-    """Streaming gyro correction and attitude integration with input checks."""
+    """Input checks and events, then the stage table, one sample at a time."""
 
-    engine: StreamingCorrector
+    pipeline: Pipeline
     rate_hz: float                      # the model's sample rate
     max_gap_factor: float = MAX_GAP_FACTOR  # gap threshold, in nominal sample periods
     time_jump_s: float = 1.0            # backward stamp jump that resets everything
-    fusion: GravityFilter | None = None  # the gravity-aided orientation, if wanted
     rate_tolerance: float = RATE_TOLERANCE  # relative interval error of an off-rate stream
-    # the accelerometer's constant bias (m/s^2), removed before the initial tilt is read
-    accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    rest: rest_bias.RestBias | None = None  # the turn-on bias removed before the model
-    track: rest_bias.BiasTracker | None = None  # the output's bias tracked after it
-    guard: envelope.Guard | None = None  # the model not trusted beyond its input envelope
-    vertical: Vertical | None = None  # its correction about the vertical dropped
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         (*DROP_CAUSES, 'accepted', 'gap_resets', 'time_jump_resets', 'skipped_periods',
          'skipped_input_periods', 'non_finite_covariance'), 0))
     _last_ns: int | None = None
-    _attitude: rotation.Quat | None = None
-    _last_gyro: np.ndarray | None = None
     _pending_reset: bool = False
     _off_rate_run: int = 0
     _intervals: list[int] = field(default_factory=list)  # recent ones, ns
@@ -134,36 +102,73 @@ class OnlineDenoiser:
     _window_off: bool = False      # that median's rate is off the model's
 
     @classmethod
+    def of_engine(cls, engine: StreamingCorrector, rate_hz: float,
+                  accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                  **options: Any) -> OnlineDenoiser:
+        """Build a pipeline of a network alone and its open-loop attitude."""
+        return cls(Pipeline([Network(engine), Attitude(accel_bias)]), rate_hz, **options)
+
+    @classmethod
     def from_model_file(cls, model: ModelFile, fusion: FusionSettings | None = None,
                         rest_choice: str = 'model', guard_choice: str = 'model',
+                        accel_bias: tuple[float, float, float] | None = None,
                         **options: Any) -> OnlineDenoiser:
         """
         Build the pipeline of a model file (node and process-bag): numpy only, no torch.
 
-        With ``fusion`` settings, the gravity-aided orientation is computed too, and the
-        accelerometer bias they remove is removed from the open-loop attitude's initial
-        tilt as well (unless ``accel_bias`` is given). ``rest_choice`` (``model``, ``on``,
-        ``off``) says whether the turn-on bias is estimated and removed
-        (:func:`denoise_imu_ros.data.rest_bias.resolve`) and the output's bias tracked
-        (:func:`denoise_imu_ros.data.rest_bias.tracking`); ``guard_choice`` (``model``,
-        ``off``) whether the output is guarded (:func:`denoise_imu_ros.data.envelope.resolve`).
-        The correction about the vertical is dropped where the model file and
-        ``rest_choice`` say so (:func:`denoise_imu_ros.data.vertical.drops_vertical`).
+        Its correcting stages (:func:`~denoise_imu_ros.pipeline.stages.correction`, with
+        ``rest_choice`` and ``guard_choice`` as the node's ``rest_bias`` and
+        ``envelope_guard``), the open-loop attitude and, with ``fusion`` settings, the
+        gravity-aided orientation; the accelerometer bias they remove is removed from the
+        attitude's initial tilt as well (unless ``accel_bias`` is given).
         """
         rate = sample_rate(model)
+        if accel_bias is None:
+            accel_bias = (0.0, 0.0, 0.0) if fusion is None else fusion.accel_bias_m_s2
+        stages = [*correction(model, rest_choice, guard_choice), Attitude(accel_bias)]
         if fusion is not None:
-            options.setdefault('accel_bias', fusion.accel_bias_m_s2)
-        settings = rest_bias.resolve(model.meta, rest_choice)
-        track = rest_bias.tracking(model.meta, rest_choice)
-        bounds = envelope.resolve(model.meta, guard_choice)
-        return cls(StreamingCorrector(model.config, model.arrays), rate,
-                   guard=None if bounds is None else envelope.Guard(
-                       bounds, model.config.receptive_field),
-                   fusion=None if fusion is None else GravityFilter(rate, fusion),
-                   rest=None if settings is None else rest_bias.RestBias(settings, rate),
-                   track=None if track is None else rest_bias.BiasTracker(track, rate),
-                   vertical=Vertical(rate) if drops_vertical(model.meta, rest_choice) else None,
-                   **options)
+            stages.append(Orientation(rate, fusion))
+        return cls(Pipeline(stages), rate, **options)
+
+    @property
+    def engine(self) -> StreamingCorrector:
+        """Return the network's per-sample engine."""
+        return self.pipeline.get(Network).engine
+
+    @property
+    def rest(self) -> rest_bias.RestBias | None:
+        """Return the turn-on bias estimator (None: the raw gyro is fed)."""
+        stage = self.pipeline.get(TurnOnBias)
+        return None if stage is None else stage.estimator
+
+    @property
+    def track(self) -> rest_bias.BiasTracker | None:
+        """Return the output's bias tracker (None: not tracked)."""
+        stage = self.pipeline.get(BiasTrackingStage)
+        return None if stage is None else stage.tracker
+
+    @property
+    def guard(self) -> envelope.Guard | None:
+        """Return what guards the input envelope (None: nothing does)."""
+        stage = self.pipeline.get(EnvelopeCheck)
+        return None if stage is None else stage.guard
+
+    @property
+    def vertical(self) -> Vertical | None:
+        """Return what drops the correction about the vertical; None where it is kept."""
+        stage = self.pipeline.get(VerticalDrop)
+        return None if stage is None else stage.vertical
+
+    @property
+    def fusion(self) -> GravityFilter | None:
+        """Return the gravity-aided orientation's filter (None: not computed)."""
+        stage = self.pipeline.get(Orientation)
+        return None if stage is None else stage.filter
+
+    @property
+    def accel_bias(self) -> tuple[float, float, float]:
+        """Return the accelerometer bias removed before the attitude's initial tilt."""
+        return self.pipeline.get(Attitude).accel_bias
 
     def _count_input_periods(self, interval_ns: int) -> None:
         """Count the periods of the stream's own recent rate that went without a sample."""
@@ -242,52 +247,20 @@ class OnlineDenoiser:
                 self._off_rate_run = self._off_rate_run + 1 if off else 0
             self._count_input_periods(stamp_ns - self._last_ns)
 
-        if event is not None:
-            self.engine.reset()
-        if self.rest is not None:
-            if event in (Event.START, Event.TIME_JUMP):
-                self.rest.reset()
-            gyro = gyro - self.rest.update(gyro, accel)
-        fed = np.concatenate([gyro, accel])
-        corrected = self.engine.step(fed)
-        if self.guard is not None:  # every input the engine's history holds
-            if event is not None:  # that history restarted
-                self.guard.reset()
-            self.guard.check(fed)
-        if not np.isfinite(corrected).all():  # never published: dropped as if lost
+        events = frozenset() if event is None else frozenset({event})
+        if self._pending_reset:
+            events |= {Event.REQUESTED}
+            self._pending_reset = False
+        flow = Flow(np.concatenate([gyro, accel]), event,
+                    (stamp_ns - self._last_ns) * 1e-9 if event is None else 0.0,
+                    periods if event is None else 0.0)  # a gap: yaw held
+        if not self.pipeline.step(flow, events):  # never published: dropped as if lost
             return self._drop(Drop.NON_FINITE_OUTPUT)
-        bias = None
-        if self.track is not None:
-            if event in (Event.START, Event.TIME_JUMP):
-                self.track.reset()
-            bias = self.track.update(corrected, accel,
-                                     self.guard is not None and self.guard.too_fast)
-            corrected = corrected - bias
-        if self.guard is not None:
-            corrected = self.guard.apply(corrected, fed, bias)
-        if self.vertical is not None:
-            if event in (Event.START, Event.TIME_JUMP):
-                self.vertical.reset()
-            corrected = self.vertical.apply(corrected, fed)
         if event in (Event.START, Event.TIME_JUMP):  # another stream: its rate is new too
             self._off_rate_run, self._input_period_ns, self._window_off = 0, 0.0, False
             self._intervals.clear()
-        if event in (Event.START, Event.TIME_JUMP) or self._pending_reset:
-            bx, by, bz = self.accel_bias
-            self._attitude = rotation.from_gravity(float(accel[0]) - bx, float(accel[1]) - by,
-                                                   float(accel[2]) - bz)
-            if self.fusion is not None:
-                self.fusion.reset()
-            self._pending_reset = False
-        elif event is None:  # stamp k-1 to k at samples k-1's and k's mean, as imu/data
-            dt = (stamp_ns - self._last_ns) * 1e-9
-            step = rotation.exp(*(0.5 * (float(a) + float(b)) * dt
-                                  for a, b in zip(self._last_gyro, corrected)))
-            self._attitude = rotation.multiply(self._attitude, step)
-        self._last_ns, self._last_gyro = stamp_ns, corrected
+        self._last_ns = stamp_ns
         self.counts['accepted'] += 1
-        orientation = None if self.fusion is None else self.fusion.update(
-            corrected, accel, periods if event is None else 0.0)  # a gap: yaw held
-        return Output(stamp_ns=stamp_ns, gyro=corrected, attitude=np.array(self._attitude),
-                      event=event, orientation=orientation, rate_suspect=self.rate_suspect,
+        return Output(stamp_ns=stamp_ns, gyro=flow.out, attitude=flow.attitude, event=event,
+                      orientation=flow.orientation, rate_suspect=self.rate_suspect,
                       accel_cov=accel_cov)

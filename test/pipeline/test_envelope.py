@@ -5,8 +5,8 @@
 from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.schema import InputEnvelope, parse_meta
-from denoise_imu_ros.data.envelope import (combine, Guard, guard_batch, measure, resolve,
-                                           too_fast, untrusted)
+from denoise_imu_ros.pipeline.envelope import (combine, Guard, guard_batch, measure, resolve,
+                                               too_fast, untrusted)
 import numpy as np
 import pytest
 
@@ -46,8 +46,8 @@ def test_the_fallback_replaces_the_correction_for_a_receptive_field_after_a_samp
 def test_untrusted_the_output_falls_back_to_what_the_tracker_gives():
     """Beyond the envelope: the input less the tracked bias, held through fast motion."""
     from denoise_imu_ros.core.schema import BiasTracking
-    from denoise_imu_ros.data.envelope import finish
-    from denoise_imu_ros.data.rest_bias import tracked_bias
+    from denoise_imu_ros.pipeline.stages import finish
+    from denoise_imu_ros.pipeline.rest_bias import tracked_bias
     rng = np.random.default_rng(5)
     n, rate = 8000, 200.0
     fed = np.column_stack([rng.normal(0, 0.3, (n, 3)) + [0.01, -0.008, 0.004],

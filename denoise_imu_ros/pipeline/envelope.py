@@ -24,11 +24,12 @@ correction taken in motion carries that motion's scale terms into faster motion)
 guarding before the tracking (its estimate then follows the fallback through fast
 motion), holding the estimate wherever the guard is (what it learns through tapping is
 then discarded), and feeding the tracker the fallback through the held stretches.
-Every path uses it identically (:func:`finish` over arrays for ``eval``, ``correct`` and
-``crossval``; :class:`Guard` per sample for the node and ``process-bag``; equal bit for
-bit). The node's ``envelope_guard`` parameter (``correct``'s and ``process-bag``'s
-option) turns it off, and the hold with it: the model's output everywhere, tracked
-throughout (:func:`resolve`).
+Every path uses it identically (:func:`too_fast` and :func:`guard_batch` over arrays for
+``eval``, ``correct`` and ``crossval``; :class:`Guard` per sample for the node and
+``process-bag``; equal bit for bit), in the order of
+:data:`~denoise_imu_ros.pipeline.stages.STAGES`. The node's ``envelope_guard``
+parameter (``correct``'s and ``process-bag``'s option) turns it off, and the hold with
+it: the model's output everywhere, tracked throughout (:func:`resolve`).
 """
 
 from __future__ import annotations
@@ -38,14 +39,11 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from .rest_bias import tracked_bias, tracking
-from .vertical import drop_vertical, drops_vertical
 from ..core.limits import GRAVITY_M_S2
-from ..core.modelfile import sample_rate
-from ..core.schema import BiasTracking, InputEnvelope
+from ..core.schema import InputEnvelope
 
-__all__ = ['CHOICES', 'combine', 'excursion', 'finish', 'finished', 'Guard', 'guard_batch',
-           'measure', 'outside', 'resolve', 'too_fast', 'untrusted']
+__all__ = ['CHOICES', 'combine', 'excursion', 'Guard', 'guard_batch', 'measure', 'outside',
+           'resolve', 'too_fast', 'untrusted']
 
 CHOICES = ('model', 'off')  # the node's envelope_guard parameter, the offline tools' option
 
@@ -136,38 +134,6 @@ def resolve(meta: Any, choice: str) -> InputEnvelope | None:
     if choice not in CHOICES:
         raise ValueError(f'envelope guard {choice!r}: one of {", ".join(CHOICES)}')
     return meta.input_envelope if choice == 'model' else None
-
-
-def finish(output: np.ndarray, fed: np.ndarray, rate_hz: float,
-           tracking: BiasTracking | None, envelope: InputEnvelope | None, field: int,
-           vertical: bool = False) -> np.ndarray:
-    """
-    Return a model's ``output`` (N, 3) for its input ``fed`` (N, 6) as every path ends it.
-
-    Its bias tracked (``tracking``; held through stretches where the receptive field turns
-    faster than the envelope: :func:`too_fast`), then guarded (:func:`guard_batch`), then,
-    with ``vertical``, its correction about the vertical dropped
-    (:func:`~denoise_imu_ros.data.vertical.drop_vertical`); one run.
-    """
-    hold = None if envelope is None or tracking is None else too_fast(fed, envelope, field)
-    bias = None if tracking is None else tracked_bias(output, fed[:, 3:], rate_hz, tracking,
-                                                      hold)
-    output = guard_batch(output if bias is None else output - bias, fed, envelope, field, bias)
-    return drop_vertical(output, fed, rate_hz) if vertical else output
-
-
-def finished(loaded: Any, output: np.ndarray, fed: np.ndarray, rest: str = 'model',
-             guard: str = 'model') -> np.ndarray:
-    """
-    Return :func:`finish` with a model file's tracking, envelope and vertical.
-
-    ``rest`` as the node's ``rest_bias`` (tracking off with it, and the drop of the
-    correction about the vertical: :func:`~denoise_imu_ros.data.vertical.drops_vertical`),
-    ``guard`` as its ``envelope_guard`` (:func:`resolve`).
-    """
-    return finish(output, fed, sample_rate(loaded), tracking(loaded.meta, rest),
-                  resolve(loaded.meta, guard), loaded.config.receptive_field,
-                  drops_vertical(loaded.meta, rest))
 
 
 class Guard:

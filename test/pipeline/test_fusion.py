@@ -5,9 +5,9 @@
 from denoise_imu_ros.core.modelfile import read_model_file
 from denoise_imu_ros.core.schema import parse_meta
 from denoise_imu_ros.data.load import load_imu
-from denoise_imu_ros.runtime.fusion import (fuse, FusionSettings, GravityFilter,
-                                            orientation_covariance, step_periods)
-from denoise_imu_ros.runtime.online import OnlineDenoiser
+from denoise_imu_ros.pipeline.fusion import (fuse, FusionSettings, GravityFilter,
+                                             orientation_covariance, step_periods)
+from denoise_imu_ros.pipeline.online import OnlineDenoiser
 from helpers import SAMPLE
 import numpy as np
 import pytest

@@ -9,8 +9,8 @@ from denoise_imu_ros.core.rotation import from_gravity
 from denoise_imu_ros.core.schema import parse_meta
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.learn.model import correct_gyro
-from denoise_imu_ros.runtime.online import Drop, DROP_CAUSES, Event, OnlineDenoiser, Output
-from denoise_imu_ros.runtime.streaming import StreamingCorrector
+from denoise_imu_ros.pipeline.online import Drop, DROP_CAUSES, Event, OnlineDenoiser, Output
+from denoise_imu_ros.pipeline.streaming import StreamingCorrector
 from helpers import SAMPLE, untrained_model
 from hypothesis import given, HealthCheck, settings, strategies as st
 import numpy as np
@@ -31,14 +31,18 @@ def model():
     return untrained_model()
 
 
+def _bare(model, **options):
+    """Return the pipeline of a network alone and its attitude."""
+    return OnlineDenoiser.of_engine(StreamingCorrector.from_module(model), 200.0, **options)
+
+
 def _run(denoiser, stamps, imu):
     return [denoiser.process(int(t), row[:3], row[3:]) for t, row in zip(stamps, imu)]
 
 
 def test_online_attitude_equals_offline_integration_of_the_batch_output(seq, model):
     n = 3000
-    outs = _run(OnlineDenoiser(StreamingCorrector.from_module(model), 200.0), seq.stamp_ns[:n],
-                seq.imu[:n])
+    outs = _run(_bare(model), seq.stamp_ns[:n], seq.imu[:n])
     gyro = correct_gyro(model, seq.imu[:n])
     np.testing.assert_allclose(np.array([o.gyro for o in outs]), gyro, atol=1e-6)
     # the attitude at stamp k includes sample k's rate: each interval at its ends' mean
@@ -53,8 +57,8 @@ def test_online_attitude_equals_offline_integration_of_the_batch_output(seq, mod
 def test_with_bias_tracking_online_equals_both_offline_engines(seq, tmp_path):
     """The model file's rest bias, input envelope and output tracking, per sample as offline."""
     from denoise_imu_ros.core.modelfile import read_model_file
-    from denoise_imu_ros.data.envelope import excursion
-    from denoise_imu_ros.data.rest_bias import RestBiasSettings
+    from denoise_imu_ros.pipeline.envelope import excursion
+    from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
     from denoise_imu_ros.evaluation.correct import corrected_gyro
     from denoise_imu_ros.learn.checkpoint import load_model
     from helpers import write_untrained_model
@@ -89,8 +93,8 @@ def test_with_bias_tracking_online_equals_both_offline_engines(seq, tmp_path):
 def test_taught_without_the_heading_online_equals_both_offline_engines(seq, tmp_path):
     """The correction about the vertical dropped (after tracking and guard) as offline."""
     from denoise_imu_ros.core.modelfile import read_model_file
-    from denoise_imu_ros.data.envelope import excursion
-    from denoise_imu_ros.data.rest_bias import RestBiasSettings
+    from denoise_imu_ros.pipeline.envelope import excursion
+    from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
     from denoise_imu_ros.evaluation.correct import corrected_gyro
     from helpers import write_untrained_model
     n, cut = 2000, 1200
@@ -127,7 +131,7 @@ def test_the_start_attitude_levels_the_accelerometer():
 
 def test_the_start_and_reset_tilt_come_from_the_accelerometer_less_its_bias(seq, model):
     bias = (-0.013, 0.122, 0.063)  # EuRoC's fitted one: 0.7 deg of tilt
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, accel_bias=bias)
+    den = _bare(model, accel_bias=bias)
     first = _run(den, seq.stamp_ns[:500], seq.imu[:500])[0]
     np.testing.assert_allclose(first.attitude, from_gravity(*(seq.imu[0, 3:] - bias)))
     assert (Rotation.from_quat(first.attitude).inv()
@@ -138,7 +142,7 @@ def test_the_start_and_reset_tilt_come_from_the_accelerometer_less_its_bias(seq,
 
 
 def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    den = _bare(model)
     t, imu = seq.stamp_ns, seq.imu
     assert isinstance(den.process(int(t[0]), imu[0, :3], imu[0, 3:]), Output)
     bad_gyro = np.array([np.nan, 0.0, 0.0])
@@ -159,7 +163,7 @@ def test_bad_stamps_and_values_are_dropped_and_counted(seq, model):
 
 
 def test_missing_samples_are_counted_from_the_stamps(seq, model):
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    den = _bare(model)
     keep = np.ones(400, bool)
     keep[[10, 11, 12, 200]] = False  # four samples lost upstream
     _run(den, seq.stamp_ns[:400][keep], seq.imu[:400][keep])
@@ -167,7 +171,7 @@ def test_missing_samples_are_counted_from_the_stamps(seq, model):
 
 
 def test_gap_restarts_the_network_and_holds_the_attitude(seq, model):
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, max_gap_factor=3.0)
+    den = _bare(model, max_gap_factor=3.0)
     first = _run(den, seq.stamp_ns[:600], seq.imu[:600])
     after = _run(den, seq.stamp_ns[1000:1600], seq.imu[1000:1600])  # 2 s gap
     assert after[0].event == Event.GAP and den.counts['gap_resets'] == 1
@@ -178,17 +182,17 @@ def test_gap_restarts_the_network_and_holds_the_attitude(seq, model):
 
 
 def test_backward_time_jump_resets_everything(seq, model):
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0, time_jump_s=1.0)
+    den = _bare(model, time_jump_s=1.0)
     _run(den, seq.stamp_ns[:800], seq.imu[:800])
     again = _run(den, seq.stamp_ns[:300], seq.imu[:300])  # a bag played again
     assert again[0].event == Event.TIME_JUMP and den.counts['time_jump_resets'] == 1
-    fresh = _run(OnlineDenoiser(StreamingCorrector.from_module(model), 200.0), seq.stamp_ns[:300],
+    fresh = _run(_bare(model), seq.stamp_ns[:300],
                  seq.imu[:300])
     np.testing.assert_allclose(again[-1].attitude, fresh[-1].attitude, atol=1e-12)
 
 
 def test_reset_attitude_reinitialises_from_gravity_at_the_next_sample(seq, model):
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    den = _bare(model)
     _run(den, seq.stamp_ns[:500], seq.imu[:500])
     den.reset_attitude()
     out = den.process(int(seq.stamp_ns[500]), seq.imu[500, :3], seq.imu[500, 3:])
@@ -202,7 +206,7 @@ ODD_BUT_VALID = [5e-324, -5e-324, 1e-310, 0.0, -0.0, 99.0, -1999.0]
 
 def test_fuzz_ten_thousand_samples_with_extremes_never_yield_a_non_finite_output(seq, model):
     rng = np.random.default_rng(1)
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    den = _bare(model)
     answered = out_of_range = 0
     n = 5000
     for k in range(n):  # a real sample, then one with extreme or odd fields, 1 ms later
@@ -251,7 +255,7 @@ def denormals():
 @given(stream=STREAMS)
 def test_property_no_sample_raises_or_yields_a_non_finite_output(
         denormals, seq, model, stream):
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    den = _bare(model)
     t = 1_700_000_000 * 10**9
     for k, (step, fields) in enumerate(stream):
         t += step
@@ -266,7 +270,7 @@ def test_property_no_sample_raises_or_yields_a_non_finite_output(
 
 def test_a_second_clock_and_a_rate_change_are_told_from_losses(seq, model):
     """No 1.6e14 skipped periods; an off-rate stream is caught at once."""
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    den = _bare(model)
     imu = seq.imu
     t = 10**9
     den.process(t, imu[0, :3], imu[0, 3:])
@@ -285,7 +289,7 @@ def test_a_second_clock_and_a_rate_change_are_told_from_losses(seq, model):
 
 def test_a_stream_slower_than_the_gap_limit_is_off_rate_too(seq, model):
     """50 Hz into the 200 Hz model: every interval is a gap, and the stream is suspect."""
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    den = _bare(model)
     flags = [den.process(10**9 + k * 20_000_000, seq.imu[k, :3], seq.imu[k, 3:]).rate_suspect
              for k in range(30)]
     assert den.counts['gap_resets'] == 29
@@ -294,7 +298,7 @@ def test_a_stream_slower_than_the_gap_limit_is_off_rate_too(seq, model):
 
 def test_a_stream_whose_median_rate_is_off_is_suspect_though_no_run_of_intervals_is(seq, model):
     """Intervals of 1 and 2.5 periods in turn: each on-time one ends a run, the median not."""
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    den = _bare(model)
     t, flags = 10**9, []
     for k in range(100):
         t += 5_000_000 if k % 2 else 12_500_000
@@ -309,7 +313,7 @@ def test_a_stream_whose_median_rate_is_off_is_suspect_though_no_run_of_intervals
 
 def test_losses_of_a_stream_faster_than_the_model_are_counted(seq, model):
     """1 kHz into the 200 Hz model, every fifth message lost."""
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0)
+    den = _bare(model)
     kept = [k for k in range(2000) if k % 5 != 4]
     for k in kept:
         den.process(10**9 + k * 1_000_000, seq.imu[k % 500, :3], seq.imu[k % 500, 3:])
@@ -335,11 +339,13 @@ def test_a_correction_that_is_not_finite_is_dropped_never_output(tmp_path, seq):
 
 
 def test_with_a_rest_bias_the_model_sees_what_the_batch_path_feeds_it(seq, model):
-    from denoise_imu_ros.data.rest_bias import (model_input, rest_bias_batch, RestBias,
-                                                RestBiasSettings, remove_rest_bias)
+    from denoise_imu_ros.pipeline.rest_bias import (rest_bias_batch, RestBiasSettings,
+                                                    remove_rest_bias)
+    from denoise_imu_ros.pipeline.stages import (Attitude, model_input, Network, Pipeline,
+                                                 TurnOnBias)
     n, settings = 3000, RestBiasSettings(prior_rad_s=(0.002, -0.01, 0.03))
-    den = OnlineDenoiser(StreamingCorrector.from_module(model), 200.0,
-                         rest=RestBias(settings, 200.0))
+    den = OnlineDenoiser(Pipeline([Network(StreamingCorrector.from_module(model)),
+                                   TurnOnBias(settings, 200.0), Attitude()]), 200.0)
     outs = _run(den, seq.stamp_ns[:n], seq.imu[:n])
     fed = remove_rest_bias(seq.imu[:n], 200.0, settings)
     meta = parse_meta({'sample_rate_hz': 200.0, 'rest_bias': settings.to_dict()}, 'm')
@@ -362,7 +368,9 @@ def test_with_a_rest_bias_the_model_sees_what_the_batch_path_feeds_it(seq, model
 def test_a_dropped_non_finite_output_still_counts_its_input_for_the_guard():
     """The engine stepped on it: its motion is in the receptive field that follows."""
     from denoise_imu_ros.core.schema import InputEnvelope
-    from denoise_imu_ros.data.envelope import Guard
+    from denoise_imu_ros.pipeline.envelope import Guard
+    from denoise_imu_ros.pipeline.stages import (Attitude, EnvelopeApply, EnvelopeCheck, Network,
+                                                 Pipeline)
 
     class Broken:  # a model whose output is non-finite beyond 1 rad/s
         receptive_field = 5
@@ -374,8 +382,9 @@ def test_a_dropped_non_finite_output_still_counts_its_input_for_the_guard():
             gyro = fed[:3].copy()
             return gyro * np.nan if np.linalg.norm(gyro) > 1.0 else gyro + 0.5
 
-    den = OnlineDenoiser(Broken(), 200.0,
-                         guard=Guard(InputEnvelope(1.0, 50.0, (0.01, 0.0, 0.0)), 5))
+    guard = Guard(InputEnvelope(1.0, 50.0, (0.01, 0.0, 0.0)), 5)
+    den = OnlineDenoiser(Pipeline([Network(Broken()), EnvelopeCheck(guard), EnvelopeApply(guard),
+                                   Attitude()]), 200.0)
     gyro = np.full((12, 3), 0.1)
     gyro[3] = [2.0, 0.0, 0.0]
     accel = np.array([0.0, 0.0, 9.81])

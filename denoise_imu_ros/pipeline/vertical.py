@@ -54,7 +54,7 @@ def drops_vertical(meta: ModelMeta, rest: str = 'model') -> bool:
     """
     :func:`drops` for a model file fed as ``rest`` says.
 
-    ``rest`` as :func:`~denoise_imu_ros.data.rest_bias.resolve`; a rest-only or
+    ``rest`` as :func:`~denoise_imu_ros.pipeline.rest_bias.resolve`; a rest-only or
     tracker-only model corrects nothing to drop.
     """
     return (meta.kind not in NO_MODEL

@@ -27,7 +27,8 @@ is tracked after the model where its file says so (``bias_tracking``,
 :class:`~denoise_imu_ros.core.schema.BiasTracking`): a second VQF, its rest and motion
 bias estimators on, fed the model's output from a bias of 0; its estimate is removed
 from the output (:func:`track_bias` over arrays, :class:`BiasTracker` per sample; its
-estimate restored after motion faster than the model was trained on: ``envelope.finish``).
+estimate restored after motion faster than the model was trained on: the stage table,
+:mod:`denoise_imu_ros.pipeline.stages`).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ from ..core.modelfile import code_version, Described, ModelFile, sample_rate, wr
 from ..core.schema import BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings, TRACKER_ONLY
 
 __all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES',
-           'classical_tracking', 'estimator', 'model_input', 'Nominal', 'nominal_bias',
+           'classical_tracking', 'estimator', 'Nominal', 'nominal_bias',
            'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch', 'RestBiasSettings',
            'track_bias', 'tracked_bias', 'tracker', 'tracker_only_gyro', 'tracking',
            'write_rest_only_model']
@@ -302,14 +303,6 @@ def tracker_only_gyro(loaded: Described, imu: np.ndarray) -> np.ndarray:
     """Return the "tracker only" row's gyro (N, 3): the rest-bias row's, its bias tracked."""
     return track_bias(baseline_gyro(loaded, imu), imu[:, 3:], sample_rate(loaded),
                       classical_tracking(loaded.meta))
-
-
-def model_input(loaded: Described, imu: np.ndarray, choice: str = 'model') -> np.ndarray:
-    """Return what a model is fed for a recording's raw samples (N, 6), at its own rate."""
-    settings = resolve(loaded.meta, choice)
-    if settings is None:
-        return imu
-    return remove_rest_bias(imu, sample_rate(loaded), settings)
 
 
 class Nominal(NamedTuple):

@@ -4,7 +4,7 @@
 
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.learn.model import correct_gyro
-from denoise_imu_ros.runtime.streaming import StreamingCorrector
+from denoise_imu_ros.pipeline.streaming import StreamingCorrector
 from helpers import SAMPLE, untrained_model
 import numpy as np
 import pytest
@@ -92,7 +92,7 @@ def test_an_ensemble_is_the_mean_of_its_members_in_batch_and_streaming(imu, comp
 
 
 def test_the_engine_gelu_is_the_exact_erf_gelu_to_float32_precision():
-    from denoise_imu_ros.runtime.streaming import _gelu
+    from denoise_imu_ros.pipeline.streaming import _gelu
     from scipy.special import ndtr
     x = np.linspace(-20, 20, 400001)
     exact = x * ndtr(x)

@@ -1,0 +1,423 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The correction pipeline as one table: the stages in order and the events that reset each.
+
+Every stage has two forms: :meth:`Stage.step` takes one sample (the node and
+process-bag, through :class:`~denoise_imu_ros.pipeline.online.OnlineDenoiser`, which
+checks each sample and finds the events) and :meth:`Stage.run` a whole recording as one
+run (``eval``, ``correct``, ``crossval``, ``tune-fusion``); the two agree bit for bit
+except the network's batch form (torch's float32 batch network within 1e-6 rad/s of the
+compiled step). :class:`Pipeline` runs the stages a model file has in the order of
+:data:`STAGES` and resets each at its events, so no stage can reach one path only.
+
+==============  =========================  =========================  ===================
+stage           per sample                 over a recording           reset by
+==============  =========================  =========================  ===================
+turn-on bias    ``RestBias.update``        ``remove_rest_bias``       start, jump
+envelope check  ``Guard.check``            ``too_fast``               start, gap, jump
+network         ``StreamingCorrector``     torch's ``GyroNet``        start, gap, jump
+bias tracking   ``BiasTracker.update``     ``tracked_bias``           start, jump
+envelope apply  ``Guard.apply``            ``guard_batch``            (the check's)
+vertical drop   ``Vertical.apply``         ``drop_vertical``          start, jump
+attitude        :class:`Attitude`          the same step, in a loop   start, jump, request
+orientation     ``GravityFilter.update``   ``fuse``                   start, jump, request
+==============  =========================  =========================  ===================
+
+A gap restarts the network's history (and the envelope's view of it) but not the
+estimates of the same run; the open-loop attitude is held across it and the orientation
+takes no gyro step (gravity corrects its tilt). A request (the node's ``reset_attitude``
+service) restarts the attitude and the orientation from the next accelerometer only.
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+from typing import Any, Callable, Iterable
+
+import numpy as np
+
+from . import envelope, rest_bias
+from .fusion import fuse, FusionSettings, GravityFilter
+from .streaming import StreamingCorrector
+from .vertical import drop_vertical, drops_vertical, Vertical
+from ..core import rotation
+from ..core.limits import MAX_GAP_FACTOR
+from ..core.modelfile import ModelFile, sample_rate
+from ..core.schema import BiasTracking, InputEnvelope, RestBiasSettings
+
+__all__ = ['Attitude', 'BiasTrackingStage', 'correction', 'corrected', 'EnvelopeApply',
+           'EnvelopeCheck', 'Event', 'finish', 'Flow', 'model_input', 'Network',
+           'Orientation', 'Pipeline', 'Stage', 'STAGES', 'TurnOnBias', 'VerticalDrop']
+
+
+class Event(str, Enum):
+    """Why the pipeline's state is reset at an accepted sample (the value names it)."""
+
+    START = 'start'          # first sample: network warm-up, attitude from gravity
+    GAP = 'gap'              # stamps too far apart: network warm-up, attitude held
+    TIME_JUMP = 'time_jump'  # stamps jumped back, or a minute ahead: everything reset
+    REQUESTED = 'reset_attitude'  # the node's service: attitude and orientation only
+
+
+RUN = frozenset({Event.START, Event.TIME_JUMP})  # another run, perhaps another power-on
+HISTORY = RUN | {Event.GAP}                      # the network's input history restarts
+ATTITUDE = RUN | {Event.REQUESTED}               # integrated from gravity again
+
+
+class Flow:
+    """
+    What the stages hand on: one sample's values, or a recording's arrays.
+
+    ``fed`` is the model's input (the raw gyro less the turn-on bias, and the
+    accelerometer), ``out`` the gyro so far; the rest are set by the stages that have
+    them (``bias`` the tracked bias removed, ``too_fast`` the envelope's hold).
+    """
+
+    __slots__ = ('fed', 'out', 'bias', 'too_fast', 'event', 'dt_s', 'periods', 'attitude',
+                 'orientation')
+
+    def __init__(self, fed: np.ndarray, event: Event | None = None, dt_s: Any = 0.0,
+                 periods: Any = 0.0, out: np.ndarray | None = None) -> None:
+        self.fed, self.event, self.dt_s, self.periods = fed, event, dt_s, periods
+        self.out: Any = out
+        self.bias: Any = None
+        self.too_fast: Any = False
+        self.attitude: Any = None
+        self.orientation: Any = None
+
+    @classmethod
+    def recording(cls, imu: np.ndarray, stamp_ns: np.ndarray | None = None,
+                  rate_hz: float = 0.0, max_gap_factor: float = MAX_GAP_FACTOR) -> Flow:
+        """
+        Return a recording's raw samples (N, 6) as one run, with their stamps if given.
+
+        ``periods`` as the online pipeline passes them (0 at the first stamp and across
+        a gap of more than ``max_gap_factor`` periods), ``dt_s`` each interval's length.
+        """
+        if stamp_ns is None:
+            return cls(imu)
+        stamps = np.asarray(stamp_ns, dtype=np.int64)
+        dt = np.zeros(len(stamps))
+        dt[1:] = np.diff(stamps) * 1e-9
+        periods = dt * rate_hz
+        periods[periods > max_gap_factor] = 0.0
+        return cls(imu, dt_s=dt, periods=periods)
+
+
+class Stage:
+    """One stage: :meth:`step` per sample, :meth:`run` over a recording, :meth:`reset`."""
+
+    def reset(self) -> None:
+        """Start again at one of the events :data:`STAGES` gives it."""
+
+    def step(self, flow: Flow) -> bool | None:
+        """Take one sample; False drops it (the stages after it do not see it)."""
+        raise NotImplementedError
+
+    def run(self, flow: Flow) -> None:
+        """Take a whole recording, one run from its first sample."""
+        raise NotImplementedError
+
+
+class TurnOnBias(Stage):
+    """The raw gyro less the turn-on bias estimated from stillness so far (the model's input)."""
+
+    def __init__(self, settings: RestBiasSettings, rate_hz: float) -> None:
+        self.settings, self.rate_hz = settings, rate_hz
+        self.estimator = rest_bias.RestBias(settings, rate_hz)
+
+    def reset(self) -> None:
+        """Start from the prior again: another run, perhaps another power-on."""
+        self.estimator.reset()
+
+    def step(self, flow: Flow) -> None:
+        """Remove this sample's estimate from its gyro."""
+        flow.fed[:3] -= self.estimator.update(flow.fed[:3], flow.fed[3:])
+
+    def run(self, flow: Flow) -> None:
+        """Remove each sample's estimate (a copy)."""
+        flow.fed = rest_bias.remove_rest_bias(flow.fed, self.rate_hz, self.settings)
+
+
+class EnvelopeCheck(Stage):
+    """Whether the receptive field holds motion the model was not trained on."""
+
+    def __init__(self, guard: envelope.Guard) -> None:
+        self.guard = guard
+
+    def reset(self) -> None:
+        """Forget the inputs seen: the network's history restarted."""
+        self.guard.reset()
+
+    def step(self, flow: Flow) -> None:
+        """Take the model's input; the tracker holds while it turns too fast."""
+        self.guard.check(flow.fed)
+        flow.too_fast = self.guard.too_fast
+
+    def run(self, flow: Flow) -> None:
+        """Mark the samples whose receptive field turns faster than the envelope."""
+        flow.too_fast = envelope.too_fast(flow.fed, self.guard.envelope, self.guard.field)
+
+
+class Network(Stage):
+    """The model's correction: the compiled step per sample, ``batch`` (or it) over arrays."""
+
+    def __init__(self, engine: StreamingCorrector | None,
+                 batch: Callable[[np.ndarray], np.ndarray] | None = None) -> None:
+        if engine is None and batch is None:
+            raise ValueError('a network stage needs its per-sample engine or a batch form')
+        self.engine, self.batch = engine, batch
+
+    def reset(self) -> None:
+        """Warm up again: the history is filled with the next input."""
+        if self.engine is not None:
+            self.engine.reset()
+
+    def step(self, flow: Flow) -> bool:
+        """Correct one sample; a correction that is not finite drops it."""
+        flow.out = self.engine.step(flow.fed)
+        return bool(np.isfinite(flow.out).all())
+
+    def run(self, flow: Flow) -> None:
+        """Correct every sample."""
+        flow.out = (self.engine.process if self.batch is None else self.batch)(flow.fed)
+
+
+class BiasTrackingStage(Stage):
+    """The model's output less the bias it still has, tracked from gravity (VQF)."""
+
+    def __init__(self, settings: BiasTracking, rate_hz: float) -> None:
+        self.settings, self.rate_hz = settings, rate_hz
+        self.tracker = rest_bias.BiasTracker(settings, rate_hz)
+
+    def reset(self) -> None:
+        """Start the estimate again: another run."""
+        self.tracker.reset()
+
+    def step(self, flow: Flow) -> None:
+        """Remove the bias tracked up to this sample (held while the envelope says)."""
+        flow.bias = self.tracker.update(flow.out, flow.fed[3:], flow.too_fast)
+        flow.out = flow.out - flow.bias
+
+    def run(self, flow: Flow) -> None:
+        """Remove the bias tracked at each sample."""
+        hold = flow.too_fast if isinstance(flow.too_fast, np.ndarray) else None
+        flow.bias = rest_bias.tracked_bias(flow.out, flow.fed[:, 3:], self.rate_hz,
+                                           self.settings, hold)
+        flow.out = flow.out - flow.bias
+
+
+class EnvelopeApply(Stage):
+    """Outside the envelope, the input plus a constant, less the tracked bias."""
+
+    def __init__(self, guard: envelope.Guard) -> None:
+        self.guard = guard  # the check's, reset by it
+
+    def step(self, flow: Flow) -> None:
+        """Guard one output."""
+        flow.out = self.guard.apply(flow.out, flow.fed, flow.bias)
+
+    def run(self, flow: Flow) -> None:
+        """Guard every output."""
+        flow.out = envelope.guard_batch(flow.out, flow.fed, self.guard.envelope,
+                                        self.guard.field, flow.bias)
+
+
+class VerticalDrop(Stage):
+    """A heading-less model's output less its correction about the vertical."""
+
+    def __init__(self, rate_hz: float) -> None:
+        self.rate_hz = rate_hz
+        self.vertical = Vertical(rate_hz)
+
+    def reset(self) -> None:
+        """Find the vertical again: another run."""
+        self.vertical.reset()
+
+    def step(self, flow: Flow) -> None:
+        """Drop one output's correction about the vertical."""
+        flow.out = self.vertical.apply(flow.out, flow.fed)
+
+    def run(self, flow: Flow) -> None:
+        """Drop every output's correction about the vertical."""
+        flow.out = drop_vertical(flow.out, flow.fed, self.rate_hz)
+
+
+class Attitude(Stage):
+    """
+    The open-loop attitude (``imu/attitude``): the corrected gyro integrated, xyzw.
+
+    From gravity at a reset (less the accelerometer's constant bias); then the interval
+    from stamp k - 1 to k at samples k - 1's and k's mean rate, as ``imu/data``; held
+    across a gap, which cannot be integrated.
+    """
+
+    def __init__(self, accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:
+        self.accel_bias = accel_bias
+        self._attitude: rotation.Quat | None = None
+        self._last: np.ndarray | None = None
+
+    def reset(self) -> None:
+        """Take the next sample's accelerometer for the tilt, yaw 0."""
+        self._attitude = None
+
+    def step(self, flow: Flow) -> None:
+        """Integrate to this sample's stamp."""
+        if self._attitude is None:
+            bx, by, bz = self.accel_bias
+            accel = flow.fed[3:]
+            self._attitude = rotation.from_gravity(float(accel[0]) - bx, float(accel[1]) - by,
+                                                   float(accel[2]) - bz)
+        elif flow.event is None:
+            dt = flow.dt_s
+            self._attitude = rotation.multiply(self._attitude, rotation.exp(
+                *(0.5 * (float(a) + float(b)) * dt for a, b in zip(self._last, flow.out))))
+        self._last = flow.out
+        flow.attitude = np.array(self._attitude)
+
+    def run(self, flow: Flow) -> None:
+        """Integrate over the recording: the same step, each gap (periods 0) held."""
+        self.reset()
+        attitude = np.empty((len(flow.out), 4))
+        for k, (fed, out, periods) in enumerate(zip(flow.fed, flow.out, flow.periods)):
+            sample = Flow(fed, None if periods else Event.GAP, flow.dt_s[k], out=out)
+            self.step(sample)
+            attitude[k] = sample.attitude
+        flow.attitude = attitude
+
+
+class Orientation(Stage):
+    """The gravity-aided orientation (``imu/data``): VQF on the corrected gyro."""
+
+    def __init__(self, rate_hz: float, settings: FusionSettings) -> None:
+        self.rate_hz, self.settings = rate_hz, settings
+        self.filter = GravityFilter(rate_hz, settings)
+
+    def reset(self) -> None:
+        """Take the next sample's accelerometer for the tilt, yaw 0."""
+        self.filter.reset()
+
+    def step(self, flow: Flow) -> None:
+        """Update with this sample (no gyro step after an event: the yaw is held)."""
+        flow.orientation = self.filter.update(flow.out, flow.fed[3:], flow.periods)
+
+    def run(self, flow: Flow) -> None:
+        """Filter the recording in one compiled batch."""
+        flow.orientation = fuse(flow.out, flow.fed[:, 3:], self.rate_hz, self.settings,
+                                flow.periods if isinstance(flow.periods, np.ndarray)
+                                else None)
+
+
+# The one table: the order of the stages and the events that reset each.
+STAGES: tuple[tuple[type[Stage], frozenset[Event]], ...] = (
+    (TurnOnBias, RUN),
+    (EnvelopeCheck, HISTORY),
+    (Network, HISTORY),
+    (BiasTrackingStage, RUN),
+    (EnvelopeApply, frozenset()),  # its guard is the check's, reset there
+    (VerticalDrop, RUN),
+    (Attitude, ATTITUDE),
+    (Orientation, ATTITUDE),
+)
+RESETS = dict(STAGES)
+
+
+class Pipeline:
+    """The stages a model file has, in the order of :data:`STAGES`, reset at its events."""
+
+    def __init__(self, stages: Iterable[Stage]) -> None:
+        given = {type(s): s for s in stages}
+        unknown = set(given) - set(RESETS)
+        if unknown:
+            raise TypeError(f'not a stage of the table: {sorted(k.__name__ for k in unknown)}')
+        self.stages = tuple(given[kind] for kind, _ in STAGES if kind in given)
+        self._resets = tuple((s, RESETS[type(s)]) for s in self.stages)
+
+    def get(self, kind: type[Stage]) -> Any:
+        """Return the stage of that kind, or None where this pipeline has none."""
+        return next((s for s in self.stages if type(s) is kind), None)
+
+    def step(self, flow: Flow, events: frozenset[Event] = frozenset()) -> bool:
+        """Take one sample after resetting the stages ``events`` reset; False: dropped."""
+        if events:
+            for stage, resets in self._resets:
+                if not resets.isdisjoint(events):
+                    stage.reset()
+        for stage in self.stages:
+            if stage.step(flow) is False:
+                return False
+        return True
+
+    def run(self, flow: Flow, before: type[Stage] | None = None) -> Flow:
+        """Take a recording, one run, through every stage (or up to ``before``)."""
+        for stage in self.stages:
+            if type(stage) is before:
+                break
+            stage.run(flow)
+        return flow
+
+
+def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
+               batch: Callable[[np.ndarray], np.ndarray] | None = None) -> list[Stage]:
+    """
+    Return the correcting stages of a model file (numpy only, no torch).
+
+    ``rest`` as the node's ``rest_bias`` (``model``, ``on``, ``off``): the turn-on bias
+    removed first (:func:`~denoise_imu_ros.pipeline.rest_bias.resolve`), the output's
+    bias tracked (:func:`~denoise_imu_ros.pipeline.rest_bias.tracking`) and the correction
+    about the vertical dropped (:func:`~denoise_imu_ros.pipeline.vertical.drops_vertical`)
+    where the model file says; ``guard`` as its ``envelope_guard`` (``model``, ``off``:
+    :func:`~denoise_imu_ros.pipeline.envelope.resolve`). ``batch``: the network over
+    arrays (torch's, for a model loaded with torch) instead of the per-sample engine.
+    """
+    rate = sample_rate(model)
+    settings = rest_bias.resolve(model.meta, rest)
+    tracking = rest_bias.tracking(model.meta, rest)
+    bounds = envelope.resolve(model.meta, guard)
+    stages: list[Stage] = [Network(
+        StreamingCorrector(model.config, model.arrays) if batch is None else None, batch)]
+    if settings is not None:
+        stages.append(TurnOnBias(settings, rate))
+    if tracking is not None:
+        stages.append(BiasTrackingStage(tracking, rate))
+    if bounds is not None:
+        stages += _guarded(bounds, model.config.receptive_field)
+    if drops_vertical(model.meta, rest):
+        stages.append(VerticalDrop(rate))
+    return stages
+
+
+def _guarded(bounds: InputEnvelope, field: int) -> list[Stage]:
+    guard = envelope.Guard(bounds, field)
+    return [EnvelopeCheck(guard), EnvelopeApply(guard)]
+
+
+def corrected(model: ModelFile, imu: np.ndarray, rest: str = 'model', guard: str = 'model',
+              batch: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
+    """Return the corrected gyro (N, 3) of a recording's raw samples (N, 6), one run."""
+    return Pipeline(correction(model, rest, guard, batch)).run(Flow.recording(imu)).out
+
+
+def model_input(model: Any, imu: np.ndarray, rest: str = 'model') -> np.ndarray:
+    """Return what a model is fed for a recording's raw samples (N, 6): the stages before it."""
+    settings = rest_bias.resolve(model.meta, rest)
+    stages = [] if settings is None else [TurnOnBias(settings, sample_rate(model))]
+    return Pipeline(stages).run(Flow.recording(imu)).fed
+
+
+def finish(output: np.ndarray, fed: np.ndarray, rate_hz: float,
+           tracking: BiasTracking | None, bounds: InputEnvelope | None, field: int,
+           vertical: bool = False) -> np.ndarray:
+    """
+    Return a network's ``output`` (N, 3) for its input ``fed`` (N, 6) through the stages after it.
+
+    With these settings rather than a model file's: ``crossval`` tries several trackings
+    on one output, and on the mean of its folds' outputs.
+    """
+    stages: list[Stage] = [] if tracking is None else [BiasTrackingStage(tracking, rate_hz)]
+    if bounds is not None:
+        stages += _guarded(bounds, field)
+    if vertical:
+        stages.append(VerticalDrop(rate_hz))
+    return Pipeline(stages).run(Flow(fed, out=output)).out
