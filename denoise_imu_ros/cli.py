@@ -39,16 +39,12 @@ ESTIMATED_OPTION = {  # a bag's pose topic that is a VIO's or SLAM's, as --poses
     'action': 'store_true',
     'help': "the recordings' own poses (a bag's pose topic, an ASL folder's) are a VIO's or "
             "SLAM's estimate, not motion capture, as trajectory files (--poses) always are"}
-REST_BIAS_OPTION = {  # the node's rest_bias parameter, for the offline tools
-    'choices': ('model', 'on', 'off'), 'default': 'model',
-    'help': "remove the gyro's turn-on bias, estimated from stillness, before the model, "
-            "and track the output's bias after it where the model file says: model (as the "
-            'model was trained and cross-validated, the default), on, off (neither)'}
-GUARD_OPTION = {  # the node's envelope_guard parameter, for the offline tools
-    'choices': ('model', 'off'), 'default': 'model',
-    'help': "beyond the motion the model was trained on (its file's input envelope), "
-            'its input gyro plus a constant instead of its correction: model (where the '
-            'file has an envelope, the default) or off (the correction everywhere)'}
+# The node's parameters that correct and process-bag take as options (the rest from
+# --params-file): parameter -> the option's attribute; their help is the parameter's
+OPTION_OF = {'model': 'model', 'rest_bias': 'rest_bias', 'envelope_guard': 'envelope_guard',
+             'fixed_frame': 'fixed_frame', 'embed_attitude': 'embed_attitude'}
+PARAMS_FILE_HELP = ("the node's params YAML (config/gyro_denoiser.yaml, keyed /**:): run as "
+                    'the node configured by it; the options given override it')
 
 
 def _workers(value: str) -> int | str:
@@ -275,13 +271,35 @@ def _start_up_warnings(model: str, rest: str = 'model') -> None:
             print(f'warning: {warning}', file=sys.stderr)
 
 
+def _node_settings(args: argparse.Namespace) -> Any:
+    """
+    Return the node's settings for an offline run: its params file, then these options.
+
+    What the node would ignore in the file (a parameter it does not have) is said, as the
+    node says it; an option given overrides the file, as ``-p`` after ``--params-file``.
+    """
+    from .runtime.settings import Settings
+    settings, unknown = (Settings.from_params_file(args.params_file) if args.params_file
+                         else (Settings(), []))
+    if unknown:
+        print(f'warning: {args.params_file}: ignored parameters the node does not have: '
+              f'{", ".join(unknown)}', file=sys.stderr)
+    if args.model is None and not args.params_file:
+        raise OptionError('give --model, or a --params-file that names the model')
+    given = {name: getattr(args, option, None) for name, option in OPTION_OF.items()}
+    return settings.with_(**{k: v for k, v in given.items() if v is not None})
+
+
 def _correct(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file
     from .evaluation.correct import correct_to_csv
-    _guard_output(args.output, [args.input, read_model_file(args.model).path], args.overwrite)
-    _start_up_warnings(args.model, args.rest_bias)
-    n = correct_to_csv(args.model, args.input, args.output, imu_topic=args.imu_topic,
-                       engine=args.engine, rest=args.rest_bias, guard=args.envelope_guard)
+    settings = _node_settings(args)
+    rest, guard = settings.choice('rest_bias'), settings.choice('envelope_guard')
+    _guard_output(args.output, [args.input, read_model_file(settings.model).path],
+                  args.overwrite)
+    _start_up_warnings(settings.model, rest)
+    n = correct_to_csv(settings.model, args.input, args.output, imu_topic=args.imu_topic,
+                       engine=args.engine, rest=rest, guard=guard)
     print(f'wrote {n} corrected gyro samples to {args.output}')
 
 
@@ -304,14 +322,13 @@ def _process_bag(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file
     from .pipeline.online import DROP_CAUSES
     from .runtime.process_bag import process_bag
-    _guard_output(args.output, [args.input, read_model_file(args.model).path], False,
+    settings = _node_settings(args)
+    _guard_output(args.output, [args.input, read_model_file(settings.model).path], False,
                   NEVER_OVER_A_BAG)
-    _start_up_warnings(args.model, args.rest_bias)
-    counts = process_bag(args.input, args.output, args.model, imu_topic=args.imu_topic,
-                         storage=args.storage, fixed_frame=args.fixed_frame,
-                         compress=args.compress, namespace=args.namespace,
-                         rest=args.rest_bias, embed_attitude=args.embed_attitude,
-                         guard=args.envelope_guard,
+    _start_up_warnings(settings.model, settings.choice('rest_bias'))
+    counts = process_bag(args.input, args.output, settings, imu_topic=args.imu_topic,
+                         storage=args.storage, compress=args.compress,
+                         namespace=args.namespace,
                          warn=lambda said: print(f'warning: {said}', file=sys.stderr))
     dropped = ', '.join(f'{k} {v}' for k, v in counts.items() if k in DROP_CAUSES)
     rest = ', '.join(f'{k} {v}' for k, v in counts.items() if k not in DROP_CAUSES)
@@ -337,8 +354,27 @@ class _Version(argparse.Action):
         parser.exit()
 
 
+def _node_options(p: argparse.ArgumentParser, bag: bool = False) -> None:
+    """Add the node's parameters an offline run takes as options, with their own help."""
+    from .runtime.settings import Settings
+    specs = {name: spec for name, _, spec in Settings.specs()}
+    helps = {name: spec.description for name, spec in specs.items()}
+    choices = {name: ('model', *('on' if s else 'off' for s in spec.switches))
+               for name, spec in specs.items() if spec.switches}
+    p.add_argument('--params-file', help=PARAMS_FILE_HELP)
+    p.add_argument('--model', help=helps['model'] + ' (required without --params-file)')
+    p.add_argument('--rest-bias', choices=choices['rest_bias'], help=helps['rest_bias'])
+    p.add_argument('--envelope-guard', choices=choices['envelope_guard'],
+                   help=helps['envelope_guard'])
+    if bag:
+        p.add_argument('--fixed-frame', help=helps['fixed_frame'])
+        p.add_argument('--embed-attitude', action='store_true', default=None,
+                       help=helps['embed_attitude'])
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser (exposed for tests and documentation)."""
+    from .core.modelfile import MODEL_HELP
     parser = argparse.ArgumentParser(prog='denoise-imu', description=__doc__.splitlines()[0])
     parser.add_argument('--version', action=_Version)
     sub = parser.add_subparsers(dest='command', required=True)
@@ -442,7 +478,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser('eval', parents=[topics],
                        help='AOE/ROE of raw, calibrated and corrected gyro integration')
     p.add_argument('--model', required=True,
-                   help='shipped name (euroc, tumvi, broad, broad_network, *_calibrated) or file')
+                   help=MODEL_HELP)
     p.add_argument('--data', required=True, help='folder holding the sequences')
     p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags')
     p.add_argument('--out', required=True, help='output folder (JSON, Markdown, PNG)')
@@ -461,7 +497,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help='gyro noise figures for a VIO (Allan deviation, Kalibr-style '
                             'noise density and random walk) and a check of the covariance')
     p.add_argument('--model', required=True,
-                   help='shipped name (euroc, tumvi, broad, broad_network, *_calibrated) or file')
+                   help=MODEL_HELP)
     p.add_argument('--data', required=True, help='folder holding the recordings')
     p.add_argument('--sequences', nargs='+', required=True, help='recordings with ground truth')
     p.add_argument('--out', required=True, help='output folder (YAML, JSON, PNG)')
@@ -493,14 +529,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('correct', parents=[topics],
                        help='write the corrected gyro of every IMU sample as CSV')
-    p.add_argument('--model', required=True,
-                   help='shipped name (euroc, tumvi, broad, broad_network, *_calibrated) or file')
+    _node_options(p)
     p.add_argument('--input', required=True, help='ASL sequence folder or bag')
     p.add_argument('--output', required=True, help='CSV: timestamp_ns,wx,wy,wz')
     p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',
                    help='whole-recording torch network, or the per-sample numpy engine')
-    p.add_argument('--rest-bias', **REST_BIAS_OPTION)
-    p.add_argument('--envelope-guard', **GUARD_OPTION)
     p.add_argument('--overwrite', action='store_true', help='replace an existing --output')
     p.set_defaults(func=_correct)
 
@@ -509,20 +542,13 @@ def build_parser() -> argparse.ArgumentParser:
                             '(as the node)')
     p.add_argument('input', help='ROS 1 or ROS 2 bag')
     p.add_argument('output', help='ROS 2 bag to write (must not exist)')
-    p.add_argument('--model', required=True,
-                   help='shipped name (euroc, tumvi, broad, broad_network, *_calibrated) or file')
+    _node_options(p, bag=True)
     p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
-    p.add_argument('--fixed-frame', default='odom', help='frame_id of /imu/attitude')
     p.add_argument('--namespace', default='/',
                    help="the node's namespace for the outputs (default /: /imu/corrected, "
                         '/imu/data, /imu/attitude; /denoised: /denoised/imu/corrected, ...)')
     p.add_argument('--compress', action=argparse.BooleanOptionalAction,
                    help='zstd compression (default: as the input bag says it is compressed)')
-    p.add_argument('--rest-bias', **REST_BIAS_OPTION)
-    p.add_argument('--envelope-guard', **GUARD_OPTION)
-    p.add_argument('--embed-attitude', action='store_true',
-                   help="also write the attitude into /imu/corrected, as the node's "
-                        'embed_attitude (orientation σ 0.05 rad)')
     p.set_defaults(func=_process_bag)
 
     p = sub.add_parser('play', parents=[topics],

@@ -252,11 +252,15 @@ def test_version_is_the_code_version_a_model_file_records(capsys):
 
 
 def test_the_offline_tools_offer_the_node_s_rest_bias_and_guard_choices():
-    """The options are spelt out in cli.py (no numpy at start-up): they must not drift."""
-    from denoise_imu_ros.cli import GUARD_OPTION, REST_BIAS_OPTION
+    """correct's and process-bag's choices are the node's settings and the pipeline's."""
+    from denoise_imu_ros.cli import build_parser
     from denoise_imu_ros.pipeline import envelope, rest_bias
-    assert REST_BIAS_OPTION['choices'] == rest_bias.CHOICES
-    assert GUARD_OPTION['choices'] == envelope.CHOICES
+    commands = next(a for a in build_parser()._actions if a.choices and 'correct' in a.choices)
+    for command in ('correct', 'process-bag'):
+        options = {a.dest: a for a in commands.choices[command]._actions}
+        assert options['rest_bias'].choices == rest_bias.CHOICES
+        assert options['envelope_guard'].choices == envelope.CHOICES
+        assert options['rest_bias'].default is options['envelope_guard'].default is None
 
 
 @pytest.mark.parametrize('signal_error, code, word', [

@@ -78,6 +78,10 @@ def shipped_models() -> list[str]:
     return sorted(p.stem for p in SHIPPED_DIR.glob('*.safetensors'))
 
 
+MODEL_HELP = (f'shipped name ({", ".join(shipped_models())}) or the path of a .safetensors '
+              'model file')
+
+
 def code_version(package: Path = Path(__file__).resolve().parents[1]) -> str:
     """
     Package version plus a digest of its Python sources: which code wrote a file.

@@ -16,7 +16,6 @@ and frame ids are copied from the input, never re-stamped.
 from __future__ import annotations
 
 from collections import deque
-import math
 from pathlib import Path
 import re
 import sys
@@ -42,12 +41,11 @@ from .advice import ambiguous_rest, deployment_warning, rest_warnings
 from .outputs import Outputs
 from .rclpy_internals import (given_parameters, integer_given_for_double, RCLError,
                               RCLInvalidROSArgsError, take_waiting)
+from .settings import section_applies, Settings
 from ..core import msgs
 from ..core.errors import DenoiseError
-from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE
-from ..core.modelfile import gyro_covariance, ModelFile, read_model_file
-from ..pipeline.fusion import FusionSettings, orientation_covariance
-from ..pipeline.online import Drop, DROP_CAUSES, Event, OnlineDenoiser
+from ..core.modelfile import read_model_file
+from ..pipeline.online import Drop, DROP_CAUSES, Event
 
 
 def _param(description: str, read_only: bool = False, floats: tuple | None = None,
@@ -61,75 +59,15 @@ def _param(description: str, read_only: bool = False, floats: tuple | None = Non
     return d
 
 
-# Every parameter, in one place: (name, default, descriptor). config/gyro_denoiser.yaml
-# mirrors it.
+# Every parameter, as Settings declares it: (name, default, descriptor).
+# config/gyro_denoiser.yaml mirrors it.
 DRAIN_MAX = 50  # queued messages one callback takes after its own
 STALL_S = 2.0   # s without any input message after which diagnostics say the input stopped
 NAMESAKE_CHECK_S = 2.0  # s after start-up, discovery done, to look for a node of this name
 
-PARAMETERS = [
-    ('model', 'euroc', _param(
-        'Shipped model name (euroc, tumvi, broad, broad_network, *_calibrated) or path to a '
-        '.safetensors model file.',
-        read_only=True)),
-    ('fixed_frame', 'odom', _param(
-        'frame_id of imu/attitude: gravity-aligned at start (roll/pitch from the '
-        'accelerometer), yaw 0 at start.', read_only=True)),
-    ('embed_attitude', False, _param(
-        'Also write the attitude into imu/corrected orientation (otherwise '
-        'orientation_covariance[0] = -1: no orientation).')),
-    ('orientation_stddev', 0.05, _param(
-        'rad; orientation covariance diagonal when embed_attitude is on.',
-        floats=(0.0, math.pi))),
-    ('angular_velocity_stddev', -1.0, _param(
-        'rad/s; < 0 uses the per-axis residual std the model measured on its '
-        'validation data (zeros, "unknown" to ROS, for a file without it); 0: zeros.',
-        floats=(-1.0, 10.0))),
-    ('max_gap_factor', MAX_GAP_FACTOR, _param(
-        'A stamp gap above this many nominal periods restarts the network history '
-        '(warm-up) and holds the attitude across the gap.', floats=(1.5, 1000.0))),
-    ('time_jump_threshold', 1.0, _param(
-        's; a stamp this far behind the last one resets everything (bag loop); '
-        'smaller backward steps are dropped as out of order.', floats=(0.0, 3600.0))),
-    ('rate_tolerance', RATE_TOLERANCE, _param(
-        "Relative input-rate mismatch to the model rate (the stream's median interval, or "
-        'a run of intervals) that withholds the outputs and is a diagnostics error.',
-        floats=(0.0, 1.0))),
-    ('input_queue_depth', 200, _param(
-        'Subscription depth (sensor-data reliability); bursts beyond it are lost.',
-        read_only=True, ints=(10, 10000))),
-    ('publish_fused', True, _param(
-        'Publish imu/data: the gravity-aided orientation (VQF) of the corrected gyro and '
-        'the accelerometer.', read_only=True)),
-    ('fusion_tau_acc', -1.0, _param(
-        "s; the filter's accelerometer time constant (longer trusts the gyro more); < 0: "
-        'the value the model file stores, chosen on its training recordings; 0 is refused.',
-        read_only=True, floats=(-1.0, 1000.0))),
-    ('fusion_bias_estimation', 'model', _param(
-        "The filter's own gyro-bias estimation: 'model' (the model file's choice), on or "
-        "off. On stacks a second estimator on the network's correction.", read_only=True,
-        dynamic=True)),
-    ('fusion_accel_bias', 'model', _param(
-        "The accelerometer bias removed before the filter and from imu/attitude's initial "
-        "tilt: 'model' (the one the model file fitted on its training poses, if it chose "
-        'to) or off (none).', read_only=True,
-        dynamic=True)),
-    ('rest_bias', 'model', _param(
-        "The gyro's turn-on bias, estimated from stillness (at start and later) and removed "
-        "before the model, and the output's bias tracked after it where the model file "
-        "chose so: 'model' (as the model was trained and cross-validated), on or off (neither).",
-        read_only=True,
-        dynamic=True)),
-    ('envelope_guard', 'model', _param(
-        'Beyond the motion the model was trained on (its input envelope), its input gyro '
-        "plus a constant instead of its correction, and the output's bias estimate held "
-        "through faster rotation: 'model' (where the model file has an envelope) or off "
-        '(the correction everywhere, tracked throughout).', read_only=True, dynamic=True)),
-    ('fused_orientation_stddev', -1.0, _param(
-        'rad; imu/data orientation covariance diagonal; < 0: the fused errors the model '
-        'file stores (0.05 rad without them); 0: zeros, which ROS reads as "unknown".',
-        floats=(-1.0, math.pi))),
-]
+PARAMETERS = [(name, default, _param(spec.description, spec.read_only, spec.floats, spec.ints,
+                                     spec.switches is not None))
+              for name, default, spec in Settings.specs()]
 
 
 class GyroDenoiser(Node):
@@ -145,24 +83,16 @@ class GyroDenoiser(Node):
             if given:  # ROS does not convert: say how to write it
                 why += f' (write a decimal with a point: {given[0]}:={given[1]}.0)'
             raise DenoiseError(f'bad parameter: {why}') from err
-        p = self.get_parameter
-        if not p('fixed_frame').value.strip():
-            raise DenoiseError('bad parameter: fixed_frame must name a frame (imu/attitude '
-                               'is stamped in it), not be empty')
-        loaded = read_model_file(p('model').value)  # DenoiseError: handled in main()
-        settings = self._fusion_settings(loaded)  # its accelerometer bias: imu/attitude's too
-        fusion = settings if p('publish_fused').value else None
-        rest = self._model_or_switch('rest_bias', (True, False))
-        guard = self._model_or_switch('envelope_guard', (False,))
-        rest_choice = 'model' if rest is None else ('on' if rest else 'off')
-        self._denoiser = OnlineDenoiser.from_model_file(
-            loaded, fusion, rest_choice, 'model' if guard is None else 'off',
-            accel_bias=settings.accel_bias_m_s2)
+        settings = self._settings()
+        loaded = read_model_file(settings.model)  # DenoiseError: handled in main()
+        fusion = settings.fusion(loaded) if settings.publish_fused else None
+        rest_choice = settings.choice('rest_bias')
+        self._denoiser = settings.denoiser(loaded)
         self._model_rate = self._denoiser.rate_hz
         self._loaded = loaded
         self._not_recommended = deployment_warning(loaded)  # kept as a diagnostics WARN
         self._types = msgs.rclpy_types()
-        self._fixed_frame = p('fixed_frame').value
+        self._fixed_frame = settings.fixed_frame
 
         for name, value in self._given_parameters().items():  # rcl's own error is C spam
             if name.startswith('qos_overrides.') and name.endswith('.depth') and (
@@ -258,52 +188,22 @@ class GyroDenoiser(Node):
             qos_overriding_options=overridable())
 
     # -- parameters ---------------------------------------------------------------
+    def _settings(self) -> Settings:
+        """Return the parameters' values as one checked object (DenoiseError if refused)."""
+        return Settings.from_values({name: self.get_parameter(name).value
+                                     for name, _, _ in PARAMETERS})[0]
+
     def _apply_parameters(self) -> None:
-        p = self.get_parameter
+        """Apply the parameters that may change while the node runs."""
+        settings = self._settings()
         out = self._outputs
-        out.embed_attitude = p('embed_attitude').value
-        var = p('orientation_stddev').value ** 2
+        out.embed_attitude = settings.embed_attitude
         # arrays built here, once, not per message
-        out.orientation_cov = np.diag([var] * 3).ravel()
-        out.gyro_cov = np.array(gyro_covariance(self._loaded,
-                                                p('angular_velocity_stddev').value))
-        out.fused_cov = np.array(orientation_covariance(
-            self._loaded.meta, p('fused_orientation_stddev').value))
-        self._denoiser.max_gap_factor = p('max_gap_factor').value
-        self._denoiser.time_jump_s = p('time_jump_threshold').value
-        self._denoiser.rate_tolerance = p('rate_tolerance').value
+        out.gyro_cov, out.orientation_cov, out.fused_cov = settings.covariances(self._loaded)
+        settings.retune(self._denoiser)
 
     def _on_parameters(self, _params: list) -> None:
         self._apply_parameters()
-
-    def _fusion_settings(self, loaded: ModelFile) -> FusionSettings:
-        """Return the model file's filter settings with the node's overrides applied."""
-        p = self.get_parameter
-        settings = loaded.meta.fusion.chosen
-        if p('fusion_tau_acc').value == 0:
-            raise DenoiseError('bad parameter: fusion_tau_acc must be a time constant above 0 s, '
-                               "or below 0 for the model file's")
-        bias = self._model_or_switch('fusion_bias_estimation', (True, False))
-        accel = self._model_or_switch('fusion_accel_bias', (False,))
-        return FusionSettings(
-            tau_acc_s=p('fusion_tau_acc').value if p('fusion_tau_acc').value > 0
-            else settings.tau_acc_s,
-            bias_estimation=settings.bias_estimation if bias is None else bias,
-            accel_bias_m_s2=settings.accel_bias_m_s2 if accel is None else (0.0, 0.0, 0.0))
-
-    def _model_or_switch(self, name: str, switches: tuple[bool, ...]) -> bool | None:
-        """None for 'model', else the switch: YAML and ``-p`` read on/off as booleans."""
-        value = self.get_parameter(name).value
-        words = {'on': True, 'true': True, 'off': False, 'false': False}
-        switch = words.get(value.lower()) if isinstance(value, str) else value
-        if value == 'model':
-            return None
-        if isinstance(switch, bool) and switch in switches:
-            return switch
-        options = ["'model'"] + ['on' if s else 'off' for s in switches]
-        allowed = ', '.join(options[:-1]) + ' or ' + options[-1]
-        given = ('on' if value else 'off') if isinstance(value, bool) else repr(value)
-        raise DenoiseError(f'bad parameter: {name} must be {allowed}, not {given}')
 
     # -- data ---------------------------------------------------------------------
     def _on_imu(self, msg: Imu) -> None:
@@ -496,15 +396,9 @@ def foreign_params_files(args: list[str], node_name: str) -> dict[str, list[str]
             keys = list(yaml.safe_load(Path(path).read_text(encoding='utf-8')) or {})
         except (OSError, UnicodeDecodeError, yaml.YAMLError, TypeError):
             continue  # rcl has said what is wrong with it already
-        if not any(_section_applies(str(key), node_name) for key in keys):
+        if not any(section_applies(str(key), node_name) for key in keys):
             foreign[path] = [str(key) for key in keys]
     return foreign
-
-
-def _section_applies(key: str, node_name: str) -> bool:
-    """Whether a params file's section key selects the node ``node_name`` (/ns/name)."""
-    pattern = re.escape('/' + key.lstrip('/')).replace(r'/\*\*', r'(/[^/]+)*')
-    return re.fullmatch(pattern.replace(r'\*', '[^/]+'), node_name) is not None
 
 
 def main(args: list[str] | None = None) -> int:

@@ -24,15 +24,15 @@ from rosbags.rosbag2 import (CompressionFormat, CompressionMode, StoragePlugin, 
 
 from .advice import ambiguous_rest
 from .outputs import Outputs
+from .settings import Settings
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
 from ..core.limits import check_rate
-from ..core.modelfile import gyro_covariance, ModelFile, read_model_file
+from ..core.modelfile import ModelFile, read_model_file
 from ..core.msgs import stamp_ns
 from ..data.bags import (BAG_TYPES, CORRUPT, IMU_TYPE, is_compressed, messages_as_written,
                          open_bag, pick_connections, TYPESTORE)
-from ..pipeline.fusion import orientation_covariance
-from ..pipeline.online import Drop, DROP_CAUSES, FORWARD_JUMP_S, OnlineDenoiser
+from ..pipeline.online import Drop, DROP_CAUSES, FORWARD_JUMP_S
 
 OUTPUT_TOPICS = ('imu/corrected', 'imu/data', 'imu/attitude')  # the node's, relative
 MAX_CLOCK_JUMPS = 10  # stamp jumps of over FORWARD_JUMP_S a bag may hold (restarts)
@@ -133,17 +133,18 @@ class _BagOutputs:
     """The node's outputs (:class:`Outputs`), written at their input's receive time."""
 
     def __init__(self, wr: Writer, names: tuple[str, ...], loaded: ModelFile,
-                 fixed_frame: str, embed_attitude: bool) -> None:
+                 settings: Settings) -> None:
         self._wr, self._received = wr, 0
+        wanted = (True, settings.publish_fused, True)  # imu/data only where the node has it
         corrected, fused, attitude = (
-            (wr.add_connection(name, msgtype, typestore=TYPESTORE), msgtype)
-            for name, msgtype in zip(names, (IMU_TYPE, IMU_TYPE, ATTITUDE_TYPE)))
-        self.outputs = Outputs(BAG_TYPES, self._sender(*corrected), self._sender(*fused),
-                               self._sender(*attitude), fixed_frame,
-                               np.array(gyro_covariance(loaded)),
-                               np.array(orientation_covariance(loaded.meta)), embed_attitude)
+            self._sender(name, msgtype) if want else None
+            for name, msgtype, want in zip(names, (IMU_TYPE, IMU_TYPE, ATTITUDE_TYPE), wanted))
+        gyro_cov, orientation_cov, fused_cov = settings.covariances(loaded)
+        self.outputs = Outputs(BAG_TYPES, corrected, fused, attitude, settings.fixed_frame,
+                               gyro_cov, fused_cov, settings.embed_attitude, orientation_cov)
 
-    def _sender(self, topic: Any, msgtype: str) -> Callable[[Any], None]:
+    def _sender(self, name: str, msgtype: str) -> Callable[[Any], None]:
+        topic = self._wr.add_connection(name, msgtype, typestore=TYPESTORE)
         return lambda m: self._wr.write(topic, self._received,
                                         TYPESTORE.serialize_cdr(m, msgtype))
 
@@ -182,11 +183,9 @@ def _in_stamp_order(rd: Any, wr: Writer, copy: dict[int, Any], imu_ids: set[int]
                            'were not there the second')
 
 
-def process_bag(src: str | Path, dst: str | Path, model_spec: str,
+def process_bag(src: str | Path, dst: str | Path, settings: Settings,
                 imu_topic: str | None = None, storage: str = 'mcap',
-                fixed_frame: str = 'odom', compress: bool | None = None,
-                namespace: str = '/', rest: str = 'model',
-                embed_attitude: bool = False, guard: str = 'model',
+                compress: bool | None = None, namespace: str = '/',
                 warn: Callable[[str], None] = lambda said: None) -> dict[str, int]:
     """
     Copy a bag, add the corrected IMU, orientation and attitude; return the counts.
@@ -202,10 +201,10 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     length. Copied
     topics keep their recorded QoS; ``compress`` (zstd) defaults to the input's compression.
     The outputs are the node's topics in ``namespace``; a bag that has one already is
-    refused (the two would mix on one topic). ``rest``, ``guard`` and ``embed_attitude``
-    are the node's ``rest_bias``, ``envelope_guard`` and ``embed_attitude``; what is
-    written and withheld is the
-    node's, built by the same code (:mod:`denoise_imu_ros.runtime.outputs`). ``warn``
+    refused (the two would mix on one topic). ``settings`` are the node's parameters
+    (:class:`~denoise_imu_ros.runtime.settings.Settings`, the model among them); what is
+    written and withheld is the node's under them, built by the same code
+    (:mod:`denoise_imu_ros.runtime.outputs`). ``warn``
     is also told what the node's ``/diagnostics`` would say at the end (a turn-on bias
     that may have been a slow turn).
     """
@@ -213,8 +212,8 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
     if not src.exists():
         raise DatasetError(f'{src}: bag not found')
     names = output_topics(namespace)
-    loaded = read_model_file(model_spec)
-    den = OnlineDenoiser.from_model_file(loaded, loaded.meta.fusion.chosen, rest, guard)
+    loaded = read_model_file(settings.model)
+    den = settings.denoiser(loaded)
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     with tempfile.TemporaryDirectory() as tmp, atomic_output(dst) as partial:
         try:
@@ -238,7 +237,7 @@ def process_bag(src: str | Path, dst: str | Path, model_spec: str,
                         c.topic, c.msgtype, typestore=rd.typestore,
                         offered_qos_profiles=getattr(c.ext, 'offered_qos_profiles', ()))
                         for c in rd.connections}
-                    outputs = _BagOutputs(wr, names, loaded, fixed_frame, embed_attitude)
+                    outputs = _BagOutputs(wr, names, loaded, settings)
                     for msg, received in _in_stamp_order(rd, wr, copy, imu_ids, stamps, turn,
                                                          src):
                         res = den.process_imu(msg)

@@ -123,12 +123,12 @@ def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path, model_fi
 
 def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(
         model_file, tmp_path, monkeypatch):
-    from denoise_imu_ros.runtime import process_bag
     from denoise_imu_ros.data.bags import read_bag
+    from denoise_imu_ros.pipeline.online import OnlineDenoiser
     from helpers import write_asl
     assert main(['convert', str(write_asl(tmp_path / 'a', n_imu=1200)),
                  str(tmp_path / 'in')]) == 0
-    real = process_bag.OnlineDenoiser.process_imu
+    real = OnlineDenoiser.process_imu
     calls = []
 
     def fail_half_way(self, msg):
@@ -136,11 +136,11 @@ def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(
         if len(calls) == 600:
             raise DatasetError('disk full (simulated)')
         return real(self, msg)
-    monkeypatch.setattr(process_bag.OnlineDenoiser, 'process_imu', fail_half_way)
+    monkeypatch.setattr(OnlineDenoiser, 'process_imu', fail_half_way)
     assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
                  '--model', str(model_file)]) == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ['a', 'in', 'model.safetensors']
-    monkeypatch.setattr(process_bag.OnlineDenoiser, 'process_imu', real)
+    monkeypatch.setattr(OnlineDenoiser, 'process_imu', real)
     assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
                  '--model', str(model_file)]) == 0
     assert len(read_bag(tmp_path / 'out', imu_topic='/imu/corrected').imu) == 1200
@@ -318,6 +318,7 @@ def test_a_clock_set_back_mid_bag_is_two_sessions_not_one_interleaved(tmp_path, 
     from denoise_imu_ros.core import msgs
     from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
     from denoise_imu_ros.runtime.process_bag import process_bag, stamp_order
+    from denoise_imu_ros.runtime.settings import Settings
     from denoise_imu_ros.runtime.player import read_imu_messages
     from rosbags.rosbag2 import Writer
     imu = read_imu_messages(SAMPLE)[:1200]
@@ -330,7 +331,7 @@ def test_a_clock_set_back_mid_bag_is_two_sessions_not_one_interleaved(tmp_path, 
             m = msgs.copy_imu(BAG_TYPES, m)
             m.header = msgs.header(BAG_TYPES, t, 'imu0')
             w.write(conn, t0 + 5_000_000 * k, TYPESTORE.serialize_cdr(m, IMU_TYPE))
-    counts = process_bag(tmp_path / 'in', tmp_path / 'out', str(model_file))
+    counts = process_bag(tmp_path / 'in', tmp_path / 'out', Settings(model=str(model_file)))
     assert counts['accepted'] == 1200 and counts['time_jump_resets'] == 1
     assert counts.get('gap_resets', 0) == 0 and counts['out_of_order'] == 0
     order = stamp_order(np.array([5, 3, 4, 100, 90, 2, 1]), 50)
@@ -348,6 +349,7 @@ def test_a_host_clock_stepped_back_is_read_as_the_node_received_it(tmp_path, mod
     from denoise_imu_ros.pipeline.online import OnlineDenoiser
     from denoise_imu_ros.runtime.player import read_imu_messages
     from denoise_imu_ros.runtime.process_bag import process_bag
+    from denoise_imu_ros.runtime.settings import Settings
     from rosbags.rosbag2 import StoragePlugin, Writer
     imu = read_imu_messages(SAMPLE)[:1200]
     t0 = msgs.stamp_ns(imu[0].header)
@@ -362,8 +364,8 @@ def test_a_host_clock_stepped_back_is_read_as_the_node_received_it(tmp_path, mod
             w.write(conn, t + 2_000_000, TYPESTORE.serialize_cdr(m, IMU_TYPE))
             sent.append(m)
     warned = []
-    counts = process_bag(tmp_path / 'in', tmp_path / 'out', str(model_file), storage=storage,
-                         warn=warned.append)
+    counts = process_bag(tmp_path / 'in', tmp_path / 'out', Settings(model=str(model_file)),
+                         storage=storage, warn=warned.append)
     assert counts['accepted'] == 1200 and counts['time_jump_resets'] == 1
     assert counts['duplicate_stamp'] == counts['out_of_order'] == 0
     assert warned == [f'{tmp_path / "in"}: its IMU stamps step back 1 time as written (a '
@@ -417,3 +419,45 @@ def test_sigterm_during_process_bag_leaves_no_partial_bag(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143 and err.strip() == 'denoise-imu process-bag: terminated'
     assert list(tmp_path.iterdir()) == []  # neither the bag nor its hidden partial copy
+
+
+@pytest.mark.parametrize('fused', [True, False])
+def test_process_bag_with_the_nodes_params_file_writes_what_that_node_publishes(
+        harness, model_file, tmp_path, fused):
+    """Every parameter that changes a number, off its default, from one file for both."""
+    from denoise_imu_ros.core.modelfile import add_metadata
+    from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
+    from denoise_imu_ros.runtime.player import read_imu_messages
+    from rosbags.highlevel import AnyReader
+    import yaml
+    add_metadata(model_file,
+                 rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict(),
+                 bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0},
+                 input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0})
+    params = {'fixed_frame': 'map', 'embed_attitude': True, 'orientation_stddev': 0.2,
+              'angular_velocity_stddev': 0.003, 'max_gap_factor': 5.0,
+              'time_jump_threshold': 2.0, 'rate_tolerance': 0.1, 'publish_fused': fused,
+              'fusion_tau_acc': 7.0, 'fusion_bias_estimation': 'on',
+              'fusion_accel_bias': 'off', 'rest_bias': 'off', 'envelope_guard': 'off',
+              'fused_orientation_stddev': 0.02}
+    path = tmp_path / 'params.yaml'
+    path.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
+        'model': str(model_file), **params}}}))
+    assert main(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--params-file',
+                 str(path)]) == 0
+    written = {}
+    with AnyReader([tmp_path / 'out']) as reader:
+        for topic in ('/imu/corrected', '/imu/data', '/imu/attitude'):
+            conns = [c for c in reader.connections if c.topic == topic]
+            written[topic] = [reader.deserialize(raw, c.msgtype) for c, _, raw in
+                              reader.messages(connections=conns)][:600] if conns else []
+    assert bool(written['/imu/data']) == fused
+    h = harness(**params)
+    h.send(read_imu_messages(SAMPLE)[:600])
+    assert np.array_equal(np.array([_fields(m) for m in h.corrected]),
+                          np.array([_fields(m) for m in written['/imu/corrected']]))
+    assert np.array_equal(np.array([_fields(m) for m in h.fused]),
+                          np.array([_fields(m) for m in written['/imu/data']]))
+    assert [(m.header.frame_id, m.quaternion.x, m.quaternion.w) for m in h.attitude] == [
+        (m.header.frame_id, m.quaternion.x, m.quaternion.w) for m in written['/imu/attitude']]
+    assert written['/imu/corrected'][0].orientation_covariance[0] == pytest.approx(0.04)

@@ -1,0 +1,63 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""The node's settings: one object read from ROS parameters or a params YAML."""
+
+from denoise_imu_ros.core.errors import OptionError
+from denoise_imu_ros.runtime.settings import Settings
+from helpers import ROOT
+import pytest
+import yaml
+
+
+def _file(tmp_path, doc) -> str:
+    path = tmp_path / 'params.yaml'
+    path.write_text(yaml.safe_dump(doc))
+    return str(path)
+
+
+def test_the_shipped_params_file_holds_every_parameter_at_its_default():
+    settings, unknown = Settings.from_params_file(ROOT / 'config' / 'gyro_denoiser.yaml')
+    assert settings == Settings() and unknown == []
+    written = yaml.safe_load((ROOT / 'config' / 'gyro_denoiser.yaml').read_text())
+    assert list(written['/**']['ros__parameters']) == [name for name, _, _ in Settings.specs()]
+
+
+def test_a_params_file_is_read_as_ros_reads_it(tmp_path):
+    """Sections that select the node, in file order; nested names dotted; QoS left to DDS."""
+    settings, unknown = Settings.from_params_file(_file(tmp_path, {
+        '/**': {'ros__parameters': {'model': 'tumvi', 'max_gap_factor': 5.0,
+                                    'qos_overrides': {'/imu/data_raw': {'subscription': {
+                                        'depth': 5}}}}},
+        '/other_node': {'ros__parameters': {'fixed_frame': 'elsewhere'}},
+        '/gyro_denoiser': {'ros__parameters': {'max_gap_factor': 7.0, 'rest_bias': False,
+                                               'typo_parameter': 1}}}))
+    assert settings == Settings(model='tumvi', max_gap_factor=7.0, rest_bias=False)
+    assert unknown == ['typo_parameter']
+    assert settings.choice('rest_bias') == 'off' and settings.choice('envelope_guard') == 'model'
+    assert settings.with_(rest_bias='on').choice('rest_bias') == 'on'
+
+
+@pytest.mark.parametrize('params, said', [
+    ({'max_gap_factor': 3}, r'max_gap_factor must be a float, not a int \(write a decimal'),
+    ({'rate_tolerance': 2.0}, r'rate_tolerance = 2.0 is outside \[0.0, 1.0\]'),
+    ({'envelope_guard': 'on'}, r"envelope_guard must be 'model' or off, not 'on'"),
+    ({'rest_bias': 'sometimes'}, r"rest_bias must be 'model', on or off, not 'sometimes'"),
+    ({'fixed_frame': ' '}, 'fixed_frame must name a frame'),
+    ({'fusion_tau_acc': 0.0}, 'fusion_tau_acc must be a time constant above 0 s'),
+    ({'publish_fused': 'yes'}, 'publish_fused must be a bool, not a str'),
+])
+def test_a_value_the_node_refuses_is_refused_in_one_line(tmp_path, params, said):
+    with pytest.raises(OptionError, match=said):
+        Settings.from_params_file(_file(tmp_path, {'/**': {'ros__parameters': params}}))
+
+
+@pytest.mark.parametrize('doc, said', [
+    ({'/other_node': {'ros__parameters': {'model': 'tumvi'}}}, 'no parameters for /gyro_denoiser'),
+    ({'/**': {'model': 'tumvi'}}, 'no ros__parameters mapping'),
+    (['model', 'tumvi'], 'not a ROS params file'),
+])
+def test_a_file_that_is_not_the_nodes_params_is_refused(tmp_path, doc, said):
+    with pytest.raises(OptionError, match=said):
+        Settings.from_params_file(_file(tmp_path, doc))
+    with pytest.raises(OptionError, match='No such file'):
+        Settings.from_params_file(tmp_path / 'missing.yaml')
