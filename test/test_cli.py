@@ -252,7 +252,7 @@ def test_version_is_the_code_version_a_model_file_records(capsys):
 
 
 def test_the_offline_tools_offer_the_node_s_rest_bias_and_guard_choices():
-    """correct's and process-bag's choices are the node's settings and the pipeline's."""
+    """The choices of correct and process-bag are the node's settings and the pipeline's."""
     from denoise_imu_ros.cli import build_parser
     from denoise_imu_ros.pipeline import envelope, rest_bias
     commands = next(a for a in build_parser()._actions if a.choices and 'correct' in a.choices)
