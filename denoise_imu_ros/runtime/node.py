@@ -37,7 +37,8 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 import yaml
 
-from .advice import ambiguous_rest, deployment_warning, rest_warnings
+from . import diagnostics
+from .advice import deployment_warning, rest_warnings
 from .outputs import Outputs
 from .rclpy_internals import (given_parameters, integer_given_for_double, RCLError,
                               RCLInvalidROSArgsError, take_waiting)
@@ -45,7 +46,7 @@ from .settings import section_applies, Settings
 from ..core import msgs
 from ..core.errors import DenoiseError
 from ..core.modelfile import read_model_file
-from ..pipeline.online import Drop, DROP_CAUSES, Event
+from ..pipeline.online import Drop, Event
 
 
 def _param(description: str, read_only: bool = False, floats: tuple | None = None,
@@ -62,7 +63,6 @@ def _param(description: str, read_only: bool = False, floats: tuple | None = Non
 # Every parameter, as Settings declares it: (name, default, descriptor).
 # config/gyro_denoiser.yaml mirrors it.
 DRAIN_MAX = 50  # queued messages one callback takes after its own
-STALL_S = 2.0   # s without any input message after which diagnostics say the input stopped
 NAMESAKE_CHECK_S = 2.0  # s after start-up, discovery done, to look for a node of this name
 
 PARAMETERS = [(name, default, _param(spec.description, spec.read_only, spec.floats, spec.ints,
@@ -276,82 +276,20 @@ class GyroDenoiser(Node):
         return self._frame
 
     def _publish_diagnostics(self) -> None:
-        counts = self._denoiser.counts
-        rate = self.input_rate_hz()
-        status = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: gyro correction',
-                                  hardware_id=self._imu_frame(), level=DiagnosticStatus.OK,
-                                  message='ok')
-        fill = min(self._denoiser.engine.samples, self._denoiser.engine.receptive_field)
         silent_s = None if self._last_input is None else time.monotonic() - self._last_input
-        stalled = silent_s is not None and silent_s > STALL_S
-        if stalled:  # its last stamps say nothing of its rate now
-            rate = 0.0
-            status.level = DiagnosticStatus.ERROR
-            status.message = (f'no input for {silent_s:.1f} s on '
-                              f'{self.resolve_topic_name("imu/data_raw")}')
-            self.get_logger().error(status.message, throttle_duration_sec=10.0)
-        elif self._denoiser.rate_suspect:
-            status.level = DiagnosticStatus.ERROR
-            status.message = (f'input rate {rate:.1f} Hz differs from the model rate '
-                              f'{self._model_rate:.1f} Hz: corrections are not valid, '
-                              'imu/corrected, imu/attitude and imu/data not published')
-            self.get_logger().error(status.message, throttle_duration_sec=10.0)
-        elif counts['accepted'] == 0 and any(counts[c] for c in DROP_CAUSES):
-            status.level = DiagnosticStatus.ERROR
-            status.message = 'no message accepted: dropped ' + ', '.join(
-                f'{counts[c]} ({c.replace("_", " ")})' for c in DROP_CAUSES if counts[c])
-            self.get_logger().error(status.message, throttle_duration_sec=10.0)
-        elif counts['accepted'] == 0:
-            status.level, status.message = DiagnosticStatus.WARN, 'no input yet'
-        elif fill < self._denoiser.engine.receptive_field:
-            status.level, status.message = DiagnosticStatus.WARN, 'warming up'
-        elif self._not_recommended:
-            status.level, status.message = DiagnosticStatus.WARN, self._not_recommended
-        elif self._denoiser.rest is not None and self._denoiser.rest.ambiguous:
-            status.level, status.message = DiagnosticStatus.WARN, ambiguous_rest(
-                self._denoiser.rest)
-        infer = np.array(self._infer_s) if self._infer_s else np.zeros(1)
-        values = {'input_rate_hz': f'{rate:.2f}', 'model_rate_hz': f'{self._model_rate:.2f}',
-                  'seconds_since_input': '' if silent_s is None else f'{silent_s:.1f}',
-                  'buffer_fill': f'{fill}/{self._denoiser.engine.receptive_field}',
-                  'callback_time_p50_us': f'{np.median(infer) * 1e6:.1f}',
-                  'callback_time_max_us': f'{infer.max() * 1e6:.1f}'}
-        values.update({k: str(v) for k, v in counts.items()})
-        values['corrected_withheld'] = str(self.corrected_withheld)
-        values['attitude_withheld'] = str(self.attitude_withheld)
-        values['fused_withheld'] = str(self.fused_withheld)
-        values.update(self._rest_values())
-        guard = self._denoiser.guard
-        values['envelope_guard_applied'] = str(guard is not None)
-        if guard is not None:  # samples given the fallback (motion it was not trained on)
-            values['envelope_guarded_samples'] = str(guard.guarded)
-            values['envelope_trusted'] = str(guard.trusted)
-        status.values = [KeyValue(key=k, value=v) for k, v in values.items()]
+        said = diagnostics.status(self._denoiser, self._outputs.counts, silent_s,
+                                  self.resolve_topic_name('imu/data_raw'),
+                                  self._not_recommended, self._infer_s)
+        if said.level == diagnostics.Level.ERROR:
+            self.get_logger().error(said.message, throttle_duration_sec=10.0)
+        status = DiagnosticStatus(name=f'{self.get_fully_qualified_name()}: gyro correction',
+                                  hardware_id=self._imu_frame(), level=bytes([said.level]),
+                                  message=said.message,
+                                  values=[KeyValue(key=k, value=v)
+                                          for k, v in said.values.items()])
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.get_clock().now().to_msg()
         self._pub_diag.publish(array)
-
-    def _rest_values(self) -> dict[str, str]:
-        """Return the bias estimates for /diagnostics: applied, seconds still, values."""
-        rest, track = self._denoiser.rest, self._denoiser.track
-        values = {'rest_bias_applied': str(rest is not None),
-                  'tracked_bias_applied': str(track is not None),
-                  'vertical_correction_dropped': str(self._denoiser.vertical is not None)}
-        if rest is not None:
-            bias, sigma = rest.estimate()
-            values.update({'rest_bias_seconds_still': f'{rest.seconds_still:.1f}',
-                           'rest_bias_source': 'stillness' if rest.still_samples else 'prior',
-                           'rest_bias_from_prior_deg_s': f'{rest.offset_deg_s:.3f}',
-                           'rest_bias_ambiguous': str(rest.ambiguous),
-                           'rest_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
-                           'rest_bias_sigma_rad_s': f'{sigma:.6f}'})
-        if track is not None:
-            bias, sigma = track.estimate()
-            guard = self._denoiser.guard  # held through rotation faster than trained on
-            values.update({'tracked_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
-                           'tracked_bias_sigma_rad_s': f'{sigma:.6f}',
-                           'tracked_bias_held': str(guard is not None and guard.too_fast)})
-        return values
 
     def _check_namesakes(self) -> None:
         """Warn once when another node has this one's name: they share every topic."""
