@@ -1,0 +1,101 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The envelope guard's variants on a session crossval's fold models, with no retraining.
+
+For each held-out trial of ``crossval --sessions ... --seeds ...`` (its models in OUT):
+each seed's and the ensemble's open-loop AOE with the shipped guard, with the guard also
+where the training power-on's sustained accelerometer excursion is exceeded (the causal
+mean of ||a| - g| over W samples above the largest any training trial reached), and each
+of those with the classical pipeline's output (the tracker-only gyro) as the fallback
+instead of the input plus the envelope's constant less the network-fed tracker's bias.
+The tracker-only row uses the fold's chosen tracking, as crossval's. Prints the per-trial
+figures and, per fold, the mean against tracker only, the mean per-trial ratio and the
+worst. Run: scripts/reproduce/guard_variants.py OUT ../shared/data/broad [--window 286]
+"""
+
+import argparse
+import json
+from pathlib import Path
+
+from denoise_imu_ros.core.limits import GRAVITY_M_S2
+from denoise_imu_ros.core.metrics import score
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.evaluation.crossval import CANDIDATES
+from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.pipeline import envelope, stages
+from denoise_imu_ros.pipeline.rest_bias import track_bias, tracked_bias
+import numpy as np
+
+VARIANTS = ('guard', 'guard + sustained', 'classical fallback',
+            'classical fallback + sustained')
+
+
+def sustained(imu: np.ndarray, window: int) -> np.ndarray:
+    """Return the causal mean of ||a| - g| over the last ``window`` samples, per sample."""
+    dev = np.abs(np.linalg.norm(imu[:, 3:], axis=1) - GRAVITY_M_S2)
+    total = np.concatenate([[0.0], np.cumsum(dev)])
+    n = np.arange(len(dev))
+    start = np.maximum(n + 1 - window, 0)
+    return (total[n + 1] - total[start]) / (n + 1 - start)
+
+
+def main() -> None:
+    """Score every variant on every held-out trial of every fold."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
+    parser.add_argument('out', type=Path, help="crossval's --out (crossval.json, seedS/foldF)")
+    parser.add_argument('data', type=Path, help='the folder of the trials')
+    parser.add_argument('--window', type=int, default=286, help='samples (286: 1 s at BROAD)')
+    args = parser.parse_args()
+    report = json.loads((args.out / 'crossval.json').read_text())
+    seqs = {}
+    for i, held in enumerate(report['folds']):
+        train = [n for j, f in enumerate(report['folds']) if j != i for n in f]
+        chosen = report['tracking']['per_fold'][str(i)]
+        nets = [load_model(args.out / f'seed{s}' / f'fold{i}' / 'network.safetensors')
+                for s in report['seeds']]
+        bounds = envelope.combine([m.meta.input_envelope for m in nets])
+        field, rate = nets[0].model.receptive_field, nets[0].meta.sample_rate_hz
+        for name in {*train, *held} - set(seqs):
+            seqs[name] = load_sequence(args.data / name, min_samples=field, align_poses='auto')
+        bar = max(sustained(seqs[n].stream, args.window).max() for n in train)
+        print(f'fold {i}: sustained bound {bar:.2f} m/s^2 over {args.window} samples')
+        figures = {v: {} for v in VARIANTS}  # trial -> (AOE per seed and ensemble, bar)
+        for name in held:
+            seq = seqs[name]
+            fed = stages.model_input(nets[0], seq.stream)
+            gyros = [correct_gyro(m.model, fed) for m in nets]
+            gyros.append(np.mean(gyros, axis=0))
+            classical = track_bias(fed[:, :3], fed[:, 3:], rate,
+                                   CANDIDATES[chosen['tracker only']])
+            tracker = score(seq, seq.on_poses(classical))['aoe_deg']
+            hold = envelope.too_fast(fed, bounds, field)
+            base = envelope.untrusted(fed, bounds, field)
+            wider = base | envelope._in_field(sustained(fed, args.window) > bar, field)
+            cells = []
+            for variant, mask in zip(VARIANTS, (base, wider, base, wider)):
+                aoe = []
+                for g in gyros:
+                    bias = tracked_bias(g, fed[:, 3:], rate, CANDIDATES[chosen['network']], hold)
+                    fallback = (classical if variant.startswith('classical') else
+                                fed[:, :3] + np.array(bounds.fallback_rad_s) - bias)
+                    aoe.append(score(seq, seq.on_poses(
+                        np.where(mask[:, None], fallback, g - bias)))['aoe_deg'])
+                figures[variant][name] = (np.array(aoe), tracker)
+                cells.append('/'.join(f'{a:.2f}' for a in aoe))
+            print(f'| {name} | {tracker:.2f} | ' + ' | '.join(cells) + ' |')
+        for variant, per in figures.items():
+            aoe = np.array([a for a, _ in per.values()])  # trials x (seeds..., ensemble)
+            bar_aoe = np.array([b for _, b in per.values()])
+            ratio = aoe / bar_aoe[:, None]
+            print(f'  {variant}: ensemble {aoe[:, -1].mean():.2f} against tracker only '
+                  f'{bar_aoe.mean():.2f} ({aoe[:, -1].mean() / bar_aoe.mean():.2f}x), mean '
+                  f'per-trial ratio {ratio[:, -1].mean():.2f}, worst {ratio[:, -1].max():.2f}; '
+                  'each seed ' + ', '.join(f'{x:.2f}x' for x in aoe[:, :-1].mean(0)
+                                           / bar_aoe.mean())
+                  + f', worst {ratio[:, :-1].max():.2f}')
+
+
+if __name__ == '__main__':
+    main()
