@@ -278,14 +278,16 @@ def _node_settings(args: argparse.Namespace) -> Any:
     What the node would ignore in the file (a parameter it does not have) is said, as the
     node says it; an option given overrides the file, as ``-p`` after ``--params-file``.
     """
-    from .runtime.settings import Settings
-    settings, unknown = (Settings.from_params_file(args.params_file) if args.params_file
+    from .runtime.settings import NODE_NAME, Settings
+    node = getattr(args, 'namespace', '/').rstrip('/') + NODE_NAME  # as the node is named
+    settings, unknown = (Settings.from_params_file(args.params_file, node) if args.params_file
                          else (Settings(), []))
     if unknown:
         print(f'warning: {args.params_file}: ignored parameters the node does not have: '
               f'{", ".join(unknown)}', file=sys.stderr)
     if args.model is None and not args.params_file:
-        raise OptionError('give --model, or a --params-file that names the model')
+        raise OptionError("give --model, or --params-file: the node's YAML, whose model is "
+                          "the node's default (euroc) unless it names one")
     given = {name: getattr(args, option, None) for name, option in OPTION_OF.items()}
     return settings.with_(**{k: v for k, v in given.items() if v is not None})
 
@@ -368,7 +370,7 @@ def _node_options(p: argparse.ArgumentParser, bag: bool = False) -> None:
                    help=helps['envelope_guard'])
     if bag:
         p.add_argument('--fixed-frame', help=helps['fixed_frame'])
-        p.add_argument('--embed-attitude', action='store_true', default=None,
+        p.add_argument('--embed-attitude', action=argparse.BooleanOptionalAction,
                        help=helps['embed_attitude'])
 
 

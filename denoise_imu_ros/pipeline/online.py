@@ -251,7 +251,7 @@ class OnlineDenoiser:
         if self._pending_reset:
             events |= {Event.REQUESTED}
             self._pending_reset = False
-        flow = Flow(np.concatenate([gyro, accel]), event,
+        flow = Flow(np.concatenate([gyro, accel], dtype=np.float64), event,
                     (stamp_ns - self._last_ns) * 1e-9 if event is None else 0.0,
                     periods if event is None else 0.0)  # a gap: yaw held
         if not self.pipeline.step(flow, events):  # never published: dropped as if lost

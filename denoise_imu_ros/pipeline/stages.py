@@ -327,7 +327,10 @@ class Pipeline:
     """The stages a model file has, in the order of :data:`STAGES`, reset at its events."""
 
     def __init__(self, stages: Iterable[Stage]) -> None:
+        stages = list(stages)
         given = {type(s): s for s in stages}
+        if len(given) < len(stages):
+            raise TypeError('two stages of one kind: a pipeline has each stage once')
         unknown = set(given) - set(RESETS)
         if unknown:
             raise TypeError(f'not a stage of the table: {sorted(k.__name__ for k in unknown)}')

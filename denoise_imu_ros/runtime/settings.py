@@ -30,8 +30,21 @@ from ..pipeline.online import OnlineDenoiser
 
 __all__ = ['NODE_NAME', 'section_applies', 'Spec', 'Settings', 'SWITCH_WORDS']
 
-NODE_NAME = '/gyro_denoiser'  # as process-bag's node is named: no namespace
+NODE_NAME = '/gyro_denoiser'  # its fully qualified name in the root namespace
 SWITCH_WORDS = {'on': True, 'true': True, 'off': False, 'false': False}
+RANGE_TOLERANCE = 1e-6  # rclpy accepts a value this close (relative) to a range's end
+# parameters every rclpy node has: a file may set them without being about this node
+EVERY_NODE = ('use_sim_time', 'start_type_description_service')
+
+
+class _RosYaml(yaml.SafeLoader):
+    """PyYAML's safe loader reading numbers as rcl's parser does: 1e-2 is a float too."""
+
+
+_RosYaml.add_implicit_resolver(
+    'tag:yaml.org,2002:float',
+    re.compile(r'^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$'),
+    list('-+0123456789.'))
 
 
 class Spec(NamedTuple):
@@ -125,7 +138,7 @@ class Settings:
                 raise OptionError(f'bad parameter: {f.name} must be a '
                                   f'{type(f.default).__name__}, not a {given}{hint}')
             bounds = spec.floats or spec.ints
-            if bounds is not None and not bounds[0] <= value <= bounds[1]:
+            if bounds is not None and not _within(value, *bounds):
                 raise OptionError(f'bad parameter: {f.name} = {value} is outside '
                                   f'[{bounds[0]}, {bounds[1]}]')
         if not self.fixed_frame.strip():
@@ -156,11 +169,13 @@ class Settings:
         As ROS reads the file: every entry whose key selects the node
         (:func:`section_applies`: ``/**``, ``/node``...) in file order, later ones
         overriding, its ``ros__parameters`` with nested keys joined by dots.
-        ``qos_overrides.*`` set DDS policies only, so they are not counted as unknown.
+        ``qos_overrides.*`` set DDS policies only and :data:`EVERY_NODE` are every
+        node's, so neither is counted as unknown. ``node``: the node's fully qualified
+        name (``/ns/gyro_denoiser`` in a namespace).
         """
         try:
             with open(path) as f:
-                doc = yaml.safe_load(f)
+                doc = yaml.load(f, Loader=_RosYaml)  # noqa: S506 (a safe loader)
         except OSError as err:
             raise OptionError(f'--params-file {path}: {err.strerror}') from err
         except yaml.YAMLError as err:
@@ -179,7 +194,8 @@ class Settings:
         if not values:
             raise OptionError(f'--params-file {path}: no parameters for {node} (keys: '
                               f'{", ".join(map(str, doc))}; the node reads /** or {node})')
-        values = {k: v for k, v in values.items() if not k.startswith('qos_overrides.')}
+        values = {k: v for k, v in values.items()
+                  if not k.startswith('qos_overrides.') and k not in EVERY_NODE}
         return cls.from_values(values)
 
     def with_(self, **changes: Any) -> Settings:
@@ -229,6 +245,12 @@ class Settings:
         return (np.array(gyro_covariance(loaded, self.angular_velocity_stddev)),
                 np.diag([self.orientation_stddev ** 2] * 3).ravel(),
                 np.array(orientation_covariance(loaded.meta, self.fused_orientation_stddev)))
+
+
+def _within(value: float, low: float, high: float) -> bool:
+    """Whether ``value`` is in [low, high] as ROS checks a range: within 1e-6 at the ends."""
+    return all(side or math.isclose(value, end, rel_tol=RANGE_TOLERANCE)
+               for side, end in ((value >= low, low), (value <= high, high)))
 
 
 def section_applies(key: str, node_name: str) -> bool:

@@ -9,7 +9,9 @@ where the training power-on's sustained accelerometer excursion is exceeded (the
 mean of ||a| - g| over W samples above the largest any training trial reached), and each
 of those with the classical pipeline's output (the tracker-only gyro) as the fallback
 instead of the input plus the envelope's constant less the network-fed tracker's bias.
-The tracker-only row uses the fold's chosen tracking, as crossval's. Prints the per-trial
+The tracker-only row uses the fold's chosen tracking, and each seed its own envelope (the
+ensemble their union), as crossval's; a recipe with its heading (no vertical drop, as
+BROAD's). Prints the per-trial
 figures and, per fold, the mean against tracker only, the mean per-trial ratio and the
 worst. Run: scripts/reproduce/guard_variants.py OUT ../shared/data/broad [--window 286]
 """
@@ -26,6 +28,7 @@ from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
 from denoise_imu_ros.pipeline import envelope, stages
 from denoise_imu_ros.pipeline.rest_bias import track_bias, tracked_bias
+from denoise_imu_ros.pipeline.vertical import drops_vertical
 import numpy as np
 
 VARIANTS = ('guard', 'guard + sustained', 'classical fallback',
@@ -39,6 +42,13 @@ def sustained(imu: np.ndarray, window: int) -> np.ndarray:
     n = np.arange(len(dev))
     start = np.maximum(n + 1 - window, 0)
     return (total[n + 1] - total[start]) / (n + 1 - start)
+
+
+def within_field(flag: np.ndarray, field: int) -> np.ndarray:
+    """Whether any of samples n - field + 1 ... n is flagged, for each n."""
+    count = np.concatenate([[0], np.cumsum(flag)])
+    n = np.arange(len(flag))
+    return count[n + 1] > count[np.maximum(n + 1 - field, 0)]
 
 
 def main() -> None:
@@ -55,8 +65,12 @@ def main() -> None:
         chosen = report['tracking']['per_fold'][str(i)]
         nets = [load_model(args.out / f'seed{s}' / f'fold{i}' / 'network.safetensors')
                 for s in report['seeds']]
-        bounds = envelope.combine([m.meta.input_envelope for m in nets])
+        bounds = [m.meta.input_envelope for m in nets]  # each seed's, as crossval's
+        bounds.append(envelope.combine(bounds))  # the ensemble's
         field, rate = nets[0].model.receptive_field, nets[0].meta.sample_rate_hz
+        tracking = CANDIDATES[chosen['network']]
+        if drops_vertical(nets[0].meta):
+            raise SystemExit('a recipe without its heading: its vertical drop is not scored here')
         for name in {*train, *held} - set(seqs):
             seqs[name] = load_sequence(args.data / name, min_samples=field, align_poses='auto')
         bar = max(sustained(seqs[n].stream, args.window).max() for n in train)
@@ -70,21 +84,23 @@ def main() -> None:
             classical = track_bias(fed[:, :3], fed[:, 3:], rate,
                                    CANDIDATES[chosen['tracker only']])
             tracker = score(seq, seq.on_poses(classical))['aoe_deg']
-            hold = envelope.too_fast(fed, bounds, field)
-            base = envelope.untrusted(fed, bounds, field)
-            wider = base | envelope._in_field(sustained(fed, args.window) > bar, field)
-            cells = []
-            for variant, mask in zip(VARIANTS, (base, wider, base, wider)):
-                aoe = []
-                for g in gyros:
-                    bias = tracked_bias(g, fed[:, 3:], rate, CANDIDATES[chosen['network']], hold)
-                    fallback = (classical if variant.startswith('classical') else
-                                fed[:, :3] + np.array(bounds.fallback_rad_s) - bias)
-                    aoe.append(score(seq, seq.on_poses(
+            over = within_field(sustained(fed, args.window) > bar, field)
+            aoe = {v: [] for v in VARIANTS}
+            for g, env in zip(gyros, bounds):
+                hold = envelope.too_fast(fed, env, field)
+                bias = (np.zeros_like(g) if tracking is None
+                        else tracked_bias(g, fed[:, 3:], rate, tracking, hold))
+                own = fed[:, :3] + np.array(env.fallback_rad_s) - bias
+                base = envelope.untrusted(fed, env, field)
+                for variant, mask, fallback in zip(
+                        VARIANTS, (base, base | over, base, base | over),
+                        (own, own, classical, classical)):
+                    aoe[variant].append(score(seq, seq.on_poses(
                         np.where(mask[:, None], fallback, g - bias)))['aoe_deg'])
-                figures[variant][name] = (np.array(aoe), tracker)
-                cells.append('/'.join(f'{a:.2f}' for a in aoe))
-            print(f'| {name} | {tracker:.2f} | ' + ' | '.join(cells) + ' |')
+            for variant in VARIANTS:
+                figures[variant][name] = (np.array(aoe[variant]), tracker)
+            print(f'| {name} | {tracker:.2f} | ' + ' | '.join(
+                '/'.join(f'{a:.2f}' for a in aoe[v]) for v in VARIANTS) + ' |')
         for variant, per in figures.items():
             aoe = np.array([a for a, _ in per.values()])  # trials x (seeds..., ensemble)
             bar_aoe = np.array([b for _, b in per.values()])

@@ -338,6 +338,17 @@ def test_a_correction_that_is_not_finite_is_dropped_never_output(tmp_path, seq):
     assert den.counts['non_finite_output'] == 20
 
 
+def test_integer_and_float32_samples_are_read_as_float64(model):
+    """A driver's int16 counts or float32 values: the same corrections as in float64."""
+    gyro32 = np.array([0.01, -0.02, 0.03], np.float32)
+    accel = np.array([0, 0, 10], np.int16)
+    first, second = _bare(model), _bare(model)
+    for k in range(5):
+        a = first.process(10**9 + k * 5_000_000, gyro32, accel)
+        b = second.process(10**9 + k * 5_000_000, gyro32.astype(float), accel.astype(float))
+        assert np.array_equal(a.gyro, b.gyro) and np.array_equal(a.attitude, b.attitude)
+
+
 def test_with_a_rest_bias_the_model_sees_what_the_batch_path_feeds_it(seq, model):
     from denoise_imu_ros.pipeline.rest_bias import (rest_bias_batch, RestBiasSettings,
                                                     remove_rest_bias)

@@ -72,6 +72,8 @@ def test_a_pipeline_runs_its_stages_in_the_table_order_whatever_order_given():
             pass
     with pytest.raises(TypeError, match='not a stage of the table'):
         Pipeline([Extra()])
+    with pytest.raises(TypeError, match='two stages of one kind'):
+        Pipeline([Attitude(), Attitude()])
 
 
 def test_the_table_in_the_docstring_is_the_table_the_code_runs():

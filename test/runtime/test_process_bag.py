@@ -424,36 +424,59 @@ def test_sigterm_during_process_bag_leaves_no_partial_bag(tmp_path):
 @pytest.mark.parametrize('fused', [True, False])
 def test_process_bag_with_the_nodes_params_file_writes_what_that_node_publishes(
         harness, model_file, tmp_path, fused):
-    """Every parameter that changes a number, off its default, from one file for both."""
+    """
+    Every parameter that changes a number, off its default, from one file for both.
+
+    The stream has a 4-period gap (a gap at the default max_gap_factor, not at 5) and
+    then steps back 0.8 s (a new run at a 0.5 s threshold; at the default 1 s, late
+    samples that process-bag would put in stamp order).
+    """
+    from denoise_imu_ros.core import msgs
     from denoise_imu_ros.core.modelfile import add_metadata
+    from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
     from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
     from denoise_imu_ros.runtime.player import read_imu_messages
     from rosbags.highlevel import AnyReader
+    from rosbags.rosbag2 import Writer
     import yaml
     add_metadata(model_file,
                  rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict(),
                  bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0},
                  input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0})
+    imu = read_imu_messages(SAMPLE)[:700]
+    t0 = msgs.stamp_ns(imu[0].header)
+    stamps = [t0 + 5_000_000 * (k if k < 300 else k + 3) for k in range(600)]
+    stamps += [stamps[-1] - 800_000_000 + 5_000_000 * k for k in range(100)]
+    with Writer(tmp_path / 'in', version=9) as w:
+        conn = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        for k, (m, t) in enumerate(zip(imu, stamps)):
+            m = msgs.copy_imu(BAG_TYPES, m)
+            m.header = msgs.header(BAG_TYPES, t, 'imu0')
+            w.write(conn, t0 + 5_000_000 * k, TYPESTORE.serialize_cdr(m, IMU_TYPE))
     params = {'fixed_frame': 'map', 'embed_attitude': True, 'orientation_stddev': 0.2,
               'angular_velocity_stddev': 0.003, 'max_gap_factor': 5.0,
-              'time_jump_threshold': 2.0, 'rate_tolerance': 0.1, 'publish_fused': fused,
+              'time_jump_threshold': 0.5, 'rate_tolerance': 0.1, 'publish_fused': fused,
               'fusion_tau_acc': 7.0, 'fusion_bias_estimation': 'on',
               'fusion_accel_bias': 'off', 'rest_bias': 'off', 'envelope_guard': 'off',
               'fused_orientation_stddev': 0.02}
     path = tmp_path / 'params.yaml'
     path.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
         'model': str(model_file), **params}}}))
-    assert main(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--params-file',
+    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'), '--params-file',
                  str(path)]) == 0
     written = {}
     with AnyReader([tmp_path / 'out']) as reader:
         for topic in ('/imu/corrected', '/imu/data', '/imu/attitude'):
             conns = [c for c in reader.connections if c.topic == topic]
             written[topic] = [reader.deserialize(raw, c.msgtype) for c, _, raw in
-                              reader.messages(connections=conns)][:600] if conns else []
+                              reader.messages(connections=conns)] if conns else []
     assert bool(written['/imu/data']) == fused
+    assert len(written['/imu/corrected']) == 700
     h = harness(**params)
-    h.send(read_imu_messages(SAMPLE)[:600])
+    h.send(read_imu_messages(tmp_path / 'in'))
+    counts = h.node._denoiser.counts
+    assert counts['accepted'] == 700 and counts['time_jump_resets'] == 1
+    assert counts['gap_resets'] == 0 and counts['skipped_periods'] == 3
     assert np.array_equal(np.array([_fields(m) for m in h.corrected]),
                           np.array([_fields(m) for m in written['/imu/corrected']]))
     assert np.array_equal(np.array([_fields(m) for m in h.fused]),

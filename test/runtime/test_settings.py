@@ -2,6 +2,8 @@
 # SPDX-License-Identifier: Apache-2.0
 """The node's settings: one object read from ROS parameters or a params YAML."""
 
+import math
+
 from denoise_imu_ros.core.errors import OptionError
 from denoise_imu_ros.runtime.settings import Settings
 from helpers import ROOT
@@ -12,6 +14,12 @@ import yaml
 def _file(tmp_path, doc) -> str:
     path = tmp_path / 'params.yaml'
     path.write_text(yaml.safe_dump(doc))
+    return str(path)
+
+
+def _text(tmp_path, text: str) -> str:
+    path = tmp_path / 'params.yaml'
+    path.write_text(text)
     return str(path)
 
 
@@ -35,6 +43,26 @@ def test_a_params_file_is_read_as_ros_reads_it(tmp_path):
     assert unknown == ['typo_parameter']
     assert settings.choice('rest_bias') == 'off' and settings.choice('envelope_guard') == 'model'
     assert settings.with_(rest_bias='on').choice('rest_bias') == 'on'
+
+
+def test_values_ros_accepts_are_accepted_as_ros_reads_them(tmp_path):
+    """Within 1e-6 of a range's end; 1e-2 a float (YAML 1.2, as rcl); every node's own names."""
+    settings, unknown = Settings.from_params_file(_text(tmp_path, f"""/**:
+  ros__parameters:
+    orientation_stddev: {math.pi * (1 + 5e-7)!r}
+    rate_tolerance: 1e-2
+    use_sim_time: true
+"""))
+    assert settings.rate_tolerance == 0.01 and unknown == []
+    with pytest.raises(OptionError, match='outside'):
+        Settings(orientation_stddev=math.pi * (1 + 2e-6))
+
+
+def test_a_namespaced_node_reads_the_sections_that_select_it(tmp_path):
+    path = _file(tmp_path, {'/denoised/gyro_denoiser': {'ros__parameters': {'model': 'tumvi'}},
+                            '/gyro_denoiser': {'ros__parameters': {'model': 'broad'}}})
+    assert Settings.from_params_file(path, '/denoised/gyro_denoiser')[0].model == 'tumvi'
+    assert Settings.from_params_file(path)[0].model == 'broad'
 
 
 @pytest.mark.parametrize('params, said', [
