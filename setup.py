@@ -10,7 +10,7 @@ package_name = 'denoise_imu_ros'
 
 setup(
     name=package_name,
-    version='0.4.0',
+    version='0.5.0',
     packages=find_packages(exclude=['test']),
     # the streaming network's per-sample step in C (loaded with ctypes, no Python API);
     # optional: without a compiler the numpy step runs instead

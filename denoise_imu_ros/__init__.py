@@ -9,6 +9,6 @@ Five rooms, one dependency direction (held by import-linter contracts in setup.c
 other.
 """
 
-__version__ = '0.4.0'
+__version__ = '0.5.0'
 
 __all__ = ['__version__']

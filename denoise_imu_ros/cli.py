@@ -63,11 +63,11 @@ def _workers(value: str) -> int | str:
 def _train(args: argparse.Namespace) -> None:
     from .learn.config import load_config
     from .learn.train import train
-    cfg = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps,
+    cfg = load_config(args.recipe, seed=args.seed, data=args.data, steps=args.steps,
                       calibration_only=True if args.calibration_only else None,
                       whole_sequences=True if args.whole_sequences else None,
                       workers=args.workers, device=args.device)
-    inputs = [args.config, *(Path(cfg.data) / s for s in cfg.sequences)]
+    inputs = [args.recipe, *(Path(cfg.data) / s for s in cfg.sequences)]
     _guard_output(args.out, inputs, args.overwrite)  # before training, not after
     for folder in (Path(args.out).parent, args.candidates_dir):
         _check_writable(folder)
@@ -142,7 +142,7 @@ def _crossval(args: argparse.Namespace) -> None:
     from .evaluation.reports import crossval_table
     from .learn.config import load_config
     from .runtime.advice import model_kind
-    recipe = load_config(args.config, seed=args.seed, data=args.data, steps=args.steps)
+    recipe = load_config(args.recipe, seed=args.seed, data=args.data, steps=args.steps)
     if args.attach and args.fold is not None:
         raise OptionError('--attach with --fold: one fold is no verdict; attach when '
                           'crossval scores every fold (without --fold)')
@@ -154,7 +154,7 @@ def _crossval(args: argparse.Namespace) -> None:
         if why:
             raise DenoiseError(f'--attach {path}: this cross-validation is not of how that '
                                f'model was trained ({"; ".join(why)})')
-    report = crossval(args.config, args.folds, args.out, progress=not args.quiet,
+    report = crossval(args.recipe, args.folds, args.out, progress=not args.quiet,
                       only_fold=args.fold, seeds=args.seeds, sessions=args.sessions,
                       motions=args.motions,
                       seed=args.seed, data=args.data,
@@ -297,26 +297,26 @@ def _correct(args: argparse.Namespace) -> None:
     from .evaluation.correct import correct_to_csv
     settings = _node_settings(args)
     rest, guard = settings.choice('rest_bias'), settings.choice('envelope_guard')
-    _guard_output(args.output, [args.input, read_model_file(settings.model).path],
+    _guard_output(args.out, [args.input, read_model_file(settings.model).path],
                   args.overwrite)
     _start_up_warnings(settings.model, rest)
-    n = correct_to_csv(settings.model, args.input, args.output, imu_topic=args.imu_topic,
+    n = correct_to_csv(settings.model, args.input, args.out, imu_topic=args.imu_topic,
                        engine=args.engine, rest=rest, guard=guard)
-    print(f'wrote {n} corrected gyro samples to {args.output}')
+    print(f'wrote {n} corrected gyro samples to {args.out}')
 
 
 def _convert(args: argparse.Namespace) -> None:
     from .data.asl import read_asl
     from .data.bags import IMU_TOPIC, POSE_TOPIC, write_bag
     from .data.timebase import crop, overlap
-    _guard_output(args.out_bag, [args.asl_dir], False, NEVER_OVER_A_BAG)
-    rec = read_asl(args.asl_dir)
+    _guard_output(args.out, [args.input], False, NEVER_OVER_A_BAG)
+    rec = read_asl(args.input)
     rec = crop(overlap(rec) if args.overlap else rec, args.start, args.duration)
     imu_topic, pose_topic = args.imu_topic or IMU_TOPIC, args.pose_topic or POSE_TOPIC
-    write_bag(rec, args.out_bag, storage=args.storage, compress=args.compress,
+    write_bag(rec, args.out, storage=args.storage, compress=args.compress,
               imu_topic=imu_topic, pose_topic=pose_topic)
     span_s = (rec.imu_stamp_ns[-1] - rec.imu_stamp_ns[0]) * 1e-9
-    print(f'wrote {args.out_bag}: {len(rec.imu_stamp_ns)} IMU messages on {imu_topic}, '
+    print(f'wrote {args.out}: {len(rec.imu_stamp_ns)} IMU messages on {imu_topic}, '
           f'{len(rec.gt_stamp_ns)} poses on {pose_topic}, {span_s:.1f} s')
 
 
@@ -325,21 +325,21 @@ def _process_bag(args: argparse.Namespace) -> None:
     from .pipeline.online import DROP_CAUSES
     from .runtime.process_bag import process_bag
     settings = _node_settings(args)
-    _guard_output(args.output, [args.input, read_model_file(settings.model).path], False,
+    _guard_output(args.out, [args.input, read_model_file(settings.model).path], False,
                   NEVER_OVER_A_BAG)
     _start_up_warnings(settings.model, settings.choice('rest_bias'))
-    counts = process_bag(args.input, args.output, settings, imu_topic=args.imu_topic,
+    counts = process_bag(args.input, args.out, settings, imu_topic=args.imu_topic,
                          storage=args.storage, compress=args.compress,
                          namespace=args.namespace,
                          warn=lambda said: print(f'warning: {said}', file=sys.stderr))
     dropped = ', '.join(f'{k} {v}' for k, v in counts.items() if k in DROP_CAUSES)
     rest = ', '.join(f'{k} {v}' for k, v in counts.items() if k not in DROP_CAUSES)
-    print(f'wrote {args.output}: {rest}; dropped: {dropped}')
+    print(f'wrote {args.out}: {rest}; dropped: {dropped}')
 
 
 def _play(args: argparse.Namespace) -> None:
     from .runtime.player import main as play
-    play(args.bag, args.imu_topic, args.topic, args.rate, args.clock, args.wait)
+    play(args.input, args.imu_topic, args.topic, args.rate, args.clock, args.wait)
 
 
 class _Version(argparse.Action):
@@ -375,27 +375,54 @@ def _node_options(p: argparse.ArgumentParser, bag: bool = False) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """Build the argument parser (exposed for tests and documentation)."""
+    """Build the argument parser, its commands in the order a user runs them."""
     from .core.modelfile import MODEL_HELP
-    parser = argparse.ArgumentParser(prog='denoise-imu', description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog='denoise-imu', description=__doc__.splitlines()[0],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog='One recording in is --input; a folder of recordings, --data with '
+               '--sequences;\nwhat a command writes, --out. The workflow: check-data, '
+               'init-recipe, train,\ncrossval, eval, then correct, process-bag or the '
+               "gyro_denoiser node.\n'denoise-imu COMMAND -h': a command's options and "
+               'an example.')
     parser.add_argument('--version', action=_Version)
-    sub = parser.add_subparsers(dest='command', required=True)
+    sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND')
 
-    p = sub.add_parser('convert', help='ASL folder -> ROS 2 bag (IMU + ground-truth pose)')
-    p.add_argument('asl_dir')
-    p.add_argument('out_bag')
-    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
-    p.add_argument('--start', type=float, default=0.0, help='s after the first IMU sample')
-    p.add_argument('--duration', type=float, help='s to keep (default: all)')
-    p.add_argument('--compress', action='store_true', help='zstd compression')
-    p.add_argument('--overlap', action='store_true',
-                   help='keep only the span both IMU and ground truth cover')
-    p.add_argument('--imu-topic', help='IMU topic to write (default /imu0, as EuRoC)')
-    p.add_argument('--pose-topic', help='pose topic to write (default /groundtruth/pose)')
-    p.set_defaults(func=_convert)
+    def command(name: str, summary: str, example: str,
+                parents: tuple[argparse.ArgumentParser, ...] = ()) -> argparse.ArgumentParser:
+        return sub.add_parser(name, help=summary, description=summary, parents=parents,
+                              epilog=f'example:\n  denoise-imu {name} {example}',
+                              formatter_class=argparse.RawDescriptionHelpFormatter)
 
-    p = sub.add_parser('train', help='train a model from a YAML recipe')
-    p.add_argument('--config', required=True, help='e.g. config/train_euroc.yaml')
+    imu_topic = argparse.ArgumentParser(add_help=False)
+    imu_topic.add_argument('--imu-topic', help='bags: IMU topic (default: the only one)')
+    topics = argparse.ArgumentParser(add_help=False, parents=[imu_topic])
+    topics.add_argument('--pose-topic', help='bags: pose topic (default: the only one)')
+
+    p = command('check-data', 'data quality of one recording: rates, pose holes, label noise',
+                '--input ../shared/data/euroc/MH_01_easy', (topics,))
+    _input(p, 'ASL sequence folder or bag with IMU and poses', legacy='input')
+    p.add_argument('--json', action='store_true', help='also print one JSON line at the end')
+    p.add_argument('--max-offset', type=float, default=0.5,
+                   help='clock-offset search range, +- s (default 0.5)')
+    p.add_argument('--poses', metavar='FILE',
+                   help='a trajectory file (TUM format, or a folder of <recording>.txt) '
+                        "in place of the recording's own poses")
+    p.set_defaults(func=_check_data)
+
+    p = command('init-recipe', 'write a training recipe for your recordings from their data',
+                '--data my_bags --sequences run1 run2 run3 --out recipe.yaml', (topics,))
+    p.add_argument('--data', required=True, help='folder holding the recordings')
+    p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags in it')
+    p.add_argument('--out', default='recipe.yaml', help='recipe to write')
+    p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
+    p.add_argument('--poses', **POSES_OPTION)
+    p.add_argument('--estimated-poses', **ESTIMATED_OPTION)
+    p.set_defaults(func=_init_recipe)
+
+    p = command('train', 'train a model from a YAML recipe',
+                '--recipe config/train_euroc.yaml --out euroc_mine.safetensors')
+    _recipe(p, 'e.g. config/train_euroc.yaml')
     p.add_argument('--out', default='model.safetensors', help='model file to write')
     p.add_argument('--seed', type=int, help='overrides the recipe seed')
     p.add_argument('--data', help='overrides the recipe data folder')
@@ -414,9 +441,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=_train)
 
-    p = sub.add_parser('crossval', help='train leave-recording-out folds of a recipe and '
-                       'score the held-out recordings: network vs calibrated IMU vs raw')
-    p.add_argument('--config', required=True, help='training recipe (its recordings are split)')
+    p = command('crossval', 'train leave-recording-out folds of a recipe and score the '
+                'held-out recordings: network vs calibrated IMU vs the classical pipeline',
+                '--recipe recipe.yaml --seeds 0 1 2 --out folds --attach model.safetensors')
+    _recipe(p, 'training recipe (its recordings are split)')
     p.add_argument('--folds', type=int, help='number of folds (default: one per recording)')
     p.add_argument('--sessions', nargs='+', metavar='A,B,..',
                    help='recordings that share a power-on, comma-separated, one argument a '
@@ -445,16 +473,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--quiet', action='store_true', help='no progress bar')
     p.set_defaults(func=_crossval)
 
-    p = sub.add_parser('ensemble', help='one model file averaging the outputs of trained '
-                       'models of one recipe (run in one pass online and offline)')
+    p = command('ensemble', 'one model file averaging the outputs of trained models of one '
+                'recipe (run in one pass online and offline)',
+                'seed0.safetensors seed1.safetensors seed2.safetensors --out model.safetensors')
     p.add_argument('models', nargs='+', help='model files (shipped names or paths)')
     p.add_argument('--out', required=True, help='model file to write')
     p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.set_defaults(func=_ensemble)
 
-    p = sub.add_parser('rest-model', help='a model file that only removes the turn-on bias '
-                       "(crossval's verdict 'rest bias'), or that and tracks the bias left "
-                       "('tracker only'), from a model trained with rest_bias")
+    p = command('rest-model', "a model file that only removes the turn-on bias (crossval's "
+                "verdict 'rest bias'), or that and tracks the bias left ('tracker only'), "
+                'from a model trained with rest_bias',
+                '--like broad_network --tracker-only --out tracker_only.safetensors')
     p.add_argument('--like', required=True, help='a model trained with rest_bias: its rate, '
                    'estimator and prior, recordings and verdict')
     p.add_argument('--tracker-only', action='store_true', help='track the bias left too, '
@@ -463,8 +493,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.set_defaults(func=_rest_model)
 
-    p = sub.add_parser('tune-fusion', help="choose the gravity-aided filters' settings on the "
-                       "model's training recordings (validation tails) and store them")
+    p = command('tune-fusion', "choose the gravity-aided filters' settings on the model's "
+                'training recordings (validation tails) and store them',
+                '--model model.safetensors --baseline calibrated.safetensors --attach')
     p.add_argument('--model', required=True, help='the network model (shipped name or file)')
     p.add_argument('--baseline', required=True, help='its calibrated-IMU model')
     p.add_argument('--data', help="folder of the training recordings (default: the model's)")
@@ -473,14 +504,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--quiet', action='store_true')
     p.set_defaults(func=_tune_fusion)
 
-    topics = argparse.ArgumentParser(add_help=False)
-    topics.add_argument('--imu-topic', help='bags: IMU topic (default: the only one)')
-    topics.add_argument('--pose-topic', help='bags: pose topic (default: the only one)')
-
-    p = sub.add_parser('eval', parents=[topics],
-                       help='AOE/ROE of raw, calibrated and corrected gyro integration')
-    p.add_argument('--model', required=True,
-                   help=MODEL_HELP)
+    p = command('eval', 'AOE/ROE of raw, calibrated and corrected gyro integration, and of '
+                'the classical pipeline',
+                '--model euroc --data ../shared/data/euroc --sequences MH_02_easy --out ev',
+                (topics,))
+    p.add_argument('--model', required=True, help=MODEL_HELP)
     p.add_argument('--data', required=True, help='folder holding the sequences')
     p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags')
     p.add_argument('--out', required=True, help='output folder (JSON, Markdown, PNG)')
@@ -495,11 +523,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--estimated-poses', **ESTIMATED_OPTION)
     p.set_defaults(func=_eval)
 
-    p = sub.add_parser('noise', parents=[topics],
-                       help='gyro noise figures for a VIO (Allan deviation, Kalibr-style '
-                            'noise density and random walk) and a check of the covariance')
-    p.add_argument('--model', required=True,
-                   help=MODEL_HELP)
+    p = command('noise', 'gyro noise figures for a VIO (Allan deviation, Kalibr-style noise '
+                'density and random walk) and a check of the covariance',
+                '--model euroc --data ../shared/data/euroc --sequences MH_02_easy --out nz',
+                (topics,))
+    p.add_argument('--model', required=True, help=MODEL_HELP)
     p.add_argument('--data', required=True, help='folder holding the recordings')
     p.add_argument('--sequences', nargs='+', required=True, help='recordings with ground truth')
     p.add_argument('--out', required=True, help='output folder (YAML, JSON, PNG)')
@@ -508,42 +536,23 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--poses', **POSES_OPTION)
     p.set_defaults(func=_noise)
 
-    p = sub.add_parser('check-data', parents=[topics],
-                       help='data quality of one recording: rates, pose holes, label noise')
-    p.add_argument('input', help='ASL sequence folder or bag with IMU and poses')
-    p.add_argument('--json', action='store_true', help='also print one JSON line at the end')
-    p.add_argument('--max-offset', type=float, default=0.5,
-                   help='clock-offset search range, +- s (default 0.5)')
-    p.add_argument('--poses', metavar='FILE',
-                   help='a trajectory file (TUM format, or a folder of <recording>.txt) '
-                        "in place of the recording's own poses")
-    p.set_defaults(func=_check_data)
-
-    p = sub.add_parser('init-recipe', parents=[topics],
-                       help='write a training recipe for your recordings from their data')
-    p.add_argument('--data', required=True, help='folder holding the recordings')
-    p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags in it')
-    p.add_argument('--out', default='recipe.yaml', help='recipe to write')
-    p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
-    p.add_argument('--poses', **POSES_OPTION)
-    p.add_argument('--estimated-poses', **ESTIMATED_OPTION)
-    p.set_defaults(func=_init_recipe)
-
-    p = sub.add_parser('correct', parents=[topics],
-                       help='write the corrected gyro of every IMU sample as CSV')
+    p = command('correct', 'write the corrected gyro of every IMU sample as CSV',
+                '--model euroc --input ../shared/data/euroc/MH_02_easy --out MH_02.csv',
+                (imu_topic,))
     _node_options(p)
-    p.add_argument('--input', required=True, help='ASL sequence folder or bag')
-    p.add_argument('--output', required=True, help='CSV: timestamp_ns,wx,wy,wz')
+    _input(p, 'ASL sequence folder or bag')
+    _out(p, 'CSV: timestamp_ns,wx,wy,wz', legacy_option='--output')
     p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',
                    help='whole-recording torch network, or the per-sample numpy engine')
-    p.add_argument('--overwrite', action='store_true', help='replace an existing --output')
+    p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.set_defaults(func=_correct)
 
-    p = sub.add_parser('process-bag', parents=[topics],
-                       help='copy a bag and add /imu/corrected, /imu/data and /imu/attitude '
-                            '(as the node)')
-    p.add_argument('input', help='ROS 1 or ROS 2 bag')
-    p.add_argument('output', help='ROS 2 bag to write (must not exist)')
+    p = command('process-bag', 'copy a bag and add /imu/corrected, /imu/data and '
+                '/imu/attitude (as the node)',
+                '--input my_bag --out my_bag_corrected --params-file config/gyro_denoiser.yaml',
+                (imu_topic,))
+    _input(p, 'ROS 1 or ROS 2 bag', legacy='input')
+    _out(p, 'ROS 2 bag to write (must not exist)', legacy='output')
     _node_options(p, bag=True)
     p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
     p.add_argument('--namespace', default='/',
@@ -553,9 +562,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help='zstd compression (default: as the input bag says it is compressed)')
     p.set_defaults(func=_process_bag)
 
-    p = sub.add_parser('play', parents=[topics],
-                       help="publish a bag's IMU in real time (ros2 bag play stand-in)")
-    p.add_argument('bag')
+    p = command('play', "publish a bag's IMU in real time (ros2 bag play stand-in)",
+                '--input my_bag --topic imu/data_raw --clock', (imu_topic,))
+    _input(p, 'ROS 1 or ROS 2 bag', legacy='bag')
     p.add_argument('--topic', default='imu/data_raw',
                    help='topic to publish on (default: %(default)s)')
     p.add_argument('--rate', type=float, default=1.0,
@@ -564,7 +573,85 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--wait', type=float, default=10.0,
                    help='s to wait for a subscriber before playing (default 10)')
     p.set_defaults(func=_play)
+
+    p = command('convert', 'ASL folder -> ROS 2 bag (IMU + ground-truth pose)',
+                '--input ../shared/data/euroc/MH_01_easy --out MH_01_bag')
+    _input(p, 'ASL sequence folder', legacy='asl_dir')
+    _out(p, 'ROS 2 bag to write (must not exist)', legacy='out_bag')
+    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
+    p.add_argument('--start', type=float, default=0.0, help='s after the first IMU sample')
+    p.add_argument('--duration', type=float, help='s to keep (default: all)')
+    p.add_argument('--compress', action=argparse.BooleanOptionalAction, default=False,
+                   help='zstd compression (default: none)')
+    p.add_argument('--overlap', action='store_true',
+                   help='keep only the span both IMU and ground truth cover')
+    p.add_argument('--imu-topic', help='IMU topic to write (default /imu0, as EuRoC)')
+    p.add_argument('--pose-topic', help='pose topic to write (default /groundtruth/pose)')
+    p.set_defaults(func=_convert)
     return parser
+
+
+DEPRECATED_IN = '0.6.0'  # the release whose parser drops the old spellings
+
+
+def _input(p: argparse.ArgumentParser, what: str, legacy: str | None = None) -> None:
+    """``--input``, required; ``legacy``: the positional argument it replaces."""
+    p.add_argument('--input', help=f'{what} (required)')
+    if legacy:
+        _legacy(p, f'legacy_{legacy}', 'input', f'the positional {legacy.upper()}', nargs='?')
+    _require(p, 'input')
+
+
+def _out(p: argparse.ArgumentParser, what: str, legacy: str | None = None,
+         legacy_option: str | None = None) -> None:
+    """``--out``, required; ``legacy``, ``legacy_option``: the positional or option it replaces."""
+    p.add_argument('--out', help=f'{what} (required)')
+    if legacy:
+        _legacy(p, f'legacy_{legacy}', 'out', f'the positional {legacy.upper()}', nargs='?')
+    if legacy_option:
+        _legacy(p, legacy_option, 'out', legacy_option)
+    _require(p, 'out')
+
+
+def _recipe(p: argparse.ArgumentParser, what: str) -> None:
+    """``--recipe``, required, and ``--config``, its old name."""
+    p.add_argument('--recipe', help=f'{what} (required)')
+    _legacy(p, '--config', 'recipe', '--config')
+    _require(p, 'recipe')
+
+
+def _legacy(p: argparse.ArgumentParser, spelling: str, dest: str, said: str,
+            nargs: str | None = None) -> None:
+    """Add an old spelling of ``--dest``, kept one release, hidden from the help."""
+    own = f'legacy_{dest}_{len(p.get_default("legacy") or ())}'
+    if spelling.startswith('-'):
+        p.add_argument(spelling, dest=own, help=argparse.SUPPRESS)
+    else:
+        p.add_argument(own, nargs=nargs, metavar=spelling, help=argparse.SUPPRESS)
+    p.set_defaults(legacy=(*(p.get_default('legacy') or ()), (own, dest, said)))
+
+
+def _require(p: argparse.ArgumentParser, dest: str) -> None:
+    """Mark ``--dest`` required once the old spellings are settled (argparse cannot)."""
+    p.set_defaults(required=(*(p.get_default('required') or ()), dest), command_parser=p)
+
+
+def _settle_spellings(args: argparse.Namespace) -> None:
+    """Take each old spelling as the new one (saying so); then check what is required."""
+    parser = getattr(args, 'command_parser', None)
+    for own, dest, said in getattr(args, 'legacy', ()):
+        value = getattr(args, own)
+        if value is None:
+            continue
+        if getattr(args, dest) is not None:
+            parser.error(f'{said} and --{dest} both given: give --{dest} only')
+        setattr(args, dest, value)
+        print(f'denoise-imu {args.command}: deprecated: {said} is now --{dest} (the old '
+              f'spelling goes in {DEPRECATED_IN})', file=sys.stderr)
+    missing = [f'--{dest}' for dest in getattr(args, 'required', ())
+               if getattr(args, dest) is None]
+    if missing:
+        parser.error(f'the following arguments are required: {", ".join(missing)}')
 
 
 # Every numeric option's range, (low, high, low allowed, unit); a value must also be finite.
@@ -613,6 +700,7 @@ def _data_warning(message: Warning | str, category: type[Warning], *args: Any,
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``denoise-imu`` console script."""
     args = build_parser().parse_args(argv)
+    _settle_spellings(args)
     # play stops on SIGTERM as ros2 bag play does (exit 0); a caller's handler is restored
     own = args.command != 'play' and threading.current_thread() is threading.main_thread()
     before = signal.signal(signal.SIGTERM, _on_sigterm) if own else None

@@ -27,7 +27,7 @@ def _error(capsys):
 def test_correct_writes_every_sample_of_a_bag_as_csv(model_file, tmp_path):
     out = tmp_path / 'corrected.csv'
     assert main(['correct', '--model', str(model_file), '--input', str(SAMPLE),
-                 '--output', str(out)]) == 0
+                 '--out', str(out)]) == 0
     lines = out.read_text().splitlines()
     assert lines[0] == 'timestamp_ns,wx,wy,wz'
     rec = load_imu(SAMPLE)
@@ -40,7 +40,7 @@ def test_correct_writes_every_sample_of_a_bag_as_csv(model_file, tmp_path):
 
 def test_a_model_its_validation_advises_against_runs_with_a_warning(tmp_path, capsys):
     assert main(['correct', '--model', 'tumvi', '--input', str(SAMPLE),
-                 '--output', str(tmp_path / 'c.csv')]) == 0
+                 '--out', str(tmp_path / 'c.csv')]) == 0
     verdict = load_model('tumvi').meta.crossval.verdict
     assert verdict.endswith('deploy no correction')
     advice, mounting = capsys.readouterr().err.splitlines()
@@ -54,36 +54,36 @@ def test_a_model_its_validation_advises_against_runs_with_a_warning(tmp_path, ca
 
 
 def test_correct_and_process_bag_say_what_the_node_says_of_the_turn_on_bias(tmp_path, capsys):
-    for run in (['correct', '--input', str(SAMPLE), '--output', str(tmp_path / 'c.csv')],
-                ['process-bag', str(SAMPLE), str(tmp_path / 'out')]):
+    for run in (['correct', '--input', str(SAMPLE), '--out', str(tmp_path / 'c.csv')],
+                ['process-bag', '--input', str(SAMPLE), '--out', str(tmp_path / 'out')]):
         # EuRoC's 200 Hz against BROAD's 285.7: refused, after the warnings
         assert main([*run, '--model', 'broad_network', '--rest-bias', 'off']) == 1
         assert ('warning: rest_bias off: the model was trained on the gyro less its turn-on '
                 'bias, it now gets the raw gyro') in capsys.readouterr().err.splitlines()
     assert main(['correct', '--model', 'euroc', '--rest-bias', 'on', '--input', str(SAMPLE),
-                 '--output', str(tmp_path / 'e.csv')]) == 0
+                 '--out', str(tmp_path / 'e.csv')]) == 0
     assert 'euroc.safetensors was trained on the raw gyro and stores no turn-on bias' in (
         capsys.readouterr().err)
 
 
 def test_errors_are_one_line_naming_the_file(model_file, tmp_path, capsys):
     assert main(['correct', '--model', str(tmp_path / 'nope.safetensors'), '--input',
-                 str(SAMPLE), '--output', str(tmp_path / 'o.csv')]) == 1
+                 str(SAMPLE), '--out', str(tmp_path / 'o.csv')]) == 1
     assert 'nope.safetensors: no such model file' in _error(capsys)
     (tmp_path / 'bad.safetensors').write_bytes(b'garbage' * 10)
     assert main(['correct', '--model', str(tmp_path / 'bad.safetensors'), '--input',
-                 str(SAMPLE), '--output', str(tmp_path / 'o.csv')]) == 1
+                 str(SAMPLE), '--out', str(tmp_path / 'o.csv')]) == 1
     assert 'bad.safetensors: corrupt' in _error(capsys)
     short = write_asl(tmp_path / 'short', n_imu=400)
     assert main(['correct', '--model', str(model_file), '--input', str(short),
-                 '--output', str(tmp_path / 'o.csv')]) == 1
+                 '--out', str(tmp_path / 'o.csv')]) == 1
     assert 'short: 400 IMU samples, shorter than the receptive field (511)' in _error(capsys)
     write_asl(tmp_path / 'slow', n_imu=2000, imu_rate=100.0)
     assert main(['eval', '--model', str(model_file), '--data', str(tmp_path), '--sequences',
                  'slow', '--out', str(tmp_path / 'e'), '--no-plots']) == 1
     assert 'IMU rate 100.0 Hz, the model was trained at 200.0 Hz' in _error(capsys)
     assert main(['correct', '--model', str(model_file), '--input', str(SAMPLE),
-                 '--imu-topic', '/imu9', '--output', str(tmp_path / 'o.csv')]) == 1
+                 '--imu-topic', '/imu9', '--out', str(tmp_path / 'o.csv')]) == 1
     assert "no topic '/imu9'" in _error(capsys)
 
 
@@ -95,7 +95,7 @@ def test_one_absurd_imu_row_is_an_error_offline_and_a_counted_drop_in_process_ba
     from helpers import break_line, T0
     root = write_asl(tmp_path / 'seq', n_imu=1200)
     break_line(root / 'mav0' / 'imu0' / 'data.csv', 700, f'{T0 + 3_495_000_000},5e38,0,0,0,0,9.8')
-    for cmd in (['correct', '--model', str(model_file), '--input', str(root), '--output',
+    for cmd in (['correct', '--model', str(model_file), '--input', str(root), '--out',
                  str(tmp_path / 'o.csv')],
                 ['eval', '--model', str(model_file), '--data', str(tmp_path), '--sequences',
                  'seq', '--out', str(tmp_path / 'e'), '--no-plots']):
@@ -109,7 +109,8 @@ def test_one_absurd_imu_row_is_an_error_offline_and_a_counted_drop_in_process_ba
     imu = clean.imu.copy()
     imu[699, 0] = 5e38
     write_bag(dataclasses.replace(clean, imu=imu), tmp_path / 'bad_bag')
-    assert main(['process-bag', str(tmp_path / 'bad_bag'), str(tmp_path / 'out_bag'),
+    assert main(['process-bag', '--input', str(tmp_path / 'bad_bag'), '--out',
+                 str(tmp_path / 'out_bag'),
                  '--model', str(model_file)]) == 0
     assert 'out_of_range 1' in capsys.readouterr().out
     from rosbags.highlevel import AnyReader
@@ -129,42 +130,45 @@ def test_garbage_inputs_and_bad_options_are_one_line_errors(model_file, tmp_path
     (tmp_path / 'file').write_text('')
     model = ['--model', str(model_file)]
     cases = [
-        (['correct', '--input', str(garbage), '--output', str(tmp_path / 'o.csv')] + model,
+        (['correct', '--input', str(garbage), '--out', str(tmp_path / 'o.csv')] + model,
          'garbage.bag: not a readable bag'),
         (['eval', '--data', str(tmp_path), '--sequences', 'garbage.bag', '--out',
           str(tmp_path / 'e')] + model, 'garbage.bag: not a readable bag'),
-        (['process-bag', str(garbage), str(tmp_path / 'p')] + model,
+        (['process-bag', '--input', str(garbage), '--out', str(tmp_path / 'p')] + model,
          'garbage.bag: cannot read ROS 1 bag'),
-        (['play', str(garbage)], 'garbage.bag: not a readable bag'),
-        (['play', str(SAMPLE), '--topic', 'bad topic'], "--topic 'bad topic': Invalid topic"),
-        (['correct', '--input', str(binary), '--output', str(tmp_path / 'o.csv')] + model,
+        (['play', '--input', str(garbage)], 'garbage.bag: not a readable bag'),
+        (['play', '--input', str(SAMPLE), '--topic', 'bad topic'],
+         "--topic 'bad topic': Invalid topic"),
+        (['correct', '--input', str(binary), '--out', str(tmp_path / 'o.csv')] + model,
          'imu0/data.csv: not a text CSV file'),
         (['eval', '--data', str(SAMPLE.parent), '--sequences', SAMPLE.name,
           '--start-sample', '-100', '--out', str(tmp_path / 'e')] + model,
          '--start-sample -100: must be 0 or more'),
         (['eval', '--data', str(SAMPLE.parent), '--sequences', SAMPLE.name,
           '--out', str(tmp_path / 'file' / 'e')] + model, 'cannot create the output folder'),
-        (['correct', '--input', str(SAMPLE), '--output', str(tmp_path / 'file' / 'o.csv')]
+        (['correct', '--input', str(SAMPLE), '--out', str(tmp_path / 'file' / 'o.csv')]
          + model, 'cannot write here'),
-        (['process-bag', str(SAMPLE), str(tmp_path / 'file' / 'p')] + model,
+        (['process-bag', '--input', str(SAMPLE), '--out', str(tmp_path / 'file' / 'p')] + model,
          'cannot write here'),
     ]
     # every numeric option: finite and in range, named before any work
     asl = write_asl(tmp_path / 'asl', n_imu=600)
     for option, value in (('--start', 'nan'), ('--start', '-1'), ('--duration', 'inf'),
                           ('--duration', '0')):
-        cases.append((['convert', str(asl), str(tmp_path / 'c'), option, value],
+        cases.append((['convert', '--input', str(asl), '--out', str(tmp_path / 'c'), option,
+                       value],
                       f'{option} {value}: must be a number'))
     for option, value in (('--rate', 'nan'), ('--rate', '0'), ('--wait', '-1'),
                           ('--wait', 'nan')):
-        cases.append((['play', str(SAMPLE), option, value], f'{option} {value}: must be'))
-    cases.append((['train', '--config', 'x.yaml', '--seed', '-1'], '--seed -1: must be'))
+        cases.append((['play', '--input', str(SAMPLE), option, value],
+                      f'{option} {value}: must be'))
+    cases.append((['train', '--recipe', 'x.yaml', '--seed', '-1'], '--seed -1: must be'))
     recipe = str(Path(__file__).resolve().parents[1] / 'config' / 'train_euroc.yaml')
     # checked by creating a file, before any training: /proc passes a permission test
-    cases.append((['train', '--config', recipe, '--out', '/proc/m.safetensors'],
+    cases.append((['train', '--recipe', recipe, '--out', '/proc/m.safetensors'],
                   '/proc: output folder is not writable'))
-    cases.append((['crossval', '--config', 'x.yaml', '--seeds', '0', '-1'], '--seeds -1: must be'))
-    cases.append((['crossval', '--config', recipe, '--out', '/proc/cv'],
+    cases.append((['crossval', '--recipe', 'x.yaml', '--seeds', '0', '-1'], '--seeds -1: must be'))
+    cases.append((['crossval', '--recipe', recipe, '--out', '/proc/cv'],
                   '/proc/cv: cannot create the output folder'))
     for argv, message in cases:
         assert main(argv) == 1, argv
@@ -180,19 +184,19 @@ def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_p
     before = {p: p.read_bytes() for p in bag.rglob('*') if p.is_file()}
     inner = next(p for p in before if p.suffix == '.mcap')
     for out in (bag, inner):
-        assert main(['correct', '--model', str(model_file), '--input', str(bag), '--output',
+        assert main(['correct', '--model', str(model_file), '--input', str(bag), '--out',
                      str(out), '--engine', 'streaming']) == 1
         assert 'is an input of this command' in _error(capsys)
     asl = write_asl(tmp_path / 'asl', n_imu=800)
     csv = asl / 'mav0' / 'imu0' / 'data.csv'
     raw = csv.read_bytes()
-    assert main(['correct', '--model', str(model_file), '--input', str(asl), '--output',
+    assert main(['correct', '--model', str(model_file), '--input', str(asl), '--out',
                  str(csv), '--overwrite']) == 1  # not even with --overwrite
     assert 'is an input of this command' in _error(capsys) and csv.read_bytes() == raw
     assert main(['ensemble', str(model_file), str(model_file), '--out', str(model_file)]) == 1
     assert 'is an input of this command' in _error(capsys)
     model = model_file.read_bytes()
-    assert main(['correct', '--model', str(model_file), '--input', str(asl), '--output',
+    assert main(['correct', '--model', str(model_file), '--input', str(asl), '--out',
                  str(model_file), '--overwrite']) == 1  # the model is an input too
     assert 'is an input of this command' in _error(capsys) and model_file.read_bytes() == model
     assert main(['init-recipe', '--data', str(tmp_path), '--sequences', 'asl', '--out',
@@ -209,7 +213,7 @@ def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_p
     # an existing output is replaced only when asked
     out = tmp_path / 'c.csv'
     out.write_text('mine\n')
-    args = ['correct', '--model', str(model_file), '--input', str(asl), '--output', str(out)]
+    args = ['correct', '--model', str(model_file), '--input', str(asl), '--out', str(out)]
     assert main(args) == 1 and 'exists already (pass --overwrite' in _error(capsys)
     assert out.read_text() == 'mine\n'
     assert main(args + ['--overwrite']) == 0 and out.read_text().startswith('timestamp_ns')
@@ -219,8 +223,10 @@ def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_p
     assert 'a folder exists there; --overwrite replaces a file, not a folder' in _error(capsys)
     assert folder.is_dir()
     # process-bag twice to one output: the second is refused before it reads anything
-    assert main(['process-bag', str(bag), str(tmp_path / 'pb'), '--model', str(model_file)]) == 0
-    assert main(['process-bag', str(bag), str(tmp_path / 'pb'), '--model', str(model_file)]) == 1
+    assert main(['process-bag', '--input', str(bag), '--out', str(tmp_path / 'pb'), '--model',
+                 str(model_file)]) == 0
+    assert main(['process-bag', '--input', str(bag), '--out', str(tmp_path / 'pb'), '--model',
+                 str(model_file)]) == 1
     err = _error(capsys)  # it has no --overwrite to suggest
     assert 'exists already' in err and 'remove it' in err and '--overwrite' not in err
 
@@ -236,7 +242,7 @@ def test_an_imu_mounted_unlike_the_models_is_said_in_one_line(tmp_path, capsys):
     imu = np.hstack([turn.apply(rec.imu[:, :3]), turn.apply(rec.imu[:, 3:])])
     write_bag(dataclasses.replace(rec, imu=imu), tmp_path / 'turned')
     for source, said in ((SAMPLE, False), (tmp_path / 'turned', True)):
-        assert main(['correct', '--model', 'euroc', '--input', str(source), '--output',
+        assert main(['correct', '--model', 'euroc', '--input', str(source), '--out',
                      str(tmp_path / 'out.csv'), '--overwrite']) == 0
         err = capsys.readouterr().err
         assert (f"warning: {source}: gravity is 90 deg from where the model's training IMU "
@@ -278,5 +284,49 @@ def test_a_signal_while_torch_imports_ends_in_one_line_and_its_exit_code(
             raise (signal_error or Terminated)()
         return real_import(name, *args, **kwargs)
     monkeypatch.setattr(builtins, '__import__', slow_torch)
-    assert main(['train', '--config', 'recipe.yaml']) == code
+    assert main(['train', '--recipe', 'recipe.yaml']) == code
     assert capsys.readouterr().err.strip() == f'denoise-imu train: {word}'
+
+
+def _commands():
+    from denoise_imu_ros.cli import build_parser
+    return next(a for a in build_parser()._actions if a.choices and 'correct' in a.choices).choices
+
+
+def test_one_grammar_input_out_and_topics_only_where_they_act():
+    """One recording in is --input, what is written --out; --pose-topic where poses are read."""
+    reads_poses = {'check-data', 'init-recipe', 'eval', 'noise', 'convert'}
+    for name, parser in _commands().items():
+        shown = {o for a in parser._actions if a.help != '==SUPPRESS==' for o in a.option_strings}
+        positional = [a.dest for a in parser._actions
+                      if not a.option_strings and a.help != '==SUPPRESS==']
+        assert positional in ([], ['models']), name  # ensemble's list of models only
+        assert not shown & {'--output', '--config', '--bag'}, name
+        assert ('--pose-topic' in shown) == (name in reads_poses), name
+        assert f'denoise-imu {name} ' in parser.epilog, name  # an example
+
+
+def test_the_old_spellings_work_one_release_and_say_so(tmp_path, capsys):
+    asl = write_asl(tmp_path / 'asl', n_imu=1200)
+    assert main(['convert', str(asl), str(tmp_path / 'bag')]) == 0
+    err = capsys.readouterr().err
+    assert 'deprecated: the positional ASL_DIR is now --input' in err
+    assert 'deprecated: the positional OUT_BAG is now --out' in err
+    assert (tmp_path / 'bag').is_dir()
+    assert main(['correct', '--model', 'euroc', '--input', str(tmp_path / 'bag'), '--output',
+                 str(tmp_path / 'c.csv'), '--engine', 'streaming']) == 0
+    assert 'deprecated: --output is now --out' in capsys.readouterr().err
+    assert (tmp_path / 'c.csv').is_file()
+
+
+@pytest.mark.parametrize('argv, said', [
+    (['process-bag', 'a', '--input', 'b', '--out', 'c', '--model', 'euroc'],
+     'the positional INPUT and --input both given'),
+    (['process-bag', '--model', 'euroc'], 'required: --input, --out'),
+    (['train', '--config', 'a.yaml', '--recipe', 'b.yaml'], '--config and --recipe both given'),
+    (['check-data'], 'required: --input')])
+def test_a_spelling_missing_or_given_twice_is_a_usage_error(argv, said, capsys):
+    with pytest.raises(SystemExit) as done:
+        main(argv)
+    assert done.value.code == 2
+    assert said in capsys.readouterr().err

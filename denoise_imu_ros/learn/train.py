@@ -1,7 +1,7 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
 """
-Train the gyro-correcting network: ``denoise-imu train --config FILE``.
+Train the gyro-correcting network: ``denoise-imu train --recipe FILE``.
 
 Read top to bottom, as nanoGPT's train.py: set-up, data, model, optimiser, helpers, then
 one visible loop. The recipe (config/train_euroc.yaml) is the reference code's: every

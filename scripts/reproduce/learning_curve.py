@@ -14,7 +14,7 @@ one Markdown row per subset: the held-out means (open loop AOE 3-D, then ``imu/d
 of the rest bias, the calibration, each seed's network and their mean ± std, the ensemble
 (one seed: that network again) and its ratio to the calibration.
 
-Usage: .venv/bin/python scripts/reproduce/learning_curve.py --config RECIPE --out DIR
+Usage: .venv/bin/python scripts/reproduce/learning_curve.py --recipe RECIPE --out DIR
        --held REC [REC ...] --subset REC,REC [--subset ...] [--seeds 0 1 2]
        [--tracking-from MODEL] [--data DIR]
 (docs/results.md, BROAD: config/train_broad.yaml, subsets of one session, the other
@@ -54,7 +54,7 @@ def means(folder: Path) -> tuple[dict[str, float], dict[str, float]]:
 def main() -> None:
     """Train and score every subset, then print the table."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
-    parser.add_argument('--config', required=True)
+    parser.add_argument('--recipe', required=True)
     parser.add_argument('--out', required=True, type=Path)
     parser.add_argument('--held', required=True, nargs='+')
     parser.add_argument('--subset', required=True, action='append')
@@ -62,7 +62,7 @@ def main() -> None:
     parser.add_argument('--tracking-from')
     parser.add_argument('--data')
     args = parser.parse_args()
-    recipe = yaml.safe_load(Path(args.config).read_text())
+    recipe = yaml.safe_load(Path(args.recipe).read_text())
     data = args.data or recipe.get('data') or TrainConfig.data
     align = recipe.get('align') or 'none'
     if not isinstance(align, str):
@@ -85,11 +85,11 @@ def main() -> None:
         config.write_text(yaml.safe_dump({**recipe, 'sequences': names, 'data': data},
                                          sort_keys=False))
         calibration = folder / 'calibrated.safetensors'
-        run('train', '--config', str(config), '--calibration-only', '--seed', '0',
+        run('train', '--recipe', str(config), '--calibration-only', '--seed', '0',
             '--out', str(calibration), '--overwrite', '--quiet')
         models = [folder / f'seed{s}.safetensors' for s in args.seeds]
         for seed, model in zip(args.seeds, models):
-            run('train', '--config', str(config), '--seed', str(seed), '--out', str(model),
+            run('train', '--recipe', str(config), '--seed', str(seed), '--out', str(model),
                 '--overwrite', '--quiet')
         ensemble = models[0]
         if len(models) > 1:

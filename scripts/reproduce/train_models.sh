@@ -23,18 +23,18 @@ run() {  # name, args...
     > "$out/$name.log" 2>&1
   tail -n 1 "$out/$name.log"
 }
-run euroc_calibrated --config config/train_euroc.yaml --calibration-only
-run tumvi_calibrated --config config/train_tumvi.yaml --calibration-only
+run euroc_calibrated --recipe config/train_euroc.yaml --calibration-only
+run tumvi_calibrated --recipe config/train_tumvi.yaml --calibration-only
 first=${seeds[0]%% *}
-run "euroc_s$first" --config config/train_euroc.yaml --seed "$first"
+run "euroc_s$first" --recipe config/train_euroc.yaml --seed "$first"
 family=()
 for seed in ${TUMVI_SEEDS:-0 1 2 3 4 5 6 7 8 9 10}; do
-  run "tumvi_family_s$seed" --config config/train_tumvi_family.yaml --seed "$seed"
+  run "tumvi_family_s$seed" --recipe config/train_tumvi_family.yaml --seed "$seed"
   family+=("$out/tumvi_family_s$seed.safetensors")
 done
 euroc=()
 for seed in ${seeds[@]}; do
-  run "euroc_s$seed" --config config/train_euroc.yaml --seed "$seed"
+  run "euroc_s$seed" --recipe config/train_euroc.yaml --seed "$seed"
   euroc+=("$out/euroc_s$seed.safetensors")  # these seeds, not whatever else is in OUT_DIR
 done
 [ -f "$out/euroc_ensemble.safetensors" ] || "$bin/denoise-imu" ensemble "${euroc[@]}" \
@@ -45,7 +45,7 @@ crossval() {  # name, recipe, folds, seeds ("" for the recipe's), models to atta
   local name=$1 recipe=$2 folds=$3 cv_seeds=$4; shift 4
   [ -f "$out/$name/crossval.json" ] && { echo "skip $name (exists)"; return; }
   echo "$(date -u +%H:%M:%S) $name"
-  "$bin/denoise-imu" crossval --config "$recipe" --folds "$folds" --out "$out/$name" \
+  "$bin/denoise-imu" crossval --recipe "$recipe" --folds "$folds" --out "$out/$name" \
     ${cv_seeds:+--seeds $cv_seeds} --quiet --attach "$@" > "$out/$name.log" 2>&1
   tail -n 1 "$out/$name.log"
 }
@@ -69,14 +69,14 @@ broad_b=02_undisturbed_slow_rotation_B,05_undisturbed_slow_rotation_with_breaks_
 broad_c=03_undisturbed_slow_rotation_C,12_undisturbed_slow_translation_C,25_disturbed_tapping_B,27_disturbed_phone_vibration_B
 broad=()
 for seed in 0 1 2; do
-  run "broad_s$seed" --config config/train_broad.yaml --seed "$seed"
+  run "broad_s$seed" --recipe config/train_broad.yaml --seed "$seed"
   broad+=("$out/broad_s$seed.safetensors")
 done
-run broad_calibrated --config config/train_broad.yaml --calibration-only
+run broad_calibrated --recipe config/train_broad.yaml --calibration-only
 [ -f "$out/broad_network.safetensors" ] || "$bin/denoise-imu" ensemble "${broad[@]}" \
   --out "$out/broad_network.safetensors"
 [ -f "$out/crossval_broad/crossval.json" ] || "$bin/denoise-imu" crossval \
-  --config config/train_broad.yaml --sessions "$broad_b" "$broad_c" --seeds 0 1 2 \
+  --recipe config/train_broad.yaml --sessions "$broad_b" "$broad_c" --seeds 0 1 2 \
   --out "$out/crossval_broad" --quiet --attach "$out/broad_network.safetensors" \
   "$out/broad_calibrated.safetensors" > "$out/crossval_broad.log" 2>&1
 [ -f "$out/tune_broad.log" ] || "$bin/denoise-imu" tune-fusion \

@@ -21,7 +21,7 @@ mkdir -p "$out"
     --poses "$data/euroc_vio/$source" --out "$out/recipe.yaml" --overwrite \
     > "$out/init.log" 2>&1
 for seed in ${seeds[@]}; do
-  "$bin/denoise-imu" train --config "$out/recipe.yaml" --seed "$seed" \
+  "$bin/denoise-imu" train --recipe "$out/recipe.yaml" --seed "$seed" \
       --out "$out/seed$seed.safetensors" --overwrite --quiet > "$out/train$seed.log" 2>&1
   "$bin/denoise-imu" eval --model "$out/seed$seed.safetensors" --data "$data/euroc" \
       --sequences "${test[@]}" --out "$out/eval$seed" > "$out/eval$seed.log" 2>&1

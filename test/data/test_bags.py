@@ -57,7 +57,7 @@ def test_ros2_bag_with_odometry_ground_truth_and_explicit_topics(tmp_path, stora
 def test_training_arrays_from_converted_bag_equal_those_from_csv(euroc, tmp_path, storage):
     seq_dir = euroc / 'V1_02_medium'
     bag = tmp_path / f'V1_02_medium_{storage}'
-    assert main(['convert', str(seq_dir), str(bag), '--storage', storage]) == 0
+    assert main(['convert', '--input', str(seq_dir), '--out', str(bag), '--storage', storage]) == 0
     cfg = load_config(ROOT / 'config' / 'train_euroc.yaml')
     from_csv = training_split([load_sequence(seq_dir)], cfg)
     from_bag = training_split([load_sequence(bag)], cfg)
@@ -69,7 +69,8 @@ def test_training_arrays_from_converted_bag_equal_those_from_csv(euroc, tmp_path
 
 def test_convert_refuses_an_existing_output(euroc, tmp_path, capsys):
     (tmp_path / 'out').mkdir()
-    assert main(['convert', str(euroc / 'V1_02_medium'), str(tmp_path / 'out')]) == 1
+    assert main(['convert', '--input', str(euroc / 'V1_02_medium'), '--out',
+                 str(tmp_path / 'out')]) == 1
     err = capsys.readouterr().err.strip()
     assert err.startswith('denoise-imu convert: error:') and str(tmp_path / 'out') in err
     assert '\n' not in err
@@ -80,7 +81,7 @@ def test_convert_overlap_keeps_only_the_span_with_ground_truth(euroc, tmp_path):
     from denoise_imu_ros.data.bags import read_bag
     # V1_02's ground truth starts ~1 s after its IMU (V1_01's corrected one does not).
     seq = euroc / 'V1_02_medium'
-    assert main(['convert', str(seq), str(tmp_path / 'b'), '--overlap']) == 0
+    assert main(['convert', '--input', str(seq), '--out', str(tmp_path / 'b'), '--overlap']) == 0
     rec, asl = read_bag(tmp_path / 'b'), read_asl(seq)
     assert asl.gt_stamp_ns[0] > asl.imu_stamp_ns[0]  # the case this test is about
     assert rec.imu_stamp_ns[0] >= asl.gt_stamp_ns[0]
@@ -91,7 +92,8 @@ def test_convert_writes_the_topic_names_asked_for(tmp_path):
     from denoise_imu_ros.data.bags import read_bag
     from helpers import write_asl
     seq = write_asl(tmp_path / 'a', n_imu=600)
-    assert main(['convert', str(seq), str(tmp_path / 'b'), '--imu-topic', '/imu/data_raw',
+    assert main(['convert', '--input', str(seq), '--out', str(tmp_path / 'b'), '--imu-topic',
+                 '/imu/data_raw',
                  '--pose-topic', '/mocap/pose']) == 0
     with pytest.raises(DatasetError, match=r"no topic '/imu0' \(topics: /imu/data_raw"):
         read_bag(tmp_path / 'b', imu_topic='/imu0')
@@ -107,7 +109,7 @@ def test_a_bag_compressed_inside_its_mcap_chunks_is_seen_as_compressed(tmp_path,
     rec = write_asl(tmp_path / 'rec', n_imu=400)
     for compress in (True, False):
         out = tmp_path / f'{storage}_{compress}'
-        argv = ['convert', str(rec), str(out), '--storage', storage]
+        argv = ['convert', '--input', str(rec), '--out', str(out), '--storage', storage]
         assert main(argv + ['--compress'] * compress) == 0
         with open_bag(out) as reader:
             assert is_compressed(reader) == compress
@@ -145,7 +147,8 @@ def test_every_reader_takes_a_bag_in_header_stamp_order(tmp_path):
     assert (np.diff(received) < 0).sum() > 100  # the receive order is not the stamps'
     for field in ('imu_stamp_ns', 'imu', 'gt_stamp_ns', 'gt_quat', 'gt_pos'):
         np.testing.assert_array_equal(getattr(got, field), getattr(rec, field), err_msg=field)
-    assert main(['check-data', str(tmp_path / 'jittered')]) in (0, 1)  # judged, not refused
+    # judged, not refused
+    assert main(['check-data', '--input', str(tmp_path / 'jittered')]) in (0, 1)
 
 
 def test_a_pose_topic_drops_and_counts_the_rows_a_trajectory_file_does(tmp_path):
@@ -154,7 +157,7 @@ def test_a_pose_topic_drops_and_counts_the_rows_a_trajectory_file_does(tmp_path)
     from helpers import write_asl
     rec_dir = write_asl(tmp_path / 'asl', n_imu=1000, yaw_rate=0.3)
     bag = tmp_path / 'bag'
-    assert main(['convert', str(rec_dir), str(bag)]) == 0
+    assert main(['convert', '--input', str(rec_dir), '--out', str(bag)]) == 0
     good = read_bag_poses(bag)
     stamps, rows = good[0].copy(), good[1].copy()
     rows[10, 0] = np.nan                        # x

@@ -92,7 +92,7 @@ def test_poses_whose_increments_disagree_with_their_own_attitude_cannot_supervis
 
 
 def test_check_data_on_real_recordings(data_dir, capsys):
-    assert main(['check-data', str(data_dir / 'tumvi' / 'dataset-room1_512_16'),
+    assert main(['check-data', '--input', str(data_dir / 'tumvi' / 'dataset-room1_512_16'),
                  '--json']) == 0
     tumvi = json.loads(capsys.readouterr().out.splitlines()[-1])
     assert set(ESTIMATES) <= set(tumvi)  # what a too-short recording reports as null
@@ -168,7 +168,7 @@ def test_label_noise_and_supervision_are_judged_on_the_poses_as_training_aligns_
 def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, capsys, euroc):
     # yaw only: nothing about x and y
     flat = write_asl(tmp_path / 'flat', n_imu=8000)
-    assert main(['check-data', str(flat)]) == 1
+    assert main(['check-data', '--input', str(flat)]) == 1
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert 'not usable for training: no rotation about the IMU x axis' in err
@@ -181,7 +181,7 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
     from denoise_imu_ros.data.bags import write_bag
     write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:400], imu=rec.imu[:400]),
               tmp_path / 'tiny')
-    assert main(['check-data', str(tmp_path / 'tiny'), '--json']) == 1
+    assert main(['check-data', '--input', str(tmp_path / 'tiny'), '--json']) == 1
     out, err = capsys.readouterr()
     assert json.loads(out.splitlines()[-1])['time_offset_s'] is None
     assert len(err.strip().splitlines()) == 1
@@ -367,14 +367,14 @@ def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_p
     micro = [lines[0]] + [f'{int(x.split(",")[0]) // 1000},{x.split(",", 1)[1]}'
                           for x in lines[1:]]
     csv.write_text('\n'.join(micro) + '\n')
-    for cmd in (['check-data', str(root)],
+    for cmd in (['check-data', '--input', str(root)],
                 ['init-recipe', '--data', str(tmp_path), '--sequences', 's',
                  '--out', str(tmp_path / 'r.yaml')]):
         assert main(cmd) == 1
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and 'stamps in microseconds or milliseconds?' in err
     for bad in ('-1', '0', 'nan', '0.002'):  # 2 ms: below the search's resolution
-        assert main(['check-data', str(root), '--max-offset', bad]) == 1
+        assert main(['check-data', '--input', str(root), '--max-offset', bad]) == 1
         assert '--max-offset' in capsys.readouterr().err
 
 
@@ -392,11 +392,11 @@ def test_wrong_units_are_named_by_check_data_correct_eval_and_train(
     imu = rec.imu.copy()
     imu[:, column.start - 1:column.stop - 1] *= factor
     write_bag(dataclasses.replace(rec, imu=imu), tmp_path / 'bag')
-    assert main(['check-data', str(tmp_path / 'bag')]) == 1
+    assert main(['check-data', '--input', str(tmp_path / 'bag')]) == 1
     err = capsys.readouterr().err.strip()
     tail = cause + (' (rad/s expected)' if 'gyro' in cause else '')
     assert len(err.splitlines()) == 1 and err.endswith(tail)
-    for cmd in (['correct', '--model', 'euroc', '--input', str(tmp_path / 'bag'), '--output',
+    for cmd in (['correct', '--model', 'euroc', '--input', str(tmp_path / 'bag'), '--out',
                  str(tmp_path / 'c.csv'), '--engine', 'streaming'],
                 ['eval', '--model', 'euroc', '--data', str(tmp_path), '--sequences', 'bag',
                  '--out', str(tmp_path / 'ev'), '--no-plots']):
@@ -407,7 +407,7 @@ def test_wrong_units_are_named_by_check_data_correct_eval_and_train(
     recipe.update(data=str(tmp_path), sequences=['bag'], window=1024, steps=2, val_every=1,
                   restart_period=2, swa_start=1, workers=1)
     (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
-    assert main(['train', '--config', str(tmp_path / 'r.yaml'), '--out',
+    assert main(['train', '--recipe', str(tmp_path / 'r.yaml'), '--out',
                  str(tmp_path / 'm.safetensors')]) == 1
     assert cause in capsys.readouterr().err and not (tmp_path / 'm.safetensors').exists()
 
@@ -422,9 +422,9 @@ def test_an_imu_hole_is_named_offline_as_the_node_treats_it(euroc, tmp_path, cap
     keep = (t < 20) | (t >= 25)
     write_bag(dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[keep], imu=rec.imu[keep]),
               tmp_path / 'bag')
-    assert main(['check-data', str(tmp_path / 'bag')]) == 1
+    assert main(['check-data', '--input', str(tmp_path / 'bag')]) == 1
     assert '1 IMU holes longer than 3 periods (longest 5.01 s)' in capsys.readouterr().err
-    for cmd in (['correct', '--model', 'euroc', '--input', str(tmp_path / 'bag'), '--output',
+    for cmd in (['correct', '--model', 'euroc', '--input', str(tmp_path / 'bag'), '--out',
                  str(tmp_path / 'c.csv'), '--engine', 'streaming'],
                 ['eval', '--model', 'euroc', '--data', str(tmp_path), '--sequences', 'bag',
                  '--out', str(tmp_path / 'ev'), '--no-plots']):

@@ -236,7 +236,7 @@ def test_a_trajectory_in_milliseconds_since_its_start_is_named_so(tmp_path):
 def test_check_data_reads_a_trajectory_and_says_what_it_dropped_in_one_line(tmp_path, capsys):
     rec_dir = write_asl(tmp_path / 'rec', n_imu=1000, yaw_rate=0.3)
     traj = _yawing_trajectory(tmp_path / 'rec.txt')
-    main(['check-data', str(rec_dir), '--poses', str(traj)])
+    main(['check-data', '--input', str(rec_dir), '--poses', str(traj)])
     out = capsys.readouterr()
     assert 'poses 20.0 Hz' in out.out
     assert out.err.startswith(f'warning: {traj}: 100 poses kept; dropped 1 duplicate stamps')
@@ -244,7 +244,7 @@ def test_check_data_reads_a_trajectory_and_says_what_it_dropped_in_one_line(tmp_
     nano = _write(tmp_path / 'nano.txt', [line.split(' ', 1)[0].replace('.', '') + ' '
                                           + line.split(' ', 1)[1] for line in
                                           traj.read_text().splitlines()[10:]])
-    main(['check-data', str(rec_dir), '--poses', str(nano)])
+    main(['check-data', '--input', str(rec_dir), '--poses', str(nano)])
     assert re.match(rf'note: {nano}: \d+ poses kept; stamps read as nanoseconds\n',
                     capsys.readouterr().err)
 

@@ -210,7 +210,7 @@ def test_crossval_refuses_to_attach_to_a_model_of_another_training_before_traini
     model = write_untrained_model(tmp_path / 'm.safetensors', {
         'sample_rate_hz': 200.0, 'train_sequences': ['rec0', 'rec1'],
         'train_config': {'steps': 1800}})
-    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--steps', '30', '--quiet',
+    assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--steps', '30', '--quiet',
                  '--attach', str(model)]) == 1  # the recordings do not even exist: not read
     err = capsys.readouterr().err
     assert 'this cross-validation is not of how that model was trained (its folds trained ' \
@@ -227,7 +227,7 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
               'restart_period': 30, 'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1}
     (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
     out = tmp_path / 'cv'
-    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+    assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--out', str(out),
                  '--quiet', '--attach', str(model_file)]) == 0
     report = json.loads((out / 'crossval.json').read_text())
     assert list(report['recordings']) == ['rec0', 'rec1', 'rec2']
@@ -259,10 +259,10 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     import shutil
     shutil.rmtree(out / 'fold1')
     kept = (out / 'fold0' / 'network.safetensors').stat().st_mtime_ns
-    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+    assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--out', str(out),
                  '--quiet', '--fold', '1']) == 0
     assert (out / 'fold1' / 'calibrated.safetensors').is_file()
-    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+    assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--out', str(out),
                  '--quiet']) == 0
     assert (out / 'fold0' / 'network.safetensors').stat().st_mtime_ns == kept
     assert json.loads((out / 'crossval.json').read_text())['recordings'] == report['recordings']
@@ -272,10 +272,10 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     older = load_model(net0).meta.train_config
     assert older.pop('poses', 'absent') is None
     add_metadata(net0, train_config=older)
-    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+    assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--out', str(out),
                  '--quiet']) == 0
     # models of another recipe are refused, not scored as if this one had made them
-    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(out),
+    assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--out', str(out),
                  '--quiet', '--seed', '7']) == 1
     assert 'trained by another recipe' in capsys.readouterr().err
 
@@ -321,7 +321,7 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
               'window': 1024, 'steps': 10, 'val_every': 10, 'restart_period': 10,
               'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1}
     (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
-    out, args = tmp_path / 'cv', ['crossval', '--config', str(tmp_path / 'r.yaml'), '--quiet']
+    out, args = tmp_path / 'cv', ['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--quiet']
     # one process per fold trains that fold for every seed listed
     assert main(args + ['--out', str(out), '--fold', '1', '--seeds', '3', '5']) == 0
     assert {p.parent.parent.name for p in out.glob('seed*/fold1/network.safetensors')} == {
@@ -366,7 +366,7 @@ def test_crossval_under_torchrun_is_a_clear_error_not_a_crash(tmp_path, monkeypa
         monkeypatch.setenv(key, value)
     (tmp_path / 'r.yaml').write_text(yaml.safe_dump({
         'dataset': 'synthetic', 'data': str(tmp_path), 'sequences': ['a', 'b']}))
-    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--quiet']) == 1
+    assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--quiet']) == 1
     err = capsys.readouterr().err.strip()
     assert 'crossval does not run under torchrun' in err and len(err.splitlines()) == 1
 
@@ -407,7 +407,7 @@ def test_a_shipped_model_is_never_rewritten_by_an_attach_and_refused_before_any_
     before = hashlib.sha256(shipped.read_bytes()).hexdigest()
     (tmp_path / 'r.yaml').write_text(yaml.safe_dump({
         'dataset': 'synthetic', 'data': str(tmp_path), 'sequences': ['rec0', 'rec1']}))
-    for cmd in (['crossval', '--config', str(tmp_path / 'r.yaml'), '--attach', 'euroc'],
+    for cmd in (['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--attach', 'euroc'],
                 ['tune-fusion', '--model', 'euroc', '--baseline', 'euroc_calibrated',
                  '--data', str(tmp_path / 'absent'), '--attach']):
         assert main(cmd) == 1  # the recordings do not even exist: nothing was read
@@ -426,11 +426,11 @@ def test_a_verdict_of_another_recipe_or_of_one_fold_is_not_attached(tmp_path, ca
     model = write_untrained_model(tmp_path / 'm.safetensors', {
         'sample_rate_hz': 100.0, 'train_sequences': ['rec0', 'rec1'],
         'train_config': {'steps': 1800, 'window': 2048, 'increments': [8, 16], 'seed': 3}})
-    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--attach',
+    assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--attach',
                  str(model)]) == 1
     assert ('its folds trained another recipe (they differ in increments, window)'
             in capsys.readouterr().err)
-    assert main(['crossval', '--config', str(tmp_path / 'r.yaml'), '--out', str(tmp_path / 'o'),
+    assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--out', str(tmp_path / 'o'),
                  '--fold', '0', '--attach', str(model)]) == 1
     assert '--attach with --fold: one fold is no verdict' in capsys.readouterr().err
     assert attach_mismatches({'folds': [['rec0'], ['rec1']], 'steps': 1800,

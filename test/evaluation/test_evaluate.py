@@ -114,7 +114,7 @@ def test_a_model_file_without_a_sample_rate_is_refused_by_eval_and_correct(
     for cmd in (['eval', '--model', str(model), '--data', str(SAMPLE_DIR), '--sequences',
                  SAMPLE.name, '--out', str(tmp_path / 'e'), '--baseline', str(calib_file)],
                 ['correct', '--model', str(model), '--input', str(SAMPLE),
-                 '--output', str(tmp_path / 'c.csv'), '--engine', 'streaming']):
+                 '--out', str(tmp_path / 'c.csv'), '--engine', 'streaming']):
         assert main(cmd) == 1
         err = capsys.readouterr().err.strip()
         assert err.endswith('norate.safetensors: model file has no valid sample rate'), err

@@ -130,7 +130,7 @@ def test_torchrun_trains_the_same_model_as_the_built_in_workers(tmp_path):
     recipe.update(data=str(tmp_path), sequences=['rec0', 'rec1'], window=1024, steps=4,
                   val_every=2, restart_period=4, swa_start=2, workers=2, threads=2)
     (tmp_path / 'recipe.yaml').write_text(yaml.safe_dump(recipe))
-    train_args = ['-m', 'denoise_imu_ros.cli', 'train', '--config',
+    train_args = ['-m', 'denoise_imu_ros.cli', 'train', '--recipe',
                   str(tmp_path / 'recipe.yaml'), '--quiet', '--out']
     env = {k: v for k, v in os.environ.items() if k not in ('RANK', 'WORLD_SIZE')}
     subprocess.run([sys.executable, '-m', 'torch.distributed.run', '--standalone',

@@ -146,7 +146,7 @@ def test_calibration_baseline_trains_from_the_same_command(euroc, tmp_path):
     cfg.update(sequences=['MH_01_easy'], window=1024, steps=6, val_every=6, swa_start=3)
     (tmp_path / 'c.yaml').write_text(yaml.safe_dump(cfg))
     out = tmp_path / 'calib.safetensors'
-    assert main(['train', '--config', str(tmp_path / 'c.yaml'), '--data', str(euroc),
+    assert main(['train', '--recipe', str(tmp_path / 'c.yaml'), '--data', str(euroc),
                  '--calibration-only', '--quiet', '--out', str(out)]) == 0
     loaded = load_model(out)
     assert loaded.model.num_trainable() == 12
@@ -201,7 +201,7 @@ def test_workers_and_threads_auto_follow_the_machine(tmp_path, monkeypatch):
 
 def test_workers_option_takes_a_count_or_auto(capsys):
     with pytest.raises(SystemExit):
-        main(['train', '--config', 'x.yaml', '--workers', '0'])
+        main(['train', '--recipe', 'x.yaml', '--workers', '0'])
     assert "'0': a positive number of processes, or auto" in capsys.readouterr().err
 
 
@@ -257,7 +257,7 @@ def test_windows_are_drawn_from_the_head_or_the_whole_of_each_sequence(euroc, wh
 def test_an_unwritable_output_is_refused_before_training(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(train_module, 'load_sequences', lambda cfg: pytest.fail('trained'))
     (tmp_path / 'file').write_text('')
-    assert main(['train', '--config', str(CONFIG), '--out',
+    assert main(['train', '--recipe', str(CONFIG), '--out',
                  str(tmp_path / 'file' / 'model.safetensors')]) == 1
     err = capsys.readouterr().err
     assert 'cannot create the output folder' in err and len(err.splitlines()) == 1
@@ -367,7 +367,7 @@ def test_a_finished_training_is_never_lost_when_its_output_cannot_be_written(
             raise OutputError(f'{path}: cannot write the model file (No space left on device)')
         real(path, model, meta)
     monkeypatch.setattr(train_module, 'save_model', full_disk)
-    assert main(['train', '--config', str(CONFIG), '--out', str(out)]) == 1
+    assert main(['train', '--recipe', str(CONFIG), '--out', str(out)]) == 1
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and 'No space left on device' in err
     kept = Path(err.split('the trained model was kept at ')[1])
@@ -379,7 +379,7 @@ def test_ctrl_c_stops_with_one_line_and_exit_code_130(tmp_path, capsys, monkeypa
     def interrupted(cfg, progress):
         raise KeyboardInterrupt
     monkeypatch.setattr(train_module, 'train', interrupted)
-    assert main(['train', '--config', str(CONFIG), '--out', str(tmp_path / 'm.safetensors')]) \
+    assert main(['train', '--recipe', str(CONFIG), '--out', str(tmp_path / 'm.safetensors')]) \
         == 130
     assert capsys.readouterr().err.strip() == 'denoise-imu train: interrupted'
 

@@ -49,9 +49,11 @@ def test_play_command_feeds_the_node(harness, monkeypatch, tmp_path, capsys, eur
     h = harness(input_queue_depth=1000,
                 **{'qos_overrides./imu/data_raw.subscription.reliability': 'reliable'})
     bag = tmp_path / 'short'
-    assert cli(['convert', str(euroc / 'V1_01_easy'), str(bag), '--duration', '2']) == 0
+    assert cli(['convert', '--input', str(euroc / 'V1_01_easy'), '--out', str(bag),
+                '--duration', '2']) == 0
     result = []
-    thread = threading.Thread(target=lambda: result.append(cli(['play', str(bag), '--rate', '2'])))
+    thread = threading.Thread(target=lambda: result.append(cli(['play', '--input', str(bag),
+                                                                '--rate', '2'])))
     thread.start()
     while thread.is_alive():
         h.executor.spin_once(timeout_sec=0.01)
@@ -70,8 +72,8 @@ def test_sigterm_stops_play_quietly_and_ctrl_c_is_an_interruption(signame):
     import sys
     import time
     env = {**os.environ, 'ROS_DOMAIN_ID': str(DOMAIN)}
-    play = subprocess.Popen([sys.executable, '-m', 'denoise_imu_ros.cli', 'play', str(SAMPLE),
-                             '--wait', '0'], env=env, stdout=subprocess.PIPE,
+    play = subprocess.Popen([sys.executable, '-m', 'denoise_imu_ros.cli', 'play', '--input',
+                             str(SAMPLE), '--wait', '0'], env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE)
     # the signal must come once play is publishing (rclpy's handlers in place), however
     # long the imports take on a loaded machine: its "playing anyway" warning says so

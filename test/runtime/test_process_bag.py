@@ -40,7 +40,7 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
         bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0} if track else None,
         input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0} if track else None,
         train_config={'heading_weight': heading})
-    assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'out'), '--model',
+    assert cli(['process-bag', '--input', str(SAMPLE), '--out', str(tmp_path / 'out'), '--model',
                 str(model_file), '--envelope-guard', guard]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
         topics = {c.topic: c.msgcount for c in reader.connections}
@@ -97,7 +97,8 @@ def test_process_bag_withholds_what_the_node_withholds_on_a_jittered_stretch(
         for t, row in zip(stamps, rec.imu):
             w.write(conn, int(t), TYPESTORE.serialize_cdr(
                 imu_message(int(t), row[:3], row[3:]), IMU_TYPE))
-    assert main(['process-bag', str(tmp_path / 'jittered'), str(tmp_path / 'out'),
+    assert main(['process-bag', '--input', str(tmp_path / 'jittered'), '--out',
+                 str(tmp_path / 'out'),
                  '--model', str(model_file)]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
         written = {c.topic: sorted(t for _, t, _ in reader.messages(connections=[c]))
@@ -113,7 +114,7 @@ def test_process_bag_withholds_what_the_node_withholds_on_a_jittered_stretch(
 def test_process_bag_converts_a_ros1_bag_and_adds_the_outputs(tmp_path, model_file):
     from rosbags.highlevel import AnyReader
     path = write_ros1_bag(tmp_path / 'in.bag')
-    assert main(['process-bag', str(path), str(tmp_path / 'out'), '--model',
+    assert main(['process-bag', '--input', str(path), '--out', str(tmp_path / 'out'), '--model',
                  str(model_file), '--storage', 'sqlite3']) == 0
     with AnyReader([tmp_path / 'out']) as reader:
         topics = {c.topic: c.msgcount for c in reader.connections}
@@ -126,8 +127,8 @@ def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(
     from denoise_imu_ros.data.bags import read_bag
     from denoise_imu_ros.pipeline.online import OnlineDenoiser
     from helpers import write_asl
-    assert main(['convert', str(write_asl(tmp_path / 'a', n_imu=1200)),
-                 str(tmp_path / 'in')]) == 0
+    assert main(['convert', '--input', str(write_asl(tmp_path / 'a', n_imu=1200)),
+                 '--out', str(tmp_path / 'in')]) == 0
     real = OnlineDenoiser.process_imu
     calls = []
 
@@ -137,11 +138,11 @@ def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(
             raise DatasetError('disk full (simulated)')
         return real(self, msg)
     monkeypatch.setattr(OnlineDenoiser, 'process_imu', fail_half_way)
-    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+    assert main(['process-bag', '--input', str(tmp_path / 'in'), '--out', str(tmp_path / 'out'),
                  '--model', str(model_file)]) == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ['a', 'in', 'model.safetensors']
     monkeypatch.setattr(OnlineDenoiser, 'process_imu', real)
-    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+    assert main(['process-bag', '--input', str(tmp_path / 'in'), '--out', str(tmp_path / 'out'),
                  '--model', str(model_file)]) == 0
     assert len(read_bag(tmp_path / 'out', imu_topic='/imu/corrected').imu) == 1200
 
@@ -149,10 +150,11 @@ def test_a_failed_process_bag_leaves_nothing_behind_and_the_retry_works(
 def test_every_offline_tool_refuses_a_stream_at_another_rate(model_file, tmp_path, capsys):
     from helpers import write_asl
     slow = write_asl(tmp_path / 'slow', n_imu=2000, imu_rate=100.0)
-    assert main(['convert', str(slow), str(tmp_path / 'slow_bag')]) == 0
+    assert main(['convert', '--input', str(slow), '--out', str(tmp_path / 'slow_bag')]) == 0
     capsys.readouterr()
-    for cmd in (['process-bag', str(tmp_path / 'slow_bag'), str(tmp_path / 'out')],
-                ['correct', '--input', str(tmp_path / 'slow_bag'), '--output',
+    for cmd in (['process-bag', '--input', str(tmp_path / 'slow_bag'), '--out',
+                 str(tmp_path / 'out')],
+                ['correct', '--input', str(tmp_path / 'slow_bag'), '--out',
                  str(tmp_path / 'o.csv')],
                 ['eval', '--data', str(tmp_path), '--sequences', 'slow_bag', '--out',
                  str(tmp_path / 'e'), '--no-plots'],
@@ -189,7 +191,7 @@ def test_a_non_finite_input_covariance_is_never_published(harness, tmp_path):
             msg = msgs.imu(BAG_TYPES, msgs.header(BAG_TYPES, int(t), 'imu'), [0, 0, 0.1],
                            [0, 0, 9.81], accel_cov=nan_cov)
             w.write(conn, int(t), TYPESTORE.serialize_cdr(msg, IMU_TYPE))
-    assert cli(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+    assert cli(['process-bag', '--input', str(tmp_path / 'in'), '--out', str(tmp_path / 'out'),
                 '--model', str(model)]) == 0
     with AnyReader([tmp_path / 'out']) as reader:
         conns = [c for c in reader.connections if c.topic in ('/imu/corrected', '/imu/data')]
@@ -227,9 +229,10 @@ def test_receive_order_jitter_drops_nothing_and_qos_and_compression_are_kept(
             m = msgs.copy_imu(BAG_TYPES, imu[k])
             w.write(conn, msgs.stamp_ns(m.header) + int(latency[k]),
                     TYPESTORE.serialize_cdr(m, IMU_TYPE))
-    assert cli(['process-bag', str(tmp_path / 'jittered'), str(tmp_path / 'out'),
+    assert cli(['process-bag', '--input', str(tmp_path / 'jittered'), '--out',
+                str(tmp_path / 'out'),
                 '--model', str(model_file), '--compress']) == 0
-    assert cli(['process-bag', str(SAMPLE), str(tmp_path / 'ordered'),
+    assert cli(['process-bag', '--input', str(SAMPLE), '--out', str(tmp_path / 'ordered'),
                 '--model', str(model_file)]) == 0
 
     def corrected(bag):
@@ -257,15 +260,17 @@ def test_receive_order_jitter_drops_nothing_and_qos_and_compression_are_kept(
     assert qos['/tf_static'][0].durability == QosDurability.TRANSIENT_LOCAL
     size = sum(f.stat().st_size for f in (tmp_path / 'out').iterdir())
     plain = tmp_path / 'plain'
-    assert cli(['process-bag', str(tmp_path / 'jittered'), str(plain), '--model',
+    assert cli(['process-bag', '--input', str(tmp_path / 'jittered'), '--out', str(plain),
+                '--model',
                 str(model_file)]) == 0
     assert size < 0.7 * sum(f.stat().st_size for f in plain.iterdir())
     # an input compressed inside its MCAP chunks (metadata.yaml says nothing) stays so
     from denoise_imu_ros.data.bags import is_compressed, open_bag
     from helpers import write_asl
-    assert cli(['convert', str(write_asl(tmp_path / 'asl', n_imu=1200)), str(tmp_path / 'zstd'),
+    assert cli(['convert', '--input', str(write_asl(tmp_path / 'asl', n_imu=1200)), '--out',
+                str(tmp_path / 'zstd'),
                 '--compress']) == 0
-    assert cli(['process-bag', str(tmp_path / 'zstd'), str(tmp_path / 'kept'),
+    assert cli(['process-bag', '--input', str(tmp_path / 'zstd'), '--out', str(tmp_path / 'kept'),
                 '--model', str(model_file)]) == 0
     with open_bag(tmp_path / 'kept') as reader:
         assert is_compressed(reader)
@@ -277,36 +282,41 @@ def test_a_bag_that_has_an_output_topic_already_is_refused_or_namespaced(
     from denoise_imu_ros.runtime.process_bag import output_topics
     from rosbags.highlevel import AnyReader
     from helpers import write_asl
-    assert main(['convert', str(write_asl(tmp_path / 'a', n_imu=1200)), str(tmp_path / 'in'),
+    assert main(['convert', '--input', str(write_asl(tmp_path / 'a', n_imu=1200)), '--out',
+                 str(tmp_path / 'in'),
                  '--imu-topic', '/imu/data']) == 0
     capsys.readouterr()
-    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'),
+    assert main(['process-bag', '--input', str(tmp_path / 'in'), '--out', str(tmp_path / 'out'),
                  '--model', str(model_file)]) == 1
     assert 'it has /imu/data already' in capsys.readouterr().err
     assert not (tmp_path / 'out').exists()
-    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'), '--model',
+    assert main(['process-bag', '--input', str(tmp_path / 'in'), '--out', str(tmp_path / 'out'),
+                 '--model',
                  str(model_file), '--namespace', '/denoised']) == 0
     with AnyReader([tmp_path / 'out']) as reader:
         topics = {c.topic: c.msgcount for c in reader.connections}
     assert topics == {'/imu/data': 1200, '/groundtruth/pose': 1200,
                       '/denoised/imu/corrected': 1200, '/denoised/imu/data': 1200,
                       '/denoised/imu/attitude': 1200}
-    assert main(['process-bag', str(tmp_path / 'out'), str(tmp_path / 'again'), '--model',
+    assert main(['process-bag', '--input', str(tmp_path / 'out'), '--out',
+                 str(tmp_path / 'again'), '--model',
                  str(model_file), '--namespace', '/denoised']) == 1  # its own outputs now
     err = capsys.readouterr().err
     assert 'it has /denoised/imu/attitude' in err and 'e.g. --namespace /denoised2 (' in err
     assert output_topics('robot/') == ('/robot/imu/corrected', '/robot/imu/data',
                                        '/robot/imu/attitude')
-    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'o2'), '--model',
+    assert main(['process-bag', '--input', str(tmp_path / 'in'), '--out', str(tmp_path / 'o2'),
+                 '--model',
                  str(model_file), '--namespace', '/9bad']) == 1
     assert 'not a ROS namespace' in capsys.readouterr().err
 
 
 def test_a_ros2_bag_folder_named_like_a_ros1_bag_is_read_as_ros2(tmp_path, model_file):
     from helpers import write_asl
-    assert main(['convert', str(write_asl(tmp_path / 'a', n_imu=1200)),
-                 str(tmp_path / 'in.bag')]) == 0
-    assert main(['process-bag', str(tmp_path / 'in.bag'), str(tmp_path / 'out'),
+    assert main(['convert', '--input', str(write_asl(tmp_path / 'a', n_imu=1200)),
+                 '--out', str(tmp_path / 'in.bag')]) == 0
+    assert main(['process-bag', '--input', str(tmp_path / 'in.bag'), '--out',
+                 str(tmp_path / 'out'),
                  '--model', str(model_file)]) == 0
     from denoise_imu_ros.data.bags import read_bag
     assert len(read_bag(tmp_path / 'in.bag').imu) == len(read_bag(
@@ -396,7 +406,8 @@ def test_imu_stamps_on_two_clocks_are_refused_in_one_line_and_nothing_is_written
             t = t0 + 5_000_000 * k + (12 * 365 * 86400 * 10**9 if k % 10 == 9 else 0)
             m.header = msgs.header(BAG_TYPES, t, 'imu0')
             w.write(conn, t0 + 5_000_000 * k, TYPESTORE.serialize_cdr(m, IMU_TYPE))
-    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'), '--model',
+    assert main(['process-bag', '--input', str(tmp_path / 'in'), '--out', str(tmp_path / 'out'),
+                 '--model',
                  str(model_file)]) == 1
     err = capsys.readouterr().err.strip()
     assert 'its IMU stamps jump between clocks' in err and 'two clocks on one topic?' in err
@@ -409,7 +420,8 @@ def test_sigterm_during_process_bag_leaves_no_partial_bag(tmp_path):
     import sys
     import time
     proc = subprocess.Popen([sys.executable, '-m', 'denoise_imu_ros.cli', 'process-bag',
-                             str(SAMPLE), str(tmp_path / 'out'), '--model', 'euroc'],
+                             '--input', str(SAMPLE), '--out', str(tmp_path / 'out'),
+                             '--model', 'euroc'],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 60
     while not list(tmp_path.glob('.out.*')) and time.monotonic() < deadline:
@@ -462,7 +474,8 @@ def test_process_bag_with_the_nodes_params_file_writes_what_that_node_publishes(
     path = tmp_path / 'params.yaml'
     path.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
         'model': str(model_file), **params}}}))
-    assert main(['process-bag', str(tmp_path / 'in'), str(tmp_path / 'out'), '--params-file',
+    assert main(['process-bag', '--input', str(tmp_path / 'in'), '--out', str(tmp_path / 'out'),
+                 '--params-file',
                  str(path)]) == 0
     written = {}
     with AnyReader([tmp_path / 'out']) as reader:

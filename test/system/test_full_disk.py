@@ -45,15 +45,17 @@ def test_a_full_disk_ends_every_writing_command_with_one_line_and_nothing_half_w
     write_asl(data / 'rec', n_imu=4000)
     model = write_untrained_model(tmp_path / 'model.safetensors', {'sample_rate_hz': 200.0})
     subprocess.run([sys.executable, '-m', 'denoise_imu_ros.cli', 'convert',
-                    str(data / 'rec'), str(data / 'bag')], check=True, cwd=tmp_path)
+                    '--input', str(data / 'rec'), '--out', str(data / 'bag')],
+                   check=True, cwd=tmp_path)
     before = _digest(tmp_path)
     out = tmp_path / 'out'
     out.mkdir()
     commands = {
         'correct': ['correct', '--model', str(model), '--input', str(data / 'rec'),
-                    '--output', str(out / 'rec.csv')],
-        'convert': ['convert', str(data / 'rec'), str(out / 'converted')],
-        'process-bag': ['process-bag', str(data / 'bag'), str(out / 'processed'),
+                    '--out', str(out / 'rec.csv')],
+        'convert': ['convert', '--input', str(data / 'rec'), '--out', str(out / 'converted')],
+        'process-bag': ['process-bag', '--input', str(data / 'bag'), '--out',
+                        str(out / 'processed'),
                         '--model', str(model)],
         'eval': ['eval', '--model', str(model), '--data', str(data), '--sequences', 'rec',
                  '--out', str(out / 'eval')],

@@ -27,7 +27,7 @@ def test_train_on_your_robot_at_100_hz_with_20_hz_poses(euroc, tmp_path, capsys)
                     '--sequences', 'V1_02_medium', 'V2_01_easy', 'V1_03_difficult'],
                    check=True, capture_output=True)
     # check-data: the rates, the paper's increments at this rate, a usable recording
-    assert main(['check-data', str(bags / 'V1_02_medium'), *TOPICS, '--json']) == 0
+    assert main(['check-data', '--input', str(bags / 'V1_02_medium'), *TOPICS, '--json']) == 0
     report = json.loads(capsys.readouterr().out.splitlines()[-1])
     assert abs(report['imu_rate_hz'] - 100) < 0.5 and abs(report['pose_rate_hz'] - 20) < 0.5
     assert report['paper_increments'] == [8, 16] and report['usable'] == 'yes'
@@ -43,9 +43,9 @@ def test_train_on_your_robot_at_100_hz_with_20_hz_poses(euroc, tmp_path, capsys)
     recipe.write_text(text.replace('swa_start: 1200', 'swa_start: 30'))
     # train, then crossval with the same recipe, attached to the model
     model = tmp_path / 'my_robot.safetensors'
-    assert main(['train', '--config', str(recipe), '--workers', '1', '--out', str(model),
+    assert main(['train', '--recipe', str(recipe), '--workers', '1', '--out', str(model),
                  '--quiet']) == 0
-    assert main(['crossval', '--config', str(recipe), '--workers', '1', '--attach',
+    assert main(['crossval', '--recipe', str(recipe), '--workers', '1', '--attach',
                  str(model), '--quiet']) == 0  # as long as the model: the folds judge it
     loaded = load_model(model)
     assert abs(loaded.meta.sample_rate_hz - 100) < 0.5
@@ -59,7 +59,7 @@ def test_train_on_your_robot_at_100_hz_with_20_hz_poses(euroc, tmp_path, capsys)
     assert figures['network']['aoe_deg'] < figures['raw']['aoe_deg'] / 4
     # a 200 Hz recording is refused by the 100 Hz model (the one rate policy)
     assert main(['correct', '--model', str(model), '--input', str(euroc / 'V1_03_difficult'),
-                 '--output', str(tmp_path / 'c.csv')]) == 1
+                 '--out', str(tmp_path / 'c.csv')]) == 1
     assert 'IMU rate 200.0 Hz, the model was trained at 100.0 Hz' in capsys.readouterr().err
     # the node runs it on the 100 Hz stream: no rate error, the batch network's output
     rec = read_bag(bags / 'V1_03_difficult', '/imu/data_raw', '/vio/pose')

@@ -55,12 +55,13 @@ def test_the_offline_commands_run_without_torch(no_torch_env, tmp_path, command)
         'sample_rate_hz': 200.0, 'rest_bias': RestBiasSettings().to_dict()})
     args, expect = {
         'rest-model': (['--like', str(rest), '--out', str(tmp_path / 'r')], 'wrote'),
-        'convert': ([str(write_asl(tmp_path / 'asl', n_imu=2000)), str(tmp_path / 'bag')],
-                    'wrote'),
-        'process-bag': ([str(SAMPLE), str(tmp_path / 'out'), '--model', 'euroc'], 'wrote'),
-        'correct': (['--model', 'euroc', '--input', str(SAMPLE), '--output',
+        'convert': (['--input', str(write_asl(tmp_path / 'asl', n_imu=2000)),
+                     '--out', str(tmp_path / 'bag')], 'wrote'),
+        'process-bag': (['--input', str(SAMPLE), '--out', str(tmp_path / 'out'), '--model',
+                         'euroc'], 'wrote'),
+        'correct': (['--model', 'euroc', '--input', str(SAMPLE), '--out',
                      str(tmp_path / 'c.csv'), '--engine', 'streaming'], 'wrote 18000'),
-        'check-data': ([str(SAMPLE)], 'verdict: usable for training'),
+        'check-data': (['--input', str(SAMPLE)], 'verdict: usable for training'),
         'init-recipe': (['--data', str(SAMPLE.parent), '--sequences', SAMPLE.name, '--out',
                          str(tmp_path / 'recipe.yaml')], 'wrote')}[command]
     run = _cli(no_torch_env, command, *args)
@@ -69,9 +70,9 @@ def test_the_offline_commands_run_without_torch(no_torch_env, tmp_path, command)
 
 def test_play_runs_without_torch(no_torch_env, tmp_path):
     bag = tmp_path / 'bag'
-    assert _cli(no_torch_env, 'convert', str(write_asl(tmp_path / 'asl', n_imu=200)),
-                str(bag)).returncode == 0
-    run = _cli(no_torch_env, 'play', str(bag), '--rate', '10', '--wait', '0')
+    assert _cli(no_torch_env, 'convert', '--input', str(write_asl(tmp_path / 'asl', n_imu=200)),
+                '--out', str(bag)).returncode == 0
+    run = _cli(no_torch_env, 'play', '--input', str(bag), '--rate', '10', '--wait', '0')
     assert run.returncode == 0 and 'published 200 IMU messages' in run.stdout, run.stderr
 
 
