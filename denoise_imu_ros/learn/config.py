@@ -100,6 +100,10 @@ class TrainConfig:
     # what stays constant within a recording but differs between them (the turn-on bias
     # estimate's error in motion, a VIO's drift) is not learnt as the gyro's
     recording_bias: bool = False
+    # False: the network sees the gyro only (the accelerometer's channels normalised to 0),
+    # so what it learns depends on the rotation rate alone (scale, misalignment,
+    # non-linearity), never on gravity or on how hard the IMU accelerates
+    accel_input: bool = True
     steps: int = 1800                  # one step = one batch of every sequence
     lr: float = 0.01                   # Adam
     weight_decay: float = 0.1          # L2 added to the gradient (not AdamW)

@@ -47,6 +47,7 @@ from ..pipeline import envelope, rest_bias
 from ..pipeline.vertical import drop_vertical, drops
 
 RANK_SEED_STRIDE = 7919  # data-parallel process r draws its dropout masks from seed + r * this
+UNUSED_INPUT_STD = 1e30  # input_std of a channel the network must not see (accel_input: false)
 
 
 # ----------------------------------------------------------------------------------
@@ -241,7 +242,10 @@ def build_model(cfg: TrainConfig, seqs: list[Sequence],
     flat = torch.tensor(np.concatenate([s.imu[:m] for s, m in
                                         zip(seqs, window_lengths(seqs, cfg))]),
                         dtype=torch.float32)
-    model.set_normalization(flat.mean(0), flat.std(0, unbiased=False))
+    std = flat.std(0, unbiased=False)
+    if not cfg.accel_input:  # normalised to ~1e-30 of a unit: no weight can use them
+        std[3:] = UNUSED_INPUT_STD
+    model.set_normalization(flat.mean(0), std)
     if cfg.recording_bias:  # the recordings' own biases (_run) hold every constant
         constant = model.bias if cfg.calibration_only else model.net[-1].bias
         with torch.no_grad():

@@ -470,6 +470,20 @@ def test_a_network_learning_recording_biases_keeps_its_output_layer_s_bias_at_ze
     assert set(result.meta['recording_bias_rad_s']) == {'MH_01_easy', 'V1_02_medium'}
 
 
+def test_a_gyro_only_network_s_output_does_not_move_with_the_accelerometer(euroc):
+    """accel_input: false: whatever the weights, the correction is the gyro's alone."""
+    cfg = _short(euroc, accel_input=False)
+    seqs = [load_sequence(euroc / name) for name in cfg.sequences]
+    model = build_model(cfg, seqs, rank=0)[0].eval()
+    u = torch.tensor(seqs[0].imu[:2000], dtype=torch.float32)[None]
+    shaken = u.clone()
+    shaken[..., 3:] += 80.0 * torch.randn_like(shaken[..., 3:])
+    with torch.no_grad():
+        torch.testing.assert_close(model(shaken), model(u), rtol=0, atol=1e-6)
+        both = build_model(_short(euroc), seqs, rank=0)[0].eval()
+        assert (both(shaken) - both(u)).abs().max() > 1e-3  # the accelerometer counts there
+
+
 def test_the_published_gyro_residual_of_keyframes_is_judged_between_their_stamps(euroc):
     from denoise_imu_ros.core.architecture import ModelConfig
     from denoise_imu_ros.data.asl import read_asl
