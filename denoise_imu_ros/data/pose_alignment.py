@@ -25,7 +25,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from typing import Any
-import warnings
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -35,7 +34,7 @@ from .timebase import poses_at, spans
 from ..core.errors import DatasetError
 from ..core.metrics import integrate
 from ..core.records import Recording, Sequence
-from ..core.rotation import conjugate_arrays, multiply_arrays
+from ..core.rotation import align, conjugate_arrays, multiply_arrays
 
 RATE_WINDOW_S = 0.05       # window of the mean rates compared (at least two pose periods)
 GRID_S = 1e-3              # pose-rate grid
@@ -109,12 +108,16 @@ class Rates:
 
 def fit_frame(imu: np.ndarray, pose: np.ndarray) -> tuple[Rotation, np.ndarray, float]:
     """Rotation R and bias b with imu = R pose + b (least squares); RMS residual."""
+    r, bias, rms = _fit(imu, pose)
+    return Rotation.from_matrix(r), bias, rms
+
+
+def _fit(imu: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """Return :func:`fit_frame`'s fit with R as a matrix (the offset search's inner loop)."""
     mi, mp = imu.mean(0), pose.mean(0)
-    with warnings.catch_warnings():  # degenerate motion: reported as missing excitation
-        warnings.simplefilter('ignore', UserWarning)
-        rot, rssd = Rotation.align_vectors(imu - mi, pose - mp)
     # the residual imu - R pose - b is the centred one, whose root sum of squares is rssd
-    return rot, mi - rot.apply(mp), float(rssd / math.sqrt(imu.size))
+    r, rssd = align(imu - mi, pose - mp)
+    return r, mi - r @ mp, rssd / math.sqrt(imu.size)
 
 
 def robust_fit(imu: np.ndarray,
@@ -126,11 +129,11 @@ def robust_fit(imu: np.ndarray,
     initialising, a relocalisation), unless more than OUTLIER_MAX_FRACTION are: then the
     poses do not follow the gyro, and the residual of them all says so.
     """
-    rot, bias, rms = fit_frame(imu, pose)
-    residual = np.linalg.norm(imu - rot.apply(pose) - bias, axis=1)
+    r, bias, rms = _fit(imu, pose)
+    residual = np.linalg.norm(imu - pose @ r.T - bias, axis=1)
     out = residual > OUTLIER_FACTOR * float(np.median(residual))
     if not out.any() or out.mean() > OUTLIER_MAX_FRACTION:
-        return rot, bias, rms, np.zeros(len(imu), dtype=bool)
+        return Rotation.from_matrix(r), bias, rms, np.zeros(len(imu), dtype=bool)
     return (*fit_frame(imu[~out], pose[~out]), out)
 
 

@@ -11,6 +11,9 @@ stamp and marked invalid inside its holes.
 
 from __future__ import annotations
 
+from collections import OrderedDict
+import hashlib
+
 import numpy as np
 from scipy.spatial.transform import Rotation, RotationSpline, Slerp
 
@@ -25,6 +28,11 @@ from ..core.records import Recording, Sequence
 GT_GAP_FACTOR = 2.5
 MAX_POSE_PERIOD_S = 1.0  # sparser poses cannot score an attitude between them (two, 45 s apart)
 MS_HINT_S = 10.0  # poses this far apart (median) are more likely stamped in ms than seconds
+# The splines of the last few pose stretches, by their content: checking a recording
+# interpolates the same poses at several sets of stamps, and a spline over 10^5-10^6
+# poses costs far more to fit than its knots cost to hash
+_SPLINES: OrderedDict[str, RotationSpline] = OrderedDict()
+SPLINES_KEPT = 2
 
 
 def _between(rec: Recording, t0: int, t1: int) -> Recording:
@@ -98,12 +106,25 @@ def poses_at(rec: Recording, stamps_ns: np.ndarray,
     for lo, hi in zip(np.r_[0, breaks], np.r_[breaks, len(t_gt)]):
         inside = valid & (rel >= rel_gt[lo]) & (rel <= rel_gt[hi - 1])
         if hi - lo >= 3 and inside.any():
-            spline = RotationSpline(rel_gt[lo:hi], rot_gt[lo:hi])
+            spline = _spline(rel_gt[lo:hi], rec.gt_quat[lo:hi])
             quat[inside] = spline(rel[inside]).as_quat()
             splined |= inside
     if not splined.all():  # holes (never trusted) and stretches too short for a spline
         quat[~splined] = Slerp(rel_gt, rot_gt)(rel[~splined]).as_quat()
     return quat, pos, valid
+
+
+def _spline(t: np.ndarray, quat: np.ndarray) -> RotationSpline:
+    """Return the cubic rotation spline through these knots, fitted once for equal ones."""
+    key = hashlib.blake2b(np.ascontiguousarray(t, np.float64).tobytes()
+                          + np.ascontiguousarray(quat, np.float64).tobytes()).hexdigest()
+    if key in _SPLINES:
+        _SPLINES.move_to_end(key)
+        return _SPLINES[key]
+    spline = _SPLINES[key] = RotationSpline(t, Rotation.from_quat(quat))
+    while len(_SPLINES) > SPLINES_KEPT:
+        _SPLINES.popitem(last=False)
+    return spline
 
 
 def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,

@@ -2,7 +2,10 @@
 # SPDX-License-Identifier: Apache-2.0
 """Poses onto the IMU's stamps: too sparse a stream refused, the IMU before them kept."""
 
+import dataclasses
+
 from denoise_imu_ros.core.errors import DatasetError
+from denoise_imu_ros.core.records import Recording
 from denoise_imu_ros.data.load import load_sequence
 from helpers import write_asl
 import numpy as np
@@ -60,3 +63,20 @@ def test_each_pose_marks_the_imu_sample_nearest_its_stamp_within_half_a_period(
     seq = load_sequence(write_asl(tmp_path / 'r', n_imu=2000, gt_rate=20.0))
     assert 0.09 < seq.pose_at.mean() < 0.11  # a pose every 10th sample
     assert np.array_equal(seq.tail(100).pose_at, seq.pose_at[100:])
+
+
+def test_poses_at_equal_stamps_are_those_of_a_fresh_spline_each_time():
+    """The splines kept by content never serve other poses, and serve the same ones alike."""
+    from denoise_imu_ros.data import timebase
+    from scipy.spatial.transform import Rotation, RotationSpline
+    t = np.arange(0, 2_000_000_000, 10_000_000)  # 100 Hz poses
+    stamps = np.arange(0, 1_990_000_000, 2_500_000)
+    quat = Rotation.from_rotvec(np.outer(np.sin(t * 1e-9), [0.3, -0.2, 0.9])).as_quat()
+    rec = Recording('r', 'r', stamps, np.zeros((len(stamps), 6)), t, quat, np.zeros((len(t), 3)))
+    fresh = RotationSpline(t * 1e-9, Rotation.from_quat(quat))(stamps * 1e-9).as_quat()
+    for _ in range(2):
+        got = timebase.poses_at(rec, stamps)[0]
+        np.testing.assert_array_equal(got, fresh)
+    other = dataclasses.replace(rec, gt_quat=quat[::-1].copy())  # same stamps, other poses
+    assert not np.allclose(timebase.poses_at(other, stamps)[0], fresh)
+    assert len(timebase._SPLINES) <= timebase.SPLINES_KEPT
