@@ -152,9 +152,15 @@ class RestBias(BiasTracker):
         self.still_samples = 0  # samples detected still since the last reset
 
     def reset(self) -> None:
-        """Start again from the prior (a new run: another power-on, a bag loop)."""
+        """Start again from the prior (a new run: another power-on)."""
         super().reset()
         self.still_samples = 0
+
+    def restart(self) -> None:
+        """Look for stillness afresh (its filters restarted), keeping the estimate found."""
+        found = _hold(self._vqf, None)
+        super().reset()
+        _hold(self._vqf, found)
 
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
         """Take one sample (rad/s, m/s^2); return the bias estimate after it (3,)."""

@@ -14,7 +14,7 @@ compiled step). :class:`Pipeline` runs the stages a model file has in the order 
 ==============  =========================  =========================  ===================
 stage           per sample                 over a recording           reset by
 ==============  =========================  =========================  ===================
-turn-on bias    ``RestBias.update``        ``remove_rest_bias``       start, jump
+turn-on bias    ``RestBias.update``        ``remove_rest_bias``       start, jump (kept)
 envelope check  ``Guard.check``            ``too_fast``               start, gap, jump
 network         ``StreamingCorrector``     torch's ``GyroNet``        start, gap, jump
 bias tracking   ``BiasTracker.update``     ``tracked_bias``           start, jump
@@ -26,8 +26,10 @@ orientation     ``GravityFilter.update``   ``fuse``                   start, jum
 
 A gap restarts the network's history (and the envelope's view of it) but not the
 estimates of the same run; the open-loop attitude is held across it and the orientation
-takes no gyro step (gravity corrects its tilt). A request (the node's ``reset_attitude``
-service) restarts the attitude and the orientation from the next accelerometer only.
+takes no gyro step (gravity corrects its tilt). A jump (a clock stepped back, a bag
+replayed) restarts everything but the turn-on bias found, the power-on's, whose
+stillness is looked for afresh. A request (the node's ``reset_attitude`` service)
+restarts the attitude and the orientation from the next accelerometer only.
 """
 
 from __future__ import annotations
@@ -56,7 +58,7 @@ class Event(str, Enum):
 
     START = 'start'          # first sample: network warm-up, attitude from gravity
     GAP = 'gap'              # stamps too far apart: network warm-up, attitude held
-    TIME_JUMP = 'time_jump'  # stamps jumped back, or a minute ahead: everything reset
+    TIME_JUMP = 'time_jump'  # stamps jumped back, or a minute ahead: a new run
     REQUESTED = 'reset_attitude'  # the node's service: attitude and orientation only
 
 
@@ -108,7 +110,7 @@ class Flow:
 class Stage:
     """One stage: :meth:`step` per sample, :meth:`run` over a recording, :meth:`reset`."""
 
-    def reset(self) -> None:
+    def reset(self, events: frozenset[Event] = RUN) -> None:
         """Start again at one of the events :data:`STAGES` gives it."""
 
     def step(self, flow: Flow) -> bool | None:
@@ -127,9 +129,17 @@ class TurnOnBias(Stage):
         self.settings, self.rate_hz = settings, rate_hz
         self.estimator = rest_bias.RestBias(settings, rate_hz)
 
-    def reset(self) -> None:
-        """Start from the prior again: another run, perhaps another power-on."""
-        self.estimator.reset()
+    def reset(self, events: frozenset[Event] = RUN) -> None:
+        """
+        Start from the prior again at a start; after a clock step, keep what was found.
+
+        A clock stepped back (NTP) or a bag replayed in a loop is the same power-on: the
+        stillness is looked for afresh, the estimate and its certainty kept till then.
+        """
+        if Event.START in events:
+            self.estimator.reset()
+        else:
+            self.estimator.restart()
 
     def step(self, flow: Flow) -> None:
         """Remove this sample's estimate from its gyro."""
@@ -146,7 +156,7 @@ class EnvelopeCheck(Stage):
     def __init__(self, guard: envelope.Guard) -> None:
         self.guard = guard
 
-    def reset(self) -> None:
+    def reset(self, events: frozenset[Event] = RUN) -> None:
         """Forget the inputs seen: the network's history restarted."""
         self.guard.reset()
 
@@ -169,7 +179,7 @@ class Network(Stage):
             raise ValueError('a network stage needs its per-sample engine or a batch form')
         self.engine, self.batch = engine, batch
 
-    def reset(self) -> None:
+    def reset(self, events: frozenset[Event] = RUN) -> None:
         """Warm up again: the history is filled with the next input."""
         if self.engine is not None:
             self.engine.reset()
@@ -191,7 +201,7 @@ class BiasTrackingStage(Stage):
         self.settings, self.rate_hz = settings, rate_hz
         self.tracker = rest_bias.BiasTracker(settings, rate_hz)
 
-    def reset(self) -> None:
+    def reset(self, events: frozenset[Event] = RUN) -> None:
         """Start the estimate again: another run."""
         self.tracker.reset()
 
@@ -231,7 +241,7 @@ class VerticalDrop(Stage):
         self.rate_hz = rate_hz
         self.vertical = Vertical(rate_hz)
 
-    def reset(self) -> None:
+    def reset(self, events: frozenset[Event] = RUN) -> None:
         """Find the vertical again: another run."""
         self.vertical.reset()
 
@@ -258,7 +268,7 @@ class Attitude(Stage):
         self._attitude: rotation.Quat | None = None
         self._last: np.ndarray | None = None
 
-    def reset(self) -> None:
+    def reset(self, events: frozenset[Event] = RUN) -> None:
         """Take the next sample's accelerometer for the tilt, yaw 0."""
         self._attitude = None
 
@@ -294,7 +304,7 @@ class Orientation(Stage):
         self.rate_hz, self.settings = rate_hz, settings
         self.filter = GravityFilter(rate_hz, settings)
 
-    def reset(self) -> None:
+    def reset(self, events: frozenset[Event] = RUN) -> None:
         """Take the next sample's accelerometer for the tilt, yaw 0."""
         self.filter.reset()
 
@@ -346,7 +356,7 @@ class Pipeline:
         if events:
             for stage, resets in self._resets:
                 if not resets.isdisjoint(events):
-                    stage.reset()
+                    stage.reset(events)
         for stage in self.stages:
             if stage.step(flow) is False:
                 return False

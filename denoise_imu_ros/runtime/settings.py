@@ -83,7 +83,8 @@ class Settings:
         MAX_GAP_FACTOR, 'A stamp gap above this many nominal periods restarts the network '
         'history (warm-up) and holds the attitude across the gap.', floats=(1.5, 1000.0))
     time_jump_threshold: float = _p(
-        1.0, 's; a stamp this far behind the last one resets everything (bag loop); '
+        1.0, 's; a stamp this far behind the last one restarts the run (a bag loop, a clock '
+        'stepped back), the turn-on bias found kept; '
         'smaller backward steps are dropped as out of order.', floats=(0.0, 3600.0))
     rate_tolerance: float = _p(
         RATE_TOLERANCE, "Relative input-rate mismatch to the model rate (the stream's median "

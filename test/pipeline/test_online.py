@@ -370,10 +370,26 @@ def test_with_a_rest_bias_the_model_sees_what_the_batch_path_feeds_it(seq, model
                            settings)
     assert later[0].event == Event.GAP
     np.testing.assert_array_equal(den.rest.estimate()[0], both['bias'][-1])
-    # a time jump is a new run (perhaps a new power-on): from the prior again
-    _run(den, seq.stamp_ns[:10], seq.imu[:10])
-    np.testing.assert_array_equal(den.rest.estimate()[0],
-                                  rest_bias_batch(seq.imu[:10], 200.0, settings)['bias'][-1])
+
+
+def test_a_clock_stepped_back_keeps_the_turn_on_bias_found(model):
+    """An NTP step or a bag replayed is the same power-on: not the prior again in motion."""
+    from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
+    from denoise_imu_ros.pipeline.stages import Attitude, Network, Pipeline, TurnOnBias
+    rng, bias = np.random.default_rng(3), np.array([0.01, -0.02, 0.015])
+    den = OnlineDenoiser(Pipeline([TurnOnBias(RestBiasSettings(), 200.0), Attitude(),
+                                   Network(StreamingCorrector.from_module(model))]), 200.0)
+    stamps = 10**9 + np.arange(1000) * 5_000_000
+    still = np.hstack([bias + 1e-4 * rng.normal(size=(1000, 3)),
+                       np.tile([0.0, 0.0, 9.81], (1000, 1))])
+    _run(den, stamps, still)
+    found = den.rest.estimate()
+    np.testing.assert_allclose(found[0], bias, atol=1e-3)  # 5 s still: the bias found
+    turning = still.copy()
+    turning[:, :3] += np.outer(np.sin(np.arange(1000) / 50), [0.3, -0.5, 0.8])
+    replay = _run(den, stamps[:600], turning[:600])  # the clock steps back 5 s, in motion
+    assert replay[0].event == Event.TIME_JUMP
+    np.testing.assert_array_equal(den.rest.estimate()[0], found[0])  # no stillness since
 
 
 def test_a_dropped_non_finite_output_still_counts_its_input_for_the_guard():
