@@ -1,0 +1,155 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The network's output blended with the classical pipeline's, on a session crossval's folds.
+
+For each held-out trial of ``crossval --sessions ... --seeds ...`` (its models in OUT),
+each seed's and the ensemble's guarded, tracked output N (as the product computes it) and
+the classical pipeline's gyro T (the gyro less its turn-on bias, its bias tracked as the
+fold's tracker-only row) are combined per sample:
+- ``blend W``: T + W (N - T), with T alone where the fallback rule flags the sample
+  (``sustained``: the causal 1 s mean of ||a| - g| above the largest any training trial
+  reached; ``envelope``: that or the model's own envelope; ``none``);
+- ``gravity``: N or T, whichever kept the accelerometer's direction steadier in its own
+  open-loop world frame over the last WIN s (low-passed over LP s): a causal selector.
+Prints, per fold and setting, the mean against tracker only, the mean per-trial ratio and
+the worst, for the ensemble and each seed. Run: scripts/reproduce/blend_fallback.py OUT
+../shared/data/broad --weights 1 0.7 0.5 0.3 --fallback sustained [--gravity LP WIN]
+"""
+
+import argparse
+import importlib.util
+import json
+from pathlib import Path
+
+from denoise_imu_ros.core.metrics import integrate, score
+from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.evaluation.crossval import CANDIDATES
+from denoise_imu_ros.learn.checkpoint import load_model
+from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.pipeline import envelope, stages
+from denoise_imu_ros.pipeline.rest_bias import track_bias, tracked_bias
+import numpy as np
+
+WINDOW = 286  # samples of the sustained-acceleration mean (1 s at BROAD's 285.7 Hz)
+
+
+def _guard_variants():
+    """Return the sibling script whose sustained-acceleration flag this one shares."""
+    spec = importlib.util.spec_from_file_location(
+        'guard_variants', Path(__file__).resolve().parent / 'guard_variants.py')
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def trials(out: Path, data: Path) -> dict[str, dict]:
+    """Return, per held-out trial: its fold, sequence, T, each N and their flags."""
+    report = json.loads((out / 'crossval.json').read_text())
+    helpers = _guard_variants()
+    sustained, within_field = helpers.sustained, helpers.within_field
+    found = {}
+    for i, held in enumerate(report['folds']):
+        chosen = report['tracking']['per_fold'][str(i)]
+        nets = [load_model(out / f'seed{s}' / f'fold{i}' / 'network.safetensors')
+                for s in report['seeds']]
+        bounds = [m.meta.input_envelope for m in nets]
+        bounds.append(envelope.combine(bounds))  # the ensemble's
+        field, rate = nets[0].model.receptive_field, nets[0].meta.sample_rate_hz
+        tracking = CANDIDATES[chosen['network']]
+        train = [n for j, f in enumerate(report['folds']) if j != i for n in f]
+        bar = max(sustained(load_sequence(data / n, min_samples=field,
+                                          align_poses='auto').stream, WINDOW).max()
+                  for n in train)
+        for name in held:
+            seq = load_sequence(data / name, min_samples=field, align_poses='auto')
+            fed = stages.model_input(nets[0], seq.stream)
+            gyros = [correct_gyro(m.model, fed) for m in nets]
+            gyros.append(np.mean(gyros, axis=0))
+            outputs, untrusted = [], []
+            for g, env in zip(gyros, bounds):
+                hold = envelope.too_fast(fed, env, field)
+                bias = (np.zeros_like(g) if tracking is None
+                        else tracked_bias(g, fed[:, 3:], rate, tracking, hold))
+                base = envelope.untrusted(fed, env, field)
+                own = fed[:, :3] + np.array(env.fallback_rad_s) - bias
+                outputs.append(np.where(base[:, None], own, g - bias))
+                untrusted.append(base)
+            found[name] = {
+                'fold': i, 'seq': seq, 'accel': fed[:, 3:], 'rate': rate,
+                'classical': track_bias(fed[:, :3], fed[:, 3:], rate,
+                                        CANDIDATES[chosen['tracker only']]),
+                'nets': outputs, 'untrusted': untrusted,
+                'sustained': within_field(sustained(fed, WINDOW) > bar, field)}
+    return found
+
+
+def gravity_drift(gyro: np.ndarray, accel: np.ndarray, rate: float, lp_s: float,
+                  win_s: float) -> np.ndarray:
+    """Return the angle (rad) the low-passed world accelerometer turned over the last win_s."""
+    world = integrate(np.array([0.0, 0.0, 0.0, 1.0]), gyro[:-1],
+                      np.full(len(gyro) - 1, 1.0 / rate)).apply(accel)
+    n = max(1, int(lp_s * rate))
+    total = np.concatenate([np.zeros((1, 3)), np.cumsum(world, axis=0)])
+    k = np.arange(len(world))
+    start = np.maximum(k + 1 - n, 0)
+    low = (total[k + 1] - total[start]) / (k + 1 - start)[:, None]
+    w = int(win_s * rate)
+    past = np.vstack([np.repeat(low[:1], w, axis=0), low[:-w]])
+    norms = np.linalg.norm(low, axis=1) * np.linalg.norm(past, axis=1)
+    cos = np.einsum('ij,ij->i', low, past) / norms
+    return np.arccos(np.clip(cos, -1.0, 1.0))
+
+
+def main() -> None:
+    """Score every setting on every held-out trial of every fold."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
+    parser.add_argument('out', type=Path, help="crossval's --out (crossval.json, seedS/foldF)")
+    parser.add_argument('data', type=Path, help='the folder of the trials')
+    parser.add_argument('--weights', type=float, nargs='+', default=[1.0, 0.7, 0.5, 0.3])
+    parser.add_argument('--fallback', choices=('none', 'sustained', 'envelope'),
+                        default='sustained')
+    parser.add_argument('--gravity', type=float, nargs=2, metavar=('LP', 'WIN'),
+                        help='also the gravity selector, low-pass LP s, window WIN s')
+    args = parser.parse_args()
+    found = trials(args.out, args.data)
+    settings = [(f'blend {w:g}', w) for w in args.weights]
+    if args.gravity:
+        settings.append((f'gravity {args.gravity[0]:g} s / {args.gravity[1]:g} s', None))
+    for fold in sorted({t['fold'] for t in found.values()}):
+        names = [n for n, t in found.items() if t['fold'] == fold]
+        bar = np.array([score(found[n]['seq'], found[n]['seq'].on_poses(
+            found[n]['classical']))['aoe_deg'] for n in names])
+        print(f'fold {fold}: tracker only {bar.mean():.2f} over ' + ', '.join(names))
+        for label, weight in settings:
+            aoe = []
+            for n in names:
+                t = found[n]
+                row = []
+                for net, untrusted in zip(t['nets'], t['untrusted']):
+                    flag = {'none': np.zeros(len(net), bool), 'sustained': t['sustained'],
+                            'envelope': t['sustained'] | untrusted}[args.fallback]
+                    if weight is None:
+                        use = gravity_drift(net, t['accel'], t['rate'], *args.gravity) <= \
+                            gravity_drift(t['classical'], t['accel'], t['rate'], *args.gravity)
+                        w = use.astype(float)
+                    else:
+                        w = np.full(len(net), weight)
+                    w = np.where(flag, 0.0, w)[:, None]
+                    row.append(score(t['seq'], t['seq'].on_poses(
+                        t['classical'] + w * (net - t['classical'])))['aoe_deg'])
+                aoe.append(row)
+            aoe = np.array(aoe)  # trials x (seeds..., ensemble)
+            ratio = aoe / bar[:, None]
+            print(f'  {label}, fallback {args.fallback}: ensemble {aoe[:, -1].mean():.2f} '
+                  f'({aoe[:, -1].mean() / bar.mean():.2f}x), per-trial {ratio[:, -1].mean():.2f}, '
+                  f'worst {ratio[:, -1].max():.2f}; seeds '
+                  + ', '.join(f'{x:.2f}x' for x in aoe[:, :-1].mean(0) / bar.mean())
+                  + ', per-trial ' + ', '.join(f'{x:.2f}' for x in ratio[:, :-1].mean(0))
+                  + f', worst {ratio[:, :-1].max():.2f}')
+            print('    ' + ' '.join(f'{n[:2]} {a:.2f}/{b:.2f}' for n, a, b in
+                                    zip(names, aoe[:, -1], bar)))
+
+
+if __name__ == '__main__':
+    main()
