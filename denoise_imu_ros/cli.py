@@ -1,7 +1,7 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
 """
-``denoise-imu``: convert, train, eval and correct from the command line.
+denoise-imu: convert, train, eval and correct from the command line.
 
 Each subcommand's work lives in its own module; this layer only parses arguments and
 turns the package's exceptions into a one-line message and exit code 1.
@@ -378,8 +378,9 @@ def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser, its commands in the order a user runs them."""
     from .core.modelfile import MODEL_HELP
     parser = argparse.ArgumentParser(
-        prog='denoise-imu', description=__doc__.splitlines()[0],
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        prog='denoise-imu', description=__doc__.strip().splitlines()[0],
+        formatter_class=lambda prog: argparse.RawDescriptionHelpFormatter(
+            prog, max_help_position=24),
         epilog='One recording in is --input; a folder of recordings, --data with '
                '--sequences;\nwhat a command writes, --out. The workflow: check-data, '
                'init-recipe, train,\ncrossval, eval, then correct, process-bag or the '
@@ -388,20 +389,17 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--version', action=_Version)
     sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND')
 
-    def command(name: str, summary: str, example: str,
-                parents: tuple[argparse.ArgumentParser, ...] = ()) -> argparse.ArgumentParser:
-        return sub.add_parser(name, help=summary, description=summary, parents=parents,
-                              epilog=f'example:\n  denoise-imu {name} {example}',
-                              formatter_class=argparse.RawDescriptionHelpFormatter)
-
-    imu_topic = argparse.ArgumentParser(add_help=False)
-    imu_topic.add_argument('--imu-topic', help='bags: IMU topic (default: the only one)')
-    topics = argparse.ArgumentParser(add_help=False, parents=[imu_topic])
-    topics.add_argument('--pose-topic', help='bags: pose topic (default: the only one)')
+    def command(name: str, summary: str, example: str) -> argparse.ArgumentParser:
+        p = sub.add_parser(name, help=summary, description=summary,
+                           epilog=f'example:\n  denoise-imu {name} {example}',
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
+        p.legacy, p.required = [], []  # read by _settle_spellings
+        return p
 
     p = command('check-data', 'data quality of one recording: rates, pose holes, label noise',
-                '--input ../shared/data/euroc/MH_01_easy', (topics,))
+                '--input ../shared/data/euroc/MH_01_easy')
     _input(p, 'ASL sequence folder or bag with IMU and poses', legacy='input')
+    _topics(p, poses=True)
     p.add_argument('--json', action='store_true', help='also print one JSON line at the end')
     p.add_argument('--max-offset', type=float, default=0.5,
                    help='clock-offset search range, +- s (default 0.5)')
@@ -411,10 +409,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_check_data)
 
     p = command('init-recipe', 'write a training recipe for your recordings from their data',
-                '--data my_bags --sequences run1 run2 run3 --out recipe.yaml', (topics,))
+                '--data my_bags --sequences run1 run2 run3 --out recipe.yaml')
     p.add_argument('--data', required=True, help='folder holding the recordings')
     p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags in it')
     p.add_argument('--out', default='recipe.yaml', help='recipe to write')
+    _topics(p, poses=True)
     p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
     p.add_argument('--poses', **POSES_OPTION)
     p.add_argument('--estimated-poses', **ESTIMATED_OPTION)
@@ -506,12 +505,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = command('eval', 'AOE/ROE of raw, calibrated and corrected gyro integration, and of '
                 'the classical pipeline',
-                '--model euroc --data ../shared/data/euroc --sequences MH_02_easy --out ev',
-                (topics,))
+                '--model euroc --data ../shared/data/euroc --sequences MH_02_easy --out ev')
     p.add_argument('--model', required=True, help=MODEL_HELP)
     p.add_argument('--data', required=True, help='folder holding the sequences')
     p.add_argument('--sequences', nargs='+', required=True, help='ASL folders or bags')
     p.add_argument('--out', required=True, help='output folder (JSON, Markdown, PNG)')
+    _topics(p, poses=True)
     p.add_argument('--baseline', help='calibrated-IMU model (default: <dataset>_calibrated '
                    'when shipped)')
     p.add_argument('--start-sample', type=int, default=0,
@@ -525,23 +524,23 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = command('noise', 'gyro noise figures for a VIO (Allan deviation, Kalibr-style noise '
                 'density and random walk) and a check of the covariance',
-                '--model euroc --data ../shared/data/euroc --sequences MH_02_easy --out nz',
-                (topics,))
+                '--model euroc --data ../shared/data/euroc --sequences MH_02_easy --out nz')
     p.add_argument('--model', required=True, help=MODEL_HELP)
     p.add_argument('--data', required=True, help='folder holding the recordings')
     p.add_argument('--sequences', nargs='+', required=True, help='recordings with ground truth')
     p.add_argument('--out', required=True, help='output folder (YAML, JSON, PNG)')
+    _topics(p, poses=True)
     p.add_argument('--baseline', help='calibrated-IMU model (default: <dataset>_calibrated)')
     p.add_argument('--align', **ALIGN_OPTION)
     p.add_argument('--poses', **POSES_OPTION)
     p.set_defaults(func=_noise)
 
     p = command('correct', 'write the corrected gyro of every IMU sample as CSV',
-                '--model euroc --input ../shared/data/euroc/MH_02_easy --out MH_02.csv',
-                (imu_topic,))
-    _node_options(p)
+                '--model euroc --input ../shared/data/euroc/MH_02_easy --out MH_02.csv')
     _input(p, 'ASL sequence folder or bag')
     _out(p, 'CSV: timestamp_ns,wx,wy,wz', legacy_option='--output')
+    _topics(p, poses=False)
+    _node_options(p)
     p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',
                    help='whole-recording torch network, or the per-sample numpy engine')
     p.add_argument('--overwrite', action='store_true', help='replace an existing --out')
@@ -549,12 +548,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = command('process-bag', 'copy a bag and add /imu/corrected, /imu/data and '
                 '/imu/attitude (as the node)',
-                '--input my_bag --out my_bag_corrected --params-file config/gyro_denoiser.yaml',
-                (imu_topic,))
+                '--input my_bag --out my_bag_corrected --params-file config/gyro_denoiser.yaml')
     _input(p, 'ROS 1 or ROS 2 bag', legacy='input')
-    _out(p, 'ROS 2 bag to write (must not exist)', legacy='output')
+    _out(p, 'ROS 2 bag to write; must not exist', legacy='output')
+    _topics(p, poses=False)
     _node_options(p, bag=True)
-    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
+    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap',
+                   help="the written bag's storage (default: mcap)")
     p.add_argument('--namespace', default='/',
                    help="the node's namespace for the outputs (default /: /imu/corrected, "
                         '/imu/data, /imu/attitude; /denoised: /denoised/imu/corrected, ...)')
@@ -563,8 +563,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_process_bag)
 
     p = command('play', "publish a bag's IMU in real time (ros2 bag play stand-in)",
-                '--input my_bag --topic imu/data_raw --clock', (imu_topic,))
+                '--input my_bag --topic imu/data_raw --clock')
     _input(p, 'ROS 1 or ROS 2 bag', legacy='bag')
+    _topics(p, poses=False)
     p.add_argument('--topic', default='imu/data_raw',
                    help='topic to publish on (default: %(default)s)')
     p.add_argument('--rate', type=float, default=1.0,
@@ -577,8 +578,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = command('convert', 'ASL folder -> ROS 2 bag (IMU + ground-truth pose)',
                 '--input ../shared/data/euroc/MH_01_easy --out MH_01_bag')
     _input(p, 'ASL sequence folder', legacy='asl_dir')
-    _out(p, 'ROS 2 bag to write (must not exist)', legacy='out_bag')
-    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap')
+    _out(p, 'ROS 2 bag to write; must not exist', legacy='out_bag')
+    p.add_argument('--storage', choices=('mcap', 'sqlite3'), default='mcap',
+                   help="the written bag's storage (default: mcap)")
     p.add_argument('--start', type=float, default=0.0, help='s after the first IMU sample')
     p.add_argument('--duration', type=float, help='s to keep (default: all)')
     p.add_argument('--compress', action=argparse.BooleanOptionalAction, default=False,
@@ -594,64 +596,87 @@ def build_parser() -> argparse.ArgumentParser:
 DEPRECATED_IN = '0.6.0'  # the release whose parser drops the old spellings
 
 
+def _topics(p: argparse.ArgumentParser, poses: bool) -> None:
+    """Add the bag topics a command reads: the IMU's, and the poses' where it reads them."""
+    p.add_argument('--imu-topic', help='bags: IMU topic (default: the only one)')
+    if poses:
+        p.add_argument('--pose-topic', help='bags: pose topic (default: the only one)')
+
+
+def _required_group(p: argparse.ArgumentParser) -> argparse._ArgumentGroup:
+    """Return the command's group of required options (argparse cannot mark them so)."""
+    if not hasattr(p, 'required_group'):
+        p.required_group = p.add_argument_group('required')
+    return p.required_group
+
+
 def _input(p: argparse.ArgumentParser, what: str, legacy: str | None = None) -> None:
-    """``--input``, required; ``legacy``: the positional argument it replaces."""
-    p.add_argument('--input', help=f'{what} (required)')
+    """Add ``--input``, required; ``legacy``: the positional argument it replaces."""
+    _required_group(p).add_argument('--input', help=what)
     if legacy:
-        _legacy(p, f'legacy_{legacy}', 'input', f'the positional {legacy.upper()}', nargs='?')
-    _require(p, 'input')
+        _legacy(p, legacy, 'input', f'the positional {legacy.upper()}')
+    p.required.append('input')
 
 
 def _out(p: argparse.ArgumentParser, what: str, legacy: str | None = None,
          legacy_option: str | None = None) -> None:
-    """``--out``, required; ``legacy``, ``legacy_option``: the positional or option it replaces."""
-    p.add_argument('--out', help=f'{what} (required)')
+    """Add ``--out``, required; ``legacy``, ``legacy_option``: what it replaces."""
+    _required_group(p).add_argument('--out', help=what)
     if legacy:
-        _legacy(p, f'legacy_{legacy}', 'out', f'the positional {legacy.upper()}', nargs='?')
+        _legacy(p, legacy, 'out', f'the positional {legacy.upper()}')
     if legacy_option:
         _legacy(p, legacy_option, 'out', legacy_option)
-    _require(p, 'out')
+    p.required.append('out')
 
 
 def _recipe(p: argparse.ArgumentParser, what: str) -> None:
-    """``--recipe``, required, and ``--config``, its old name."""
-    p.add_argument('--recipe', help=f'{what} (required)')
+    """Add ``--recipe``, required, and ``--config``, its old name."""
+    _required_group(p).add_argument('--recipe', help=what)
     _legacy(p, '--config', 'recipe', '--config')
-    _require(p, 'recipe')
+    p.required.append('recipe')
 
 
-def _legacy(p: argparse.ArgumentParser, spelling: str, dest: str, said: str,
-            nargs: str | None = None) -> None:
+def _legacy(p: argparse.ArgumentParser, spelling: str, dest: str, said: str) -> None:
     """Add an old spelling of ``--dest``, kept one release, hidden from the help."""
-    own = f'legacy_{dest}_{len(p.get_default("legacy") or ())}'
+    own = f'legacy_{dest}_{len(p.legacy)}'
     if spelling.startswith('-'):
         p.add_argument(spelling, dest=own, help=argparse.SUPPRESS)
-    else:
-        p.add_argument(own, nargs=nargs, metavar=spelling, help=argparse.SUPPRESS)
-    p.set_defaults(legacy=(*(p.get_default('legacy') or ()), (own, dest, said)))
+    else:  # a positional: filled in order, wherever it stands among the options
+        p.add_argument(own, nargs='?', metavar=spelling, help=argparse.SUPPRESS)
+    p.legacy.append((own, dest, said, not spelling.startswith('-')))
 
 
-def _require(p: argparse.ArgumentParser, dest: str) -> None:
-    """Mark ``--dest`` required once the old spellings are settled (argparse cannot)."""
-    p.set_defaults(required=(*(p.get_default('required') or ()), dest), command_parser=p)
+def _settle_spellings(parser: argparse.ArgumentParser, args: argparse.Namespace,
+                      extra: list[str]) -> None:
+    """
+    Take each old spelling as the new one (saying so); then check what is required.
 
-
-def _settle_spellings(args: argparse.Namespace) -> None:
-    """Take each old spelling as the new one (saying so); then check what is required."""
-    parser = getattr(args, 'command_parser', None)
-    for own, dest, said in getattr(args, 'legacy', ()):
+    argparse fills optional positionals at the first positional it meets, so 0.4's
+    ``process-bag IN --model M OUT`` leaves OUT over: it goes to the next empty one.
+    """
+    command = next(a for a in parser._actions
+                   if isinstance(a, argparse._SubParsersAction)).choices[args.command]
+    legacy = getattr(command, 'legacy', [])
+    for own, _, _, positional in legacy:
+        if positional and getattr(args, own) is None and extra and \
+                not extra[0].startswith('-'):
+            setattr(args, own, extra.pop(0))
+    if extra:
+        command.error(f'unrecognized arguments: {" ".join(extra)}')
+    for own, dest, said, _ in legacy:
         value = getattr(args, own)
+        delattr(args, own)
         if value is None:
             continue
         if getattr(args, dest) is not None:
-            parser.error(f'{said} and --{dest} both given: give --{dest} only')
+            command.error(f'{said} and --{dest} both given: give --{dest} only')
         setattr(args, dest, value)
         print(f'denoise-imu {args.command}: deprecated: {said} is now --{dest} (the old '
               f'spelling goes in {DEPRECATED_IN})', file=sys.stderr)
-    missing = [f'--{dest}' for dest in getattr(args, 'required', ())
+    missing = [f'--{dest}' for dest in getattr(command, 'required', [])
                if getattr(args, dest) is None]
     if missing:
-        parser.error(f'the following arguments are required: {", ".join(missing)}')
+        command.error(f'the following arguments are required: {", ".join(missing)}')
 
 
 # Every numeric option's range, (low, high, low allowed, unit); a value must also be finite.
@@ -699,8 +724,9 @@ def _data_warning(message: Warning | str, category: type[Warning], *args: Any,
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``denoise-imu`` console script."""
-    args = build_parser().parse_args(argv)
-    _settle_spellings(args)
+    parser = build_parser()
+    args, extra = parser.parse_known_args(argv)
+    _settle_spellings(parser, args, extra)
     # play stops on SIGTERM as ros2 bag play does (exit 0); a caller's handler is restored
     own = args.command != 'play' and threading.current_thread() is threading.main_thread()
     before = signal.signal(signal.SIGTERM, _on_sigterm) if own else None

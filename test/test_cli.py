@@ -295,11 +295,13 @@ def _commands():
 
 def test_one_grammar_input_out_and_topics_only_where_they_act():
     """One recording in is --input, what is written --out; --pose-topic where poses are read."""
+    import argparse
     reads_poses = {'check-data', 'init-recipe', 'eval', 'noise', 'convert'}
     for name, parser in _commands().items():
-        shown = {o for a in parser._actions if a.help != '==SUPPRESS==' for o in a.option_strings}
+        shown = {o for a in parser._actions if a.help != argparse.SUPPRESS
+                 for o in a.option_strings}
         positional = [a.dest for a in parser._actions
-                      if not a.option_strings and a.help != '==SUPPRESS==']
+                      if not a.option_strings and a.help != argparse.SUPPRESS]
         assert positional in ([], ['models']), name  # ensemble's list of models only
         assert not shown & {'--output', '--config', '--bag'}, name
         assert ('--pose-topic' in shown) == (name in reads_poses), name
@@ -317,6 +319,15 @@ def test_the_old_spellings_work_one_release_and_say_so(tmp_path, capsys):
                  str(tmp_path / 'c.csv'), '--engine', 'streaming']) == 0
     assert 'deprecated: --output is now --out' in capsys.readouterr().err
     assert (tmp_path / 'c.csv').is_file()
+    # 0.4's order with options between the positionals, and --config
+    assert main(['process-bag', str(tmp_path / 'bag'), '--model', 'euroc',
+                 str(tmp_path / 'pb')]) == 0
+    assert (tmp_path / 'pb').is_dir()
+    assert main(['check-data', '--json', str(tmp_path / 'bag')]) in (0, 1)  # judged
+    assert 'deprecated: the positional INPUT is now --input' in capsys.readouterr().err
+    with pytest.raises(SystemExit) as done:
+        main(['process-bag', 'a', 'b', 'c', '--model', 'euroc'])
+    assert done.value.code == 2 and 'unrecognized arguments: c' in capsys.readouterr().err
 
 
 @pytest.mark.parametrize('argv, said', [

@@ -98,6 +98,6 @@ def align(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float]:
     """
     u, _, vt = np.linalg.svd(b.T @ a)
     flip = np.ones(3)
-    flip[2] = np.sign(np.linalg.det(u @ vt)) or 1.0
+    flip[2] = np.sign(np.linalg.det(u @ vt))  # +-1: u and vt are orthogonal
     r = (vt.T * flip) @ u.T
     return r, float(np.sqrt(np.sum((a - b @ r.T) ** 2)))

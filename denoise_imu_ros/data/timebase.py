@@ -28,11 +28,11 @@ from ..core.records import Recording, Sequence
 GT_GAP_FACTOR = 2.5
 MAX_POSE_PERIOD_S = 1.0  # sparser poses cannot score an attitude between them (two, 45 s apart)
 MS_HINT_S = 10.0  # poses this far apart (median) are more likely stamped in ms than seconds
-# The splines of the last few pose stretches, by their content: checking a recording
-# interpolates the same poses at several sets of stamps, and a spline over 10^5-10^6
-# poses costs far more to fit than its knots cost to hash
-_SPLINES: OrderedDict[str, RotationSpline] = OrderedDict()
-SPLINES_KEPT = 2
+# The splines of the last few recordings' poses, by their content, one per hole-free
+# stretch: checking a recording interpolates the same poses at several sets of stamps, and
+# a spline over 10^5-10^6 poses costs far more to fit than its knots cost to hash
+_SPLINES: OrderedDict[str, dict[tuple[int, int], RotationSpline]] = OrderedDict()
+SPLINES_KEPT = 3  # recordings: check() interleaves its poses with two of its own
 
 
 def _between(rec: Recording, t0: int, t1: int) -> Recording:
@@ -103,28 +103,28 @@ def poses_at(rec: Recording, stamps_ns: np.ndarray,
             f'{limit * 1e3:.1f} ms)')
     # One spline per hole-free stretch of ground truth, so that no hole bends it.
     breaks = np.flatnonzero(np.diff(t_gt) * 1e-9 > limit) + 1
+    fitted = _splines(rel_gt, rec.gt_quat)
     for lo, hi in zip(np.r_[0, breaks], np.r_[breaks, len(t_gt)]):
         inside = valid & (rel >= rel_gt[lo]) & (rel <= rel_gt[hi - 1])
         if hi - lo >= 3 and inside.any():
-            spline = _spline(rel_gt[lo:hi], rec.gt_quat[lo:hi])
-            quat[inside] = spline(rel[inside]).as_quat()
+            if (lo, hi) not in fitted:
+                fitted[lo, hi] = RotationSpline(rel_gt[lo:hi], rot_gt[lo:hi])
+            quat[inside] = fitted[lo, hi](rel[inside]).as_quat()
             splined |= inside
     if not splined.all():  # holes (never trusted) and stretches too short for a spline
         quat[~splined] = Slerp(rel_gt, rot_gt)(rel[~splined]).as_quat()
     return quat, pos, valid
 
 
-def _spline(t: np.ndarray, quat: np.ndarray) -> RotationSpline:
-    """Return the cubic rotation spline through these knots, fitted once for equal ones."""
+def _splines(t: np.ndarray, quat: np.ndarray) -> dict[tuple[int, int], RotationSpline]:
+    """Return the splines fitted so far to these poses' stretches (by their knots' indices)."""
     key = hashlib.blake2b(np.ascontiguousarray(t, np.float64).tobytes()
                           + np.ascontiguousarray(quat, np.float64).tobytes()).hexdigest()
-    if key in _SPLINES:
-        _SPLINES.move_to_end(key)
-        return _SPLINES[key]
-    spline = _SPLINES[key] = RotationSpline(t, Rotation.from_quat(quat))
+    fitted = _SPLINES.pop(key, {})
+    _SPLINES[key] = fitted  # the most recent last
     while len(_SPLINES) > SPLINES_KEPT:
         _SPLINES.popitem(last=False)
-    return spline
+    return fitted
 
 
 def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,

@@ -28,6 +28,7 @@ chooses what ruins the heading beyond the poses' drift (:func:`heading_off`).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -47,7 +48,7 @@ from ..core.schema import (BiasTracking, InputEnvelope, JUDGED, judged_on, Model
 from ..data.load import load_sequence
 from ..learn import parallel
 from ..learn.checkpoint import load_model, LoadedModel
-from ..learn.config import load_config
+from ..learn.config import load_config, TrainConfig
 from ..learn.model import correct_gyro
 from ..learn.train import train
 from ..pipeline import envelope, rest_bias, stages, vertical
@@ -72,6 +73,10 @@ def tracking_label(settings: BiasTracking | None) -> str:
         return 'none'
     return f'sigma {settings.sigma_motion_deg_s:g} deg/s, forgetting {settings.forgetting_s:g} s'
 
+
+# each recipe key's default: what a model file written before the key existed was made with
+RECIPE_DEFAULTS = {f.name: f.default for f in dataclasses.fields(TrainConfig)
+                   if f.default is not dataclasses.MISSING}
 
 CANDIDATES = {tracking_label(t): t for t in (None, *TRACKING_GRID)}  # label -> settings
 HEADING_GUARD = 2.0  # judged on the tilt: a heading this many times the rest bias's is off
@@ -386,8 +391,11 @@ def _trained_fold(folder: Path, cfg: Any, calib_cfg: Any
     for path, want in zip(paths, (cfg, calib_cfg)):
         loaded = load_model(path)
         wanted = json.loads(jsonio.dumps(want.recipe()))
-        # a recipe entry newer than the file, left unset, is the recipe the file was made by
-        stored = {k: None for k, v in wanted.items() if v is None} | loaded.meta.train_config
+        # a recipe key newer than the file, at its default (the behaviour before the key
+        # existed), is the recipe the file was made by
+        stored = {k: v for k, v in wanted.items()
+                  if v is None or k in RECIPE_DEFAULTS and RECIPE_DEFAULTS[k] == v
+                  } | loaded.meta.train_config
         if stored != wanted:
             raise TrainingError(f'{path}: trained by another recipe than this fold uses '
                                 '(remove it, or use another --out)')

@@ -157,10 +157,15 @@ class RestBias(BiasTracker):
         self.still_samples = 0
 
     def restart(self) -> None:
-        """Look for stillness afresh (its filters restarted), keeping the estimate found."""
-        found = _hold(self._vqf, None)
+        """
+        Look for stillness afresh (its filters restarted), from the estimate found so far.
+
+        Its certainty is that of a start: where the jump was a new power-on after all (a
+        driver restarted), the next stillness moves it as fast as it moves the prior.
+        """
+        bias = _hold(self._vqf, None)[0]
         super().reset()
-        _hold(self._vqf, found)
+        _hold(self._vqf, (bias, _hold(self._vqf, None)[1]))
 
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
         """Take one sample (rad/s, m/s^2); return the bias estimate after it (3,)."""

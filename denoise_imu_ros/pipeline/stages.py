@@ -131,10 +131,10 @@ class TurnOnBias(Stage):
 
     def reset(self, events: frozenset[Event] = RUN) -> None:
         """
-        Start from the prior again at a start; after a clock step, keep what was found.
+        Start from the prior again at a start; after a jump, from the estimate found.
 
         A clock stepped back (NTP) or a bag replayed in a loop is the same power-on: the
-        stillness is looked for afresh, the estimate and its certainty kept till then.
+        estimate is kept till the next stillness, which moves it as it would the prior.
         """
         if Event.START in events:
             self.estimator.reset()

@@ -13,14 +13,16 @@ fold's tracker-only row) are combined per sample:
 - ``gravity``: N or T, whichever kept the accelerometer's direction steadier in its own
   open-loop world frame over the last WIN s (low-passed over LP s): a causal selector.
 Prints, per fold and setting, the mean against tracker only, the mean per-trial ratio and
-the worst, for the ensemble and each seed. Run: scripts/reproduce/blend_fallback.py OUT
-../shared/data/broad --weights 1 0.7 0.5 0.3 --fallback sustained [--gravity LP WIN]
+the worst, for the ensemble and each seed. Run: .venv/bin/python
+scripts/reproduce/blend_fallback.py OUT ../shared/data/broad --weights 1 0.7 0.5 0.3
+--fallback sustained [--gravity LP WIN]
 """
 
 import argparse
 import importlib.util
 import json
 from pathlib import Path
+from typing import Any
 
 from denoise_imu_ros.core.metrics import integrate, score
 from denoise_imu_ros.data.load import load_sequence
@@ -34,7 +36,7 @@ import numpy as np
 WINDOW = 286  # samples of the sustained-acceleration mean (1 s at BROAD's 285.7 Hz)
 
 
-def _guard_variants():
+def _guard_variants() -> Any:
     """Return the sibling script whose sustained-acceleration flag this one shares."""
     spec = importlib.util.spec_from_file_location(
         'guard_variants', Path(__file__).resolve().parent / 'guard_variants.py')
@@ -58,9 +60,9 @@ def trials(out: Path, data: Path) -> dict[str, dict]:
         field, rate = nets[0].model.receptive_field, nets[0].meta.sample_rate_hz
         tracking = CANDIDATES[chosen['network']]
         train = [n for j, f in enumerate(report['folds']) if j != i for n in f]
-        bar = max(sustained(load_sequence(data / n, min_samples=field,
-                                          align_poses='auto').stream, WINDOW).max()
-                  for n in train)
+        bound = max(sustained(load_sequence(data / n, min_samples=field,
+                                            align_poses='auto').stream, WINDOW).max()
+                    for n in train)
         for name in held:
             seq = load_sequence(data / name, min_samples=field, align_poses='auto')
             fed = stages.model_input(nets[0], seq.stream)
@@ -80,7 +82,7 @@ def trials(out: Path, data: Path) -> dict[str, dict]:
                 'classical': track_bias(fed[:, :3], fed[:, 3:], rate,
                                         CANDIDATES[chosen['tracker only']]),
                 'nets': outputs, 'untrusted': untrusted,
-                'sustained': within_field(sustained(fed, WINDOW) > bar, field)}
+                'sustained': within_field(sustained(fed, WINDOW) > bound, field)}
     return found
 
 
@@ -94,8 +96,8 @@ def gravity_drift(gyro: np.ndarray, accel: np.ndarray, rate: float, lp_s: float,
     k = np.arange(len(world))
     start = np.maximum(k + 1 - n, 0)
     low = (total[k + 1] - total[start]) / (k + 1 - start)[:, None]
-    w = int(win_s * rate)
-    past = np.vstack([np.repeat(low[:1], w, axis=0), low[:-w]])
+    w = min(max(1, int(win_s * rate)), len(low))
+    past = np.vstack([np.repeat(low[:1], w, axis=0), low[:len(low) - w]])
     norms = np.linalg.norm(low, axis=1) * np.linalg.norm(past, axis=1)
     cos = np.einsum('ij,ij->i', low, past) / norms
     return np.arccos(np.clip(cos, -1.0, 1.0))

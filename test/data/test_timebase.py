@@ -65,18 +65,31 @@ def test_each_pose_marks_the_imu_sample_nearest_its_stamp_within_half_a_period(
     assert np.array_equal(seq.tail(100).pose_at, seq.pose_at[100:])
 
 
-def test_poses_at_equal_stamps_are_those_of_a_fresh_spline_each_time():
+def test_poses_at_fits_each_stretch_once_and_serves_only_the_same_poses(monkeypatch):
     """The splines kept by content never serve other poses, and serve the same ones alike."""
     from denoise_imu_ros.data import timebase
     from scipy.spatial.transform import Rotation, RotationSpline
-    t = np.arange(0, 2_000_000_000, 10_000_000)  # 100 Hz poses
-    stamps = np.arange(0, 1_990_000_000, 2_500_000)
+    fits = []
+
+    class Counted(RotationSpline):
+
+        def __init__(self, *args):
+            fits.append(len(args[0]))
+            super().__init__(*args)
+    monkeypatch.setattr(timebase, 'RotationSpline', Counted)
+    t = np.arange(0, 3_000_000_000, 10_000_000)  # 100 Hz poses with two holes: 3 stretches
+    t = np.delete(t, np.r_[90:110, 190:210])
+    stamps = np.arange(0, 2_990_000_000, 2_500_000)
     quat = Rotation.from_rotvec(np.outer(np.sin(t * 1e-9), [0.3, -0.2, 0.9])).as_quat()
     rec = Recording('r', 'r', stamps, np.zeros((len(stamps), 6)), t, quat, np.zeros((len(t), 3)))
-    fresh = RotationSpline(t * 1e-9, Rotation.from_quat(quat))(stamps * 1e-9).as_quat()
-    for _ in range(2):
-        got = timebase.poses_at(rec, stamps)[0]
-        np.testing.assert_array_equal(got, fresh)
+    first = timebase.poses_at(rec, stamps)[0]
+    assert len(fits) == 3
+    np.testing.assert_array_equal(timebase.poses_at(rec, stamps[::3])[0], first[::3])
+    assert len(fits) == 3  # nothing fitted again
+    inside = (t >= 1.1e9) & (t < 1.9e9)
+    fresh = RotationSpline(t[inside] * 1e-9 - t[0] * 1e-9, Rotation.from_quat(quat[inside]))
+    middle = (stamps >= 1.1e9) & (stamps <= t[inside][-1])
+    np.testing.assert_allclose(first[middle], fresh(stamps[middle] * 1e-9).as_quat(), atol=1e-12)
     other = dataclasses.replace(rec, gt_quat=quat[::-1].copy())  # same stamps, other poses
-    assert not np.allclose(timebase.poses_at(other, stamps)[0], fresh)
-    assert len(timebase._SPLINES) <= timebase.SPLINES_KEPT
+    assert not np.allclose(timebase.poses_at(other, stamps)[0], first)
+    assert len(fits) == 6

@@ -266,11 +266,12 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
                  '--quiet']) == 0
     assert (out / 'fold0' / 'network.safetensors').stat().st_mtime_ns == kept
     assert json.loads((out / 'crossval.json').read_text())['recordings'] == report['recordings']
-    # a fold written before a recipe entry existed (unset in this recipe) is this recipe
+    # a fold written before a recipe entry existed (unset in this recipe, or at its
+    # default: 0.4's files have no accel_input) is this recipe
     from denoise_imu_ros.core.modelfile import add_metadata
     net0 = out / 'fold0' / 'network.safetensors'
     older = load_model(net0).meta.train_config
-    assert older.pop('poses', 'absent') is None
+    assert older.pop('poses', 'absent') is None and older.pop('accel_input') is True
     add_metadata(net0, train_config=older)
     assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--out', str(out),
                  '--quiet']) == 0

@@ -390,6 +390,17 @@ def test_a_clock_stepped_back_keeps_the_turn_on_bias_found(model):
     replay = _run(den, stamps[:600], turning[:600])  # the clock steps back 5 s, in motion
     assert replay[0].event == Event.TIME_JUMP
     np.testing.assert_array_equal(den.rest.estimate()[0], found[0])  # no stillness since
+    # a new power-on after all (the clock stepped back again): its stillness moves it as
+    # fast as a start moves the prior
+    other = still.copy()
+    other[:, :3] += [0.02, 0.01, -0.02]
+    assert _run(den, stamps[:300], other[:300])[0].event == Event.TIME_JUMP
+    fresh = OnlineDenoiser(Pipeline([TurnOnBias(RestBiasSettings(), 200.0), Attitude(),
+                                     Network(StreamingCorrector.from_module(model))]), 200.0)
+    _run(fresh, stamps[:300], other[:300])
+    kept_error = np.abs(den.rest.estimate()[0] - (bias + [0.02, 0.01, -0.02])).max()
+    fresh_error = np.abs(fresh.rest.estimate()[0] - (bias + [0.02, 0.01, -0.02])).max()
+    assert kept_error <= 2 * fresh_error + 1e-3
 
 
 def test_a_dropped_non_finite_output_still_counts_its_input_for_the_guard():
