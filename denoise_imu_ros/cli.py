@@ -393,7 +393,8 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=summary, description=summary,
                            epilog=f'example:\n  denoise-imu {name} {example}',
                            formatter_class=argparse.RawDescriptionHelpFormatter)
-        p.legacy, p.required = [], []  # read by _settle_spellings
+        p.legacy = []  # the old spellings, read by _settle_spellings
+        p.required_group = p.add_argument_group('required')  # checked there too
         return p
 
     p = command('check-data', 'data quality of one recording: rates, pose holes, label noise',
@@ -603,37 +604,27 @@ def _topics(p: argparse.ArgumentParser, poses: bool) -> None:
         p.add_argument('--pose-topic', help='bags: pose topic (default: the only one)')
 
 
-def _required_group(p: argparse.ArgumentParser) -> argparse._ArgumentGroup:
-    """Return the command's group of required options (argparse cannot mark them so)."""
-    if not hasattr(p, 'required_group'):
-        p.required_group = p.add_argument_group('required')
-    return p.required_group
-
-
 def _input(p: argparse.ArgumentParser, what: str, legacy: str | None = None) -> None:
     """Add ``--input``, required; ``legacy``: the positional argument it replaces."""
-    _required_group(p).add_argument('--input', help=what)
+    p.required_group.add_argument('--input', help=what)
     if legacy:
         _legacy(p, legacy, 'input', f'the positional {legacy.upper()}')
-    p.required.append('input')
 
 
 def _out(p: argparse.ArgumentParser, what: str, legacy: str | None = None,
          legacy_option: str | None = None) -> None:
     """Add ``--out``, required; ``legacy``, ``legacy_option``: what it replaces."""
-    _required_group(p).add_argument('--out', help=what)
+    p.required_group.add_argument('--out', help=what)
     if legacy:
         _legacy(p, legacy, 'out', f'the positional {legacy.upper()}')
     if legacy_option:
         _legacy(p, legacy_option, 'out', legacy_option)
-    p.required.append('out')
 
 
 def _recipe(p: argparse.ArgumentParser, what: str) -> None:
     """Add ``--recipe``, required, and ``--config``, its old name."""
-    _required_group(p).add_argument('--recipe', help=what)
+    p.required_group.add_argument('--recipe', help=what)
     _legacy(p, '--config', 'recipe', '--config')
-    p.required.append('recipe')
 
 
 def _legacy(p: argparse.ArgumentParser, spelling: str, dest: str, said: str) -> None:
@@ -656,14 +647,13 @@ def _settle_spellings(parser: argparse.ArgumentParser, args: argparse.Namespace,
     """
     command = next(a for a in parser._actions
                    if isinstance(a, argparse._SubParsersAction)).choices[args.command]
-    legacy = getattr(command, 'legacy', [])
-    for own, _, _, positional in legacy:
+    for own, _, _, positional in command.legacy:
         if positional and getattr(args, own) is None and extra and \
                 not extra[0].startswith('-'):
             setattr(args, own, extra.pop(0))
     if extra:
         command.error(f'unrecognized arguments: {" ".join(extra)}')
-    for own, dest, said, _ in legacy:
+    for own, dest, said, _ in command.legacy:
         value = getattr(args, own)
         delattr(args, own)
         if value is None:
@@ -673,8 +663,9 @@ def _settle_spellings(parser: argparse.ArgumentParser, args: argparse.Namespace,
         setattr(args, dest, value)
         print(f'denoise-imu {args.command}: deprecated: {said} is now --{dest} (the old '
               f'spelling goes in {DEPRECATED_IN})', file=sys.stderr)
-    missing = [f'--{dest}' for dest in getattr(command, 'required', [])
-               if getattr(args, dest) is None]
+    # argparse's required=True would refuse the old spellings: checked once they are in
+    missing = [a.option_strings[0] for a in command.required_group._group_actions
+               if getattr(args, a.dest) is None]
     if missing:
         command.error(f'the following arguments are required: {", ".join(missing)}')
 

@@ -163,9 +163,10 @@ class RestBias(BiasTracker):
         Its certainty is that of a start: where the jump was a new power-on after all (a
         driver restarted), the next stillness moves it as fast as it moves the prior.
         """
-        bias = _hold(self._vqf, None)[0]
+        found, _ = _hold(self._vqf, None)
         super().reset()
-        _hold(self._vqf, (bias, _hold(self._vqf, None)[1]))
+        _, fresh = _hold(self._vqf, None)
+        _hold(self._vqf, (found, fresh))
 
     def update(self, gyro: np.ndarray, accel: np.ndarray) -> np.ndarray:
         """Take one sample (rad/s, m/s^2); return the bias estimate after it (3,)."""
