@@ -42,7 +42,8 @@ ESTIMATED_OPTION = {  # a bag's pose topic that is a VIO's or SLAM's, as --poses
 # The node's parameters that correct and process-bag take as options (the rest from
 # --params-file): parameter -> the option's attribute; their help is the parameter's
 OPTION_OF = {'model': 'model', 'rest_bias': 'rest_bias', 'envelope_guard': 'envelope_guard',
-             'fixed_frame': 'fixed_frame', 'embed_attitude': 'embed_attitude'}
+             'classical_blend': 'classical_blend', 'fixed_frame': 'fixed_frame',
+             'embed_attitude': 'embed_attitude'}
 PARAMS_FILE_HELP = ("the node's params YAML (config/gyro_denoiser.yaml, keyed /**:): run as "
                     'the node configured by it; the options given override it')
 
@@ -170,10 +171,15 @@ def _crossval(args: argparse.Namespace) -> None:
         row = {'network': 'network', 'calibration': 'calibrated', 'tracker only': 'tracker only'
                }.get(model_kind(read_model_file(path)))  # a rest-only model tracks nothing
         tracking = None if row is None else report['tracking']['chosen'][row]
+        blend = report['blend']['chosen'] if row == 'network' and 'blend' in report else None
         add_metadata(path, crossval=report, bias_tracking=tracking and dict(
-            tracking, chosen_on=f'crossval: {report["tracking"]["chosen_on"]}'))
+            tracking, chosen_on=f'crossval: {report["tracking"]["chosen_on"]}'),
+            **({} if blend is None else {'blend': dict(
+                blend, chosen_on=f'crossval: {report["blend"]["chosen_on"]}')}))
         print(f'stored the cross-recording figures in {path}' + (
-            f', and its output bias tracking ({tracking["label"]})' if tracking else ''))
+            f', and its output bias tracking ({tracking["label"]})' if tracking else '') + (
+            f', and its blend with the classical pipeline (weight {blend["weight"]:g})'
+            if blend else ''))
 
 
 def _init_recipe(args: argparse.Namespace) -> None:
@@ -297,11 +303,12 @@ def _correct(args: argparse.Namespace) -> None:
     from .evaluation.correct import correct_to_csv
     settings = _node_settings(args)
     rest, guard = settings.choice('rest_bias'), settings.choice('envelope_guard')
+    mix = settings.choice('classical_blend')
     _guard_output(args.out, [args.input, read_model_file(settings.model).path],
                   args.overwrite)
     _start_up_warnings(settings.model, rest)
     n = correct_to_csv(settings.model, args.input, args.out, imu_topic=args.imu_topic,
-                       engine=args.engine, rest=rest, guard=guard)
+                       engine=args.engine, rest=rest, guard=guard, mix=mix)
     print(f'wrote {n} corrected gyro samples to {args.out}')
 
 
@@ -368,6 +375,8 @@ def _node_options(p: argparse.ArgumentParser, bag: bool = False) -> None:
     p.add_argument('--rest-bias', choices=choices['rest_bias'], help=helps['rest_bias'])
     p.add_argument('--envelope-guard', choices=choices['envelope_guard'],
                    help=helps['envelope_guard'])
+    p.add_argument('--classical-blend', choices=choices['classical_blend'],
+                   help=helps['classical_blend'])
     if bag:
         p.add_argument('--fixed-frame', help=helps['fixed_frame'])
         p.add_argument('--embed-attitude', action=argparse.BooleanOptionalAction,

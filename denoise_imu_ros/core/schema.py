@@ -20,8 +20,8 @@ from typing import Any, Callable
 from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
 
-__all__ = ['BiasTracking', 'Fusion', 'FusionSettings', 'InputEnvelope', 'JUDGED', 'judged_on',
-           'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'NO_MODEL', 'parse_meta', 'REST_ONLY',
+__all__ = ['BiasTracking', 'Blend', 'Fusion', 'FusionSettings', 'InputEnvelope', 'JUDGED',
+           'judged_on', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'NO_MODEL', 'parse_meta', 'REST_ONLY',
            'RestBiasSettings', 'TRACKER_ONLY', 'Validation', 'Verdict']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
@@ -172,11 +172,16 @@ class InputEnvelope:
     # rad/s added to the input gyro outside: the model's mean correction over its
     # training recordings, 0 where the turn-on bias is removed before the model
     fallback_rad_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    # the largest mean | |accel| - g | over any 1 s of its training recordings, whole
+    # (pipeline/envelope.py: sustained_bound); None in a file without it
+    sustained_accel_m_s2: float | None = None
 
     def __post_init__(self) -> None:
         """Refuse bounds that are not positive numbers (model files are user input)."""
-        for name in ('gyro_rad_s', 'accel_offset_m_s2'):
+        for name in ('gyro_rad_s', 'accel_offset_m_s2', 'sustained_accel_m_s2'):
             value = getattr(self, name)
+            if name == 'sustained_accel_m_s2' and value is None:
+                continue
             if not (_number(value) and 0 < value < 1e6):
                 raise ValueError(f'{name} must be a positive number, not {value!r}')
         if not (_triple(self.fallback_rad_s) and max(map(abs, self.fallback_rad_s)) <= 1.0):
@@ -187,6 +192,31 @@ class InputEnvelope:
     def as_dict(self) -> dict[str, Any]:
         """Return the bounds as stored in a model file."""
         return {**asdict(self), 'fallback_rad_s': list(self.fallback_rad_s)}
+
+
+@dataclass(frozen=True)
+class Blend:
+    """
+    The network's output N blended with the classical pipeline's T: T + weight (N - T).
+
+    T is the model's input gyro (the raw gyro less its turn-on bias) less the bias
+    ``tracking`` finds in it (None: untracked), as the "tracker only" row; ``crossval``
+    chooses the weight on held-out recordings (``pipeline/blend.py``).
+    """
+
+    weight: float                   # 1: the network's output, 0: the classical pipeline's
+    tracking: BiasTracking | None   # the classical pipeline's
+
+    def __post_init__(self) -> None:
+        """Refuse a weight outside 0 ... 1 (model files are user input)."""
+        if not (_number(self.weight) and 0 <= self.weight <= 1):
+            raise ValueError(f'weight must be a number from 0 to 1, not {self.weight!r}')
+        object.__setattr__(self, 'weight', float(self.weight))
+
+    def as_dict(self) -> dict[str, Any]:
+        """Return the blend as stored in a model file."""
+        return {'weight': self.weight,
+                'tracking': None if self.tracking is None else self.tracking.as_dict()}
 
 
 @dataclass(frozen=True)
@@ -271,6 +301,7 @@ class ModelMeta:
     rest_bias: RestBiasSettings | None = None   # None: the model is fed the raw gyro
     bias_tracking: BiasTracking | None = None   # None: the model's output as it is
     input_envelope: InputEnvelope | None = None  # None: the correction applies everywhere
+    blend: Blend | None = None                  # None: the network's output unblended
     code_version: str | None = None
     members: int = 0                            # an ensemble's trainings; 0 for one
 
@@ -405,6 +436,23 @@ def _settings(raw: dict[str, Any], key: str, where: str,
         raise ModelFileError(f'{where}: inconsistent {key} ({err})') from err
 
 
+def _tracking(v: dict[str, Any]) -> BiasTracking:
+    return BiasTracking(v.get('sigma_motion_deg_s'), v.get('forgetting_s'),
+                        v.get('sigma_init_deg_s', VQF_BIAS_SIGMA_INIT_DEG_S))
+
+
+TRACKING_KEYS = {f.name for f in fields(BiasTracking)} | {'label', 'chosen_on'}
+
+
+def _blend(v: dict[str, Any]) -> Blend:
+    tracking = v.get('tracking')
+    if tracking is not None and not (isinstance(tracking, dict)
+                                     and set(tracking) <= TRACKING_KEYS):
+        raise ValueError(f'tracking must be a mapping of {", ".join(sorted(TRACKING_KEYS))} '
+                         f'or null, not {tracking!r}')
+    return Blend(v.get('weight'), None if tracking is None else _tracking(tracking))
+
+
 def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
     """Return the typed metadata of a model file's entries; ``where`` names it in errors."""
     rate = raw.get('sample_rate_hz')
@@ -435,12 +483,12 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         fusion=_fusion(raw, where),
         crossval=_verdict(raw, where),
         rest_bias=None if rest is None else RestBiasSettings.from_dict(rest, where),
-        bias_tracking=_settings(raw, 'bias_tracking', where, lambda v: BiasTracking(
-            v.get('sigma_motion_deg_s'), v.get('forgetting_s'),
-            v.get('sigma_init_deg_s', VQF_BIAS_SIGMA_INIT_DEG_S)),
-            {f.name for f in fields(BiasTracking)} | {'label', 'chosen_on'}),
+        bias_tracking=_settings(raw, 'bias_tracking', where, _tracking, TRACKING_KEYS),
+        blend=_settings(raw, 'blend', where, _blend, {'weight', 'tracking', 'label',
+                                                      'chosen_on'}),
         input_envelope=_settings(raw, 'input_envelope', where, lambda v: InputEnvelope(
             v.get('gyro_rad_s'), v.get('accel_offset_m_s2'),
-            v.get('fallback_rad_s', (0.0, 0.0, 0.0))), {f.name for f in fields(InputEnvelope)}),
+            v.get('fallback_rad_s', (0.0, 0.0, 0.0)), v.get('sustained_accel_m_s2')),
+            {f.name for f in fields(InputEnvelope)}),
         code_version=_optional(raw, 'code_version', where, str, 'a version'),
         members=len(members))

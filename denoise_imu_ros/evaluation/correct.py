@@ -22,25 +22,27 @@ from ..pipeline import stages
 
 
 def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch',
-                   rest: str = 'model', guard: str = 'model') -> np.ndarray:
+                   rest: str = 'model', guard: str = 'model', mix: str = 'model'
+                   ) -> np.ndarray:
     """
     Corrected gyro (N, 3) rad/s of raw samples (N, 6) by either engine.
 
     ``rest`` (``model``, ``on``, ``off``): whether the turn-on bias is removed from the
     gyro first and the output's bias tracked, as the node's ``rest_bias`` parameter;
-    ``guard`` (``model``, ``off``) as its ``envelope_guard``.
+    ``guard`` and ``mix`` (``model``, ``off``) as its ``envelope_guard`` and
+    ``classical_blend``.
     """
     if engine == 'streaming':
-        return stages.corrected(mf, imu, rest, guard)
+        return stages.corrected(mf, imu, rest, guard, mix=mix)
     from ..learn.checkpoint import load_model  # torch: the batch engine only
     from ..learn.model import correct_gyro
     net = load_model(mf.path).model
-    return stages.corrected(mf, imu, rest, guard, lambda fed: correct_gyro(net, fed))
+    return stages.corrected(mf, imu, rest, guard, lambda fed: correct_gyro(net, fed), mix)
 
 
 def correct_to_csv(model_spec: str, source: str, output: str,
                    imu_topic: str | None = None, engine: str = 'batch',
-                   rest: str = 'model', guard: str = 'model') -> int:
+                   rest: str = 'model', guard: str = 'model', mix: str = 'model') -> int:
     """
     Write ``timestamp_ns,wx,wy,wz`` for every IMU sample of an ASL folder or bag.
 
@@ -55,7 +57,7 @@ def correct_to_csv(model_spec: str, source: str, output: str,
                            f'receptive field ({field})')
     check_stream(rec.imu_stamp_ns, rec.imu, source, sample_rate(loaded),
                  loaded.arrays['input_std'], loaded.arrays['input_mean'])
-    omega = corrected_gyro(loaded, rec.imu, engine, rest, guard)
+    omega = corrected_gyro(loaded, rec.imu, engine, rest, guard, mix)
     with atomic_output(output, overwrite=True) as tmp, open(tmp, 'w') as f:
         f.write('timestamp_ns,wx,wy,wz\n')
         for t, w in zip(rec.imu_stamp_ns, omega):

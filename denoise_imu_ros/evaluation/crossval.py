@@ -33,7 +33,7 @@ import json
 import math
 from pathlib import Path
 import sys
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -43,7 +43,7 @@ from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..core.modelfile import sample_rate
-from ..core.schema import (BiasTracking, InputEnvelope, JUDGED, judged_on, ModelMeta,
+from ..core.schema import (BiasTracking, Blend, InputEnvelope, JUDGED, judged_on, ModelMeta,
                            parse_meta, REST_ONLY, TRACKER_ONLY)
 from ..data.load import load_sequence
 from ..learn import parallel
@@ -58,6 +58,10 @@ from ..pipeline import envelope, rest_bias, stages, vertical
 TRACKED = (TRACKER_ONLY, 'calibrated', 'network')
 CLASSICAL = ('raw', 'rest bias', TRACKER_ONLY)  # what a practitioner runs with no training
 LOSS_LIMIT = 1.1  # a learnt row deployed loses to tracker only by no more on one recording
+# the network's weight against the classical pipeline's (pipeline/blend.py): the first of
+# equal ones is chosen, so the network's own output wins a tie
+BLEND_WEIGHTS = (1.0, 0.7, 0.5, 0.3)
+UNBLENDED = 'network unblended'  # the network row before the blend, reported beside it
 # the candidates: VQF's biasSigmaMotion (its default 0.1 deg/s) and biasForgettingTime
 # (its default 100 s), beside none; each starts as certain of its 0 as its motion updates
 # ever make it, not at VQF's 0.5 deg/s for a raw gyro: what is left after the model is
@@ -185,6 +189,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     raw_rows: dict[str, dict[str, dict[str, float]]] = {}
     tracked: dict[str, Any] = {}      # recording -> candidate -> row -> figures
     tracked_seed: dict[str, Any] = {}  # the same for each seed alone
+    networks: dict[str, Networks] = {}  # recording -> the network's outputs, to blend
     fold_of: dict[str, int] = {}
     if sessions is not None and k is not None:
         raise TrainingError('--folds and --sessions: give one (sessions are the folds)')
@@ -229,15 +234,19 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
             gyros = [{TRACKER_ONLY: rest, 'calibrated': correct_gyro(calib.model, fed),
                       'network': correct_gyro(net.model, fed)} for net, calib in models]
             rate, drop = sample_rate(models[0][0]), vertical.drops_vertical(models[0][0].meta)
-            tracked[name] = _candidates(
-                seq, {m: np.mean([g[m] for g in gyros], axis=0) for m in TRACKED}, rate, fed,
-                ensemble_bounds, fields, drop)
+            ensemble = {m: np.mean([g[m] for g in gyros], axis=0) for m in TRACKED}
+            tracked[name] = _candidates(seq, ensemble, rate, fed, ensemble_bounds, fields, drop)
             tracked_seed[name] = [_candidates(seq, g, rate, fed, b, fields, drop)
                                   for g, b in zip(gyros, bounds)] if seeds is not None else []
+            networks[name] = Networks(
+                seq, fed, rate, fields['network'], drop,
+                [ensemble['network']] + ([g['network'] for g in gyros] if seeds else []),
+                [ensemble_bounds['network']] + ([b['network'] for b in bounds] if seeds else []))
             fold_of[name] = i
     key, why = judged_on(recipe.heading_weight)
     per_recording, per_seed, tracking = _nested(raw_rows, tracked, tracked_seed, fold_of,
                                                 seeds or [], key)
+    blend = _blend(networks, tracking, per_recording, per_seed, fold_of, seeds or [], key)
     report = summarize(per_recording, key)
     sizes = sorted({len(train) for _, train in pairs})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
@@ -248,7 +257,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                  f"recipe's {len(recipe.sequences)} recordings; a model of "
                                  'the whole recipe trains on all of them, so these figures '
                                  'judge networks trained on less data than it'),
-                  tracking=tracking, judged_on=key,
+                  tracking=tracking, blend=blend, judged_on=key,
                   **({} if why is None else {'judged_on_why': why}),
                   **({'seed': recipe.seed} if seeds is None else {
                       'seeds': runs, 'per_seed': {str(s): summarize(r, key)
@@ -368,6 +377,64 @@ def _nested(raw_rows: dict[str, Any], tracked: dict[str, Any], tracked_seed: dic
                            for label in CANDIDATES} for m in TRACKED},
         'recordings': {n: {m: {label: tracked[n][label][m][key] for label in CANDIDATES}
                            for m in TRACKED} for n in tracked}}
+
+
+class Networks(NamedTuple):
+    """A held-out recording's network outputs, untracked: the ensemble's, then each seed's."""
+
+    seq: Any
+    fed: np.ndarray
+    rate_hz: float
+    field: int
+    drop: bool
+    gyros: list[np.ndarray]
+    bounds: list[InputEnvelope | None]
+
+
+def _blend(networks: dict[str, Networks], tracking: dict[str, Any],
+           per_recording: dict[str, Any], per_seed: dict[int, Any], fold_of: dict[str, int],
+           seeds: list[int], key: str) -> dict[str, Any]:
+    """
+    Blend the network rows with the classical pipeline's; return the report's ``blend``.
+
+    Each recording's network output, tracked as its fold's figures are, is blended with
+    its tracker-only row's gyro at every weight of BLEND_WEIGHTS (the classical alone
+    beyond the envelope's sustained bound, :mod:`~denoise_imu_ros.pipeline.blend`). A
+    fold's recordings take the weight of least mean per-recording ratio to tracker only
+    over the other folds' recordings; the shipped models the weight of least over all of
+    them. The ``network`` rows become the blended ones, the unblended kept beside them.
+    """
+    figures: dict[str, list[dict[float, Any]]] = {}  # recording -> [ensemble, seeds] -> w
+    for name, n in networks.items():
+        chosen = tracking['per_fold'][str(fold_of[name])]
+        classical = CANDIDATES[chosen[TRACKER_ONLY]]
+        figures[name] = [{w: score(n.seq, n.seq.on_poses(stages.finish(
+            gyro, n.fed, n.rate_hz, CANDIDATES[chosen['network']], bounds, n.field, n.drop,
+            Blend(w, classical)))) for w in BLEND_WEIGHTS}
+            for gyro, bounds in zip(n.gyros, n.bounds)]
+
+    def ratio(names: list[str], w: float) -> float:
+        return float(np.mean([figures[n][0][w][key]
+                              / max(per_recording[n][TRACKER_ONLY][key], 1e-9) for n in names]))
+
+    def best(names: list[str]) -> float:
+        return min(BLEND_WEIGHTS, key=lambda w: ratio(names, w))
+    weight = {f: best([n for n in figures if fold_of[n] != f]) for f in set(fold_of.values())}
+    for name, rows in figures.items():
+        w = weight[fold_of[name]]
+        per_recording[name][UNBLENDED] = per_recording[name]['network']
+        per_recording[name]['network'] = rows[0][w]
+        for k, seed in enumerate(seeds):
+            per_seed[seed][name][UNBLENDED] = per_seed[seed][name]['network']
+            per_seed[seed][name]['network'] = rows[k + 1][w]
+    shipped = best(list(figures))
+    return {'chosen': {'weight': shipped, 'tracking': tracking['chosen'][TRACKER_ONLY]},
+            'chosen_on': 'the least mean ratio to tracker only over every held-out recording; '
+                         "each fold's figures use the other folds' choice",
+            'per_fold': {str(f): w for f, w in weight.items()},
+            'candidates': {str(w): ratio(list(figures), w) for w in BLEND_WEIGHTS},
+            'recordings': {n: {str(w): rows[0][w][key] for w in BLEND_WEIGHTS}
+                           for n, rows in figures.items()}}
 
 
 def _labelled(label: str) -> dict[str, Any] | None:

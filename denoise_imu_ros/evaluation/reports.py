@@ -11,7 +11,8 @@ from typing import Any
 from ..core.metrics import ROE_DISTANCES_M
 from ..core.schema import JUDGED, ModelMeta
 
-CROSSVAL_METHODS = ('raw', 'rest bias', 'tracker only', 'calibrated', 'network')
+CROSSVAL_METHODS = ('raw', 'rest bias', 'tracker only', 'calibrated', 'network unblended',
+                    'network')
 
 
 def scored_on_training_samples(meta: ModelMeta, names: list[str],
@@ -89,6 +90,14 @@ def crossval_table(report: dict[str, Any]) -> str:
                      f'chosen on {tracking["chosen_on"]}: {"; ".join(said)} (for the '
                      f'models this verdict is attached to); the figures above: '
                      f'{"; ".join(folds)}.\n')
+    if 'blend' in report:
+        blend = report['blend']
+        folds = ', '.join(f'fold {f} {w:g}' for f, w in blend['per_fold'].items())
+        lines.append("\nThe network rows blend the network's output with the classical "
+                     "pipeline's (the tracker-only gyro), that alone where the acceleration "
+                     'stays longer off gravity than in training; the weight of the network, '
+                     f'chosen on {blend["chosen_on"]}: {blend["chosen"]["weight"]:g} (for the '
+                     f'models this verdict is attached to); the figures above: {folds}.\n')
     if 'per_seed' in report:
         key = report.get('judged_on', 'aoe_deg')
         alone = [f'seed {s} {r["mean"]["network"][key]:.2f}'

@@ -366,7 +366,9 @@ def _envelope(model: GyroNet, seqs: list[Sequence], cfg: TrainConfig,
     fed = [s.imu[:m] for s, m in zip(seqs, window_lengths(seqs, cfg))]
     corrections = None if rest is not None else [  # the turn-on bias is left to the model
         correct_gyro(model, imu) - imu[:, :3] for imu in fed]
-    return envelope.measure(fed, corrections).as_dict()
+    held = envelope.sustained_bound((s.imu for s in seqs), float(np.median(
+        [s.rate_hz for s in seqs])))
+    return envelope.measure(fed, corrections, held).as_dict()
 
 
 def _finish(cfg: TrainConfig, seqs: list[Sequence], candidates: dict[str, dict[str, Any]],

@@ -43,9 +43,11 @@ from ..core.limits import GRAVITY_M_S2
 from ..core.schema import InputEnvelope
 
 __all__ = ['CHOICES', 'combine', 'excursion', 'Guard', 'guard_batch', 'measure', 'outside',
-           'resolve', 'too_fast', 'untrusted']
+           'resolve', 'sustained', 'sustained_bound', 'SUSTAINED_S', 'too_fast', 'untrusted',
+           'within_field']
 
 CHOICES = ('model', 'off')  # the node's envelope_guard parameter, the offline tools' option
+SUSTAINED_S = 1.0  # the accelerometer's excursion from gravity averaged over this long
 
 
 def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -59,19 +61,45 @@ def excursion(imu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             np.abs(np.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2))
 
 
-def measure(imus: Iterable[np.ndarray], corrections: Iterable[np.ndarray] | None = None
-            ) -> InputEnvelope:
+def sustained(imu: np.ndarray, window: int) -> np.ndarray:
+    """
+    Return per sample of (N, 6) the causal mean of |accelerometer norm - g| over ``window``.
+
+    Over the samples since the first where fewer; summed as :class:`Sustained` sums them,
+    so both agree bit for bit.
+    """
+    total = np.concatenate([[0.0], np.cumsum(excursion(imu)[1])])
+    n = np.arange(len(imu))
+    start = np.maximum(n + 1 - window, 0)
+    return (total[n + 1] - total[start]) / (n + 1 - start)
+
+
+def sustained_bound(imus: Iterable[np.ndarray], rate_hz: float) -> float:
+    """
+    Return the largest :func:`sustained` excursion (over SUSTAINED_S) of whole recordings.
+
+    Beyond it a recording accelerates for longer than any training recording did (BROAD:
+    another session's fast translation), where a network's output lost to the classical
+    pipeline's (docs/experiments.md, runs 24 and 26).
+    """
+    window = max(1, round(SUSTAINED_S * rate_hz))
+    return float(max(sustained(imu, window).max() for imu in imus))
+
+
+def measure(imus: Iterable[np.ndarray], corrections: Iterable[np.ndarray] | None = None,
+            sustained_m_s2: float | None = None) -> InputEnvelope:
     """
     Return the envelope of every sample of ``imus`` (each (N, 6), as the model is fed).
 
     ``corrections``: the model's output less its input gyro on the same samples, whose
     mean is the fallback; None: no fallback correction (a turn-on bias removed first).
+    ``sustained_m_s2``: the recordings' :func:`sustained_bound`, stored with the bounds.
     """
     gyro, accel = zip(*(excursion(imu) for imu in imus))
     fallback = (0.0, 0.0, 0.0) if corrections is None else tuple(
         float(v) for v in np.concatenate(list(corrections)).mean(0))
     return InputEnvelope(float(np.max(np.concatenate(gyro))),
-                         float(np.max(np.concatenate(accel))), fallback)
+                         float(np.max(np.concatenate(accel))), fallback, sustained_m_s2)
 
 
 def combine(envelopes: list[InputEnvelope | None]) -> InputEnvelope | None:
@@ -79,13 +107,15 @@ def combine(envelopes: list[InputEnvelope | None]) -> InputEnvelope | None:
     Return the envelope of an ensemble of these models (None if one has none).
 
     The widest bounds, and the mean fallback: the members' mean corrections averaged, as
-    their outputs are.
+    their outputs are (no sustained bound where a member has none).
     """
     if not envelopes or any(e is None for e in envelopes):
         return None
+    held = [e.sustained_accel_m_s2 for e in envelopes]
     return InputEnvelope(max(e.gyro_rad_s for e in envelopes),
                          max(e.accel_offset_m_s2 for e in envelopes),
-                         tuple(np.mean([e.fallback_rad_s for e in envelopes], axis=0)))
+                         tuple(np.mean([e.fallback_rad_s for e in envelopes], axis=0)),
+                         None if None in held else max(held))
 
 
 def outside(imu: np.ndarray, envelope: InputEnvelope) -> np.ndarray:
@@ -94,7 +124,7 @@ def outside(imu: np.ndarray, envelope: InputEnvelope) -> np.ndarray:
     return (gyro > envelope.gyro_rad_s) | (accel > envelope.accel_offset_m_s2)
 
 
-def _in_field(bad: np.ndarray, field: int) -> np.ndarray:
+def within_field(bad: np.ndarray, field: int) -> np.ndarray:
     """Whether any of samples n - field + 1 ... n is ``bad`` (N,), for each n (N,)."""
     count = np.concatenate([[0], np.cumsum(bad)])
     n = np.arange(len(bad))
@@ -103,12 +133,12 @@ def _in_field(bad: np.ndarray, field: int) -> np.ndarray:
 
 def untrusted(fed: np.ndarray, envelope: InputEnvelope, field: int) -> np.ndarray:
     """Whether any of samples n - field + 1 ... n of (N, 6) is outside, for each n (N,)."""
-    return _in_field(outside(fed, envelope), field)
+    return within_field(outside(fed, envelope), field)
 
 
 def too_fast(fed: np.ndarray, envelope: InputEnvelope, field: int) -> np.ndarray:
     """Whether any of samples n - field + 1 ... n of (N, 6) turns faster, for each n (N,)."""
-    return _in_field(excursion(fed)[0] > envelope.gyro_rad_s, field)
+    return within_field(excursion(fed)[0] > envelope.gyro_rad_s, field)
 
 
 def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | None,

@@ -43,9 +43,10 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from . import envelope, rest_bias
+from .blend import Blender
 from .fusion import FusionSettings, GravityFilter
-from .stages import (Attitude, BiasTrackingStage, correction, EnvelopeCheck, Event, Flow,
-                     Network, Orientation, Pipeline, TurnOnBias, VerticalDrop)
+from .stages import (Attitude, BiasTrackingStage, ClassicalMix, correction, EnvelopeCheck,
+                     Event, Flow, Network, Orientation, Pipeline, TurnOnBias, VerticalDrop)
 from .streaming import StreamingCorrector
 from .vertical import Vertical
 from ..core.limits import in_range, MAX_GAP_FACTOR, RATE_TOLERANCE
@@ -111,21 +112,24 @@ class OnlineDenoiser:
     @classmethod
     def from_model_file(cls, model: ModelFile, fusion: FusionSettings | None = None,
                         rest_choice: str = 'model', guard_choice: str = 'model',
+                        blend_choice: str = 'model',
                         accel_bias: tuple[float, float, float] | None = None,
                         **options: Any) -> OnlineDenoiser:
         """
         Build the pipeline of a model file (node and process-bag): numpy only, no torch.
 
         Its correcting stages (:func:`~denoise_imu_ros.pipeline.stages.correction`, with
-        ``rest_choice`` and ``guard_choice`` as the node's ``rest_bias`` and
-        ``envelope_guard``), the open-loop attitude and, with ``fusion`` settings, the
-        gravity-aided orientation; the accelerometer bias they remove is removed from the
-        attitude's initial tilt as well (unless ``accel_bias`` is given).
+        ``rest_choice``, ``guard_choice`` and ``blend_choice`` as the node's
+        ``rest_bias``, ``envelope_guard`` and ``classical_blend``), the open-loop attitude
+        and, with ``fusion`` settings, the gravity-aided orientation; the accelerometer
+        bias they remove is removed from the attitude's initial tilt as well (unless
+        ``accel_bias`` is given).
         """
         rate = sample_rate(model)
         if accel_bias is None:
             accel_bias = (0.0, 0.0, 0.0) if fusion is None else fusion.accel_bias_m_s2
-        stages = [*correction(model, rest_choice, guard_choice), Attitude(accel_bias)]
+        stages = [*correction(model, rest_choice, guard_choice, mix=blend_choice),
+                  Attitude(accel_bias)]
         if fusion is not None:
             stages.append(Orientation(rate, fusion))
         return cls(Pipeline(stages), rate, **options)
@@ -152,6 +156,12 @@ class OnlineDenoiser:
         """Return what guards the input envelope (None: nothing does)."""
         stage = self.pipeline.get(EnvelopeCheck)
         return None if stage is None else stage.guard
+
+    @property
+    def blender(self) -> Blender | None:
+        """Return what blends the output with the classical pipeline's (None: nothing does)."""
+        stage = self.pipeline.get(ClassicalMix)
+        return None if stage is None else stage.blender
 
     @property
     def vertical(self) -> Vertical | None:

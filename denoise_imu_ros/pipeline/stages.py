@@ -19,6 +19,7 @@ envelope check  ``Guard.check``            ``too_fast``               start, gap
 network         ``StreamingCorrector``     torch's ``GyroNet``        start, gap, jump
 bias tracking   ``BiasTracker.update``     ``tracked_bias``           start, jump
 envelope apply  ``Guard.apply``            ``guard_batch``            (the check's)
+classical mix   ``Blender.apply``          ``blend_batch``            start, jump
 vertical drop   ``Vertical.apply``         ``drop_vertical``          start, jump
 attitude        :class:`Attitude`          the same step, in a loop   start, jump, request
 orientation     ``GravityFilter.update``   ``fuse``                   start, jump, request
@@ -40,16 +41,17 @@ from typing import Any, Callable, Iterable
 import numpy as np
 
 from . import envelope, rest_bias
+from .blend import blend_batch, Blender, resolve as resolve_blend
 from .fusion import fuse, FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
 from .vertical import drop_vertical, drops_vertical, Vertical
 from ..core import rotation
 from ..core.limits import MAX_GAP_FACTOR
 from ..core.modelfile import ModelFile, sample_rate
-from ..core.schema import BiasTracking, InputEnvelope, RestBiasSettings
+from ..core.schema import BiasTracking, Blend, InputEnvelope, RestBiasSettings
 
-__all__ = ['Attitude', 'BiasTrackingStage', 'correction', 'corrected', 'EnvelopeApply',
-           'EnvelopeCheck', 'Event', 'finish', 'Flow', 'model_input', 'Network',
+__all__ = ['Attitude', 'BiasTrackingStage', 'ClassicalMix', 'correction', 'corrected',
+           'EnvelopeApply', 'EnvelopeCheck', 'Event', 'finish', 'Flow', 'model_input', 'Network',
            'Orientation', 'Pipeline', 'Stage', 'STAGES', 'TurnOnBias', 'VerticalDrop']
 
 
@@ -234,6 +236,26 @@ class EnvelopeApply(Stage):
                                         self.guard.field, flow.bias)
 
 
+class ClassicalMix(Stage):
+    """The output blended with the classical pipeline's, which alone is given beyond training."""
+
+    def __init__(self, blender: Blender) -> None:
+        self.blender = blender
+
+    def reset(self, events: frozenset[Event] = RUN) -> None:
+        """Start the classical pipeline's tracker and the acceleration's mean again."""
+        self.blender.reset()
+
+    def step(self, flow: Flow) -> None:
+        """Blend one output."""
+        flow.out = self.blender.apply(flow.out, flow.fed)
+
+    def run(self, flow: Flow) -> None:
+        """Blend every output."""
+        b = self.blender
+        flow.out = blend_batch(flow.out, flow.fed, b.rate_hz, b.blend, b.bounds, b.field)
+
+
 class VerticalDrop(Stage):
     """A heading-less model's output less its correction about the vertical."""
 
@@ -326,6 +348,7 @@ STAGES: tuple[tuple[type[Stage], frozenset[Event]], ...] = (
     (Network, HISTORY),
     (BiasTrackingStage, RUN),
     (EnvelopeApply, frozenset()),  # its guard is the check's, reset there
+    (ClassicalMix, RUN),
     (VerticalDrop, RUN),
     (Attitude, ATTITUDE),
     (Orientation, ATTITUDE),
@@ -372,7 +395,8 @@ class Pipeline:
 
 
 def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
-               batch: Callable[[np.ndarray], np.ndarray] | None = None) -> list[Stage]:
+               batch: Callable[[np.ndarray], np.ndarray] | None = None,
+               mix: str = 'model') -> list[Stage]:
     """
     Return the correcting stages of a model file (numpy only, no torch).
 
@@ -381,13 +405,17 @@ def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
     bias tracked (:func:`~denoise_imu_ros.pipeline.rest_bias.tracking`) and the correction
     about the vertical dropped (:func:`~denoise_imu_ros.pipeline.vertical.drops_vertical`)
     where the model file says; ``guard`` as its ``envelope_guard`` (``model``, ``off``:
-    :func:`~denoise_imu_ros.pipeline.envelope.resolve`). ``batch``: the network over
-    arrays (torch's, for a model loaded with torch) instead of the per-sample engine.
+    :func:`~denoise_imu_ros.pipeline.envelope.resolve`); ``mix`` as its ``blend``
+    (``model``, ``off``: :func:`~denoise_imu_ros.pipeline.blend.resolve`), the
+    classical pipeline's alone beyond the envelope's sustained bound only where the
+    envelope guards. ``batch``: the network over arrays (torch's, for a model loaded with
+    torch) instead of the per-sample engine.
     """
     rate = sample_rate(model)
     settings = rest_bias.resolve(model.meta, rest)
     tracking = rest_bias.tracking(model.meta, rest)
     bounds = envelope.resolve(model.meta, guard)
+    blend = resolve_blend(model.meta, mix)
     stages: list[Stage] = [Network(
         StreamingCorrector(model.config, model.arrays) if batch is None else None, batch)]
     if settings is not None:
@@ -396,6 +424,8 @@ def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
         stages.append(BiasTrackingStage(tracking, rate))
     if bounds is not None:
         stages += _guarded(bounds, model.config.receptive_field)
+    if blend is not None:
+        stages.append(ClassicalMix(Blender(blend, rate, bounds, model.config.receptive_field)))
     if drops_vertical(model.meta, rest):
         stages.append(VerticalDrop(rate))
     return stages
@@ -407,9 +437,10 @@ def _guarded(bounds: InputEnvelope, field: int) -> list[Stage]:
 
 
 def corrected(model: ModelFile, imu: np.ndarray, rest: str = 'model', guard: str = 'model',
-              batch: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
+              batch: Callable[[np.ndarray], np.ndarray] | None = None, mix: str = 'model'
+              ) -> np.ndarray:
     """Return the corrected gyro (N, 3) of a recording's raw samples (N, 6), one run."""
-    return Pipeline(correction(model, rest, guard, batch)).run(Flow.recording(imu)).out
+    return Pipeline(correction(model, rest, guard, batch, mix)).run(Flow.recording(imu)).out
 
 
 def model_input(model: Any, imu: np.ndarray, rest: str = 'model') -> np.ndarray:
@@ -421,16 +452,18 @@ def model_input(model: Any, imu: np.ndarray, rest: str = 'model') -> np.ndarray:
 
 def finish(output: np.ndarray, fed: np.ndarray, rate_hz: float,
            tracking: BiasTracking | None, bounds: InputEnvelope | None, field: int,
-           vertical: bool = False) -> np.ndarray:
+           vertical: bool = False, blend: Blend | None = None) -> np.ndarray:
     """
     Return a network's ``output`` (N, 3) for its input ``fed`` (N, 6) through the stages after it.
 
     With these settings rather than a model file's: ``crossval`` tries several trackings
-    on one output, and on the mean of its folds' outputs.
+    and blends on one output, and on the mean of its folds' outputs.
     """
     stages: list[Stage] = [] if tracking is None else [BiasTrackingStage(tracking, rate_hz)]
     if bounds is not None:
         stages += _guarded(bounds, field)
+    if blend is not None:
+        stages.append(ClassicalMix(Blender(blend, rate_hz, bounds, field)))
     if vertical:
         stages.append(VerticalDrop(rate_hz))
     return Pipeline(stages).run(Flow(fed, out=output)).out

@@ -89,6 +89,11 @@ def status(den: OnlineDenoiser, withheld: dict[str, int], silent_s: float | None
     if guard is not None:  # samples given the fallback (motion it was not trained on)
         values['envelope_guarded_samples'] = str(guard.guarded)
         values['envelope_trusted'] = str(guard.trusted)
+    blender = den.blender
+    values['classical_blend_applied'] = str(blender is not None)
+    if blender is not None:  # the network's weight, and the samples given the classical alone
+        values['classical_blend_weight'] = f'{blender.blend.weight:g}'
+        values['classical_only_samples'] = str(blender.classical_only)
     return Status(level, message, values)
 
 

@@ -119,6 +119,12 @@ class Settings:
         "estimate held through faster rotation: 'model' (where the model file has an "
         'envelope) or off (the correction everywhere, tracked throughout).', read_only=True,
         switches=(False,))
+    classical_blend: str | bool = _p(
+        'model', "The output blended with the classical pipeline's (the gyro less its "
+        'turn-on bias, its bias tracked, no model), and that alone where the acceleration '
+        "stays off gravity longer than in training: 'model' (the weight the model file's "
+        "cross-validation chose, where it did) or off (the network's output).",
+        read_only=True, switches=(False,))
     fused_orientation_stddev: float = _p(
         -1.0, 'rad; imu/data orientation covariance diagonal; < 0: the fused errors the '
         'model file stores (0.05 rad without them); 0: zeros, which ROS reads as "unknown".',
@@ -231,7 +237,8 @@ class Settings:
         fusion = self.fusion(loaded)
         den = OnlineDenoiser.from_model_file(
             loaded, fusion if self.publish_fused else None, self.choice('rest_bias'),
-            self.choice('envelope_guard'), accel_bias=fusion.accel_bias_m_s2)
+            self.choice('envelope_guard'), self.choice('classical_blend'),
+            accel_bias=fusion.accel_bias_m_s2)
         self.retune(den)
         return den
 

@@ -178,10 +178,10 @@ def test_crossval_of_a_recipe_without_the_heading_chooses_and_reports_on_the_til
     assert report['tracking']['chosen_on'].startswith('the mean tilt error')
     tracking = report['tracking']
     for fold, name in (('0', 'rec0'), ('1', 'rec1')):  # the candidates' figures are tilts
-        for m in ('network', 'calibrated'):
+        for m, row in (('network', 'network unblended'), ('calibrated', 'calibrated')):
             label = tracking['per_fold'][fold][m]
-            assert tracking['recordings'][name][m][label] == report['recordings'][name][m][
-                'tilt_deg'] != report['recordings'][name][m]['aoe_deg']
+            assert tracking['recordings'][name][m][label] == report['recordings'][name][row][
+                'tilt_deg'] != report['recordings'][name][row]['aoe_deg']
     printed = crossval_table(report)
     assert 'AOE 3-D / yaw / tilt in degrees' in printed
     assert "Judged on the tilt error alone: the recipe does not trust the poses' heading" \
@@ -250,6 +250,15 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
             'sigma_motion_deg_s', 'forgetting_s', 'sigma_init_deg_s')}
         assert stored.sigma_init_deg_s == stored.sigma_motion_deg_s  # started at its sigma
     assert set(report['tracking']['per_fold']) == {'0', '1', '2'}
+    # and its blend with the classical pipeline, which the model file's pipeline then runs
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.pipeline.stages import ClassicalMix, correction
+    blend = load_model(model_file).meta.blend
+    assert blend.weight == report['blend']['chosen']['weight']
+    assert (blend.tracking is None) == (report['tracking']['chosen']['tracker only'] is None)
+    attached = read_model_file(model_file)
+    assert ClassicalMix in {type(s) for s in correction(attached)}
+    assert ClassicalMix not in {type(s) for s in correction(attached, mix='off')}
     assert main(['eval', '--model', str(model_file), '--data', str(data), '--sequences',
                  'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0
     assert json.loads((tmp_path / 'ev' / 'results.json').read_text())['crossval'] == report
@@ -349,13 +358,24 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
 
     def tracked(gyro):
         return score(seq, track_bias(gyro, seq.imu[:, 3:], 200.0, chosen))['aoe_deg']
-    assert report['recordings']['rec0']['network']['aoe_deg'] == pytest.approx(
+    assert report['recordings']['rec0']['network unblended']['aoe_deg'] == pytest.approx(
         tracked(correct_gyro(merge([n.model for n in nets]), seq.imu)), rel=1e-4)
     for s, net in zip(('3', '5'), nets):
-        assert report['per_seed'][s]['recordings']['rec0']['network']['aoe_deg'] == (
+        assert report['per_seed'][s]['recordings']['rec0']['network unblended']['aoe_deg'] == (
             pytest.approx(tracked(correct_gyro(net.model, seq.imu)), rel=1e-6))
     assert report['recordings']['rec0']['network'] != report['per_seed']['3']['recordings'][
         'rec0']['network']
+    # the network rows are blended with the tracker-only row at the weight of least ratio
+    # to it on the other fold's recording
+    blend = report['blend']
+    for fold, name, other in (('0', 'rec0', 'rec1'), ('1', 'rec1', 'rec0')):
+        bar = report['recordings'][other]['tracker only']['aoe_deg']
+        ratios = {float(w): a / bar for w, a in blend['recordings'][other].items()}
+        assert blend['per_fold'][fold] == min(ratios, key=ratios.get)
+        assert report['recordings'][name]['network']['aoe_deg'] == blend['recordings'][name][
+            str(blend['per_fold'][fold])]
+    assert set(blend['candidates']) == {'1.0', '0.7', '0.5', '0.3'}
+    assert 'The network rows blend' in printed.out
     assert main(args + ['--seeds', '3', '3']) == 1
     assert '--seeds must list distinct seeds' in capsys.readouterr().err
 

@@ -48,6 +48,11 @@ def test_a_few_steps_on_real_data_lower_the_validation_loss(euroc, tmp_path):
     # the motion trained on, that the runtime holds the correction beyond
     envelope = load_model(tmp_path / 'chosen.safetensors').meta.input_envelope
     assert 0.5 < envelope.gyro_rad_s < 10 and 0.5 < envelope.accel_offset_m_s2 < 50
+    # and how long it accelerated, over the training recordings whole
+    from denoise_imu_ros.pipeline.envelope import sustained_bound
+    assert envelope.sustained_accel_m_s2 == sustained_bound(
+        [load_sequence(euroc / n).imu for n in meta['train_sequences']], meta['sample_rate_hz'])
+    assert envelope.sustained_accel_m_s2 < envelope.accel_offset_m_s2
 
 
 def test_twenty_hz_ground_truth_trains_with_a_finite_falling_loss(euroc, tmp_path):

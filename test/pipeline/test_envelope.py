@@ -6,7 +6,7 @@ from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.schema import InputEnvelope, parse_meta
 from denoise_imu_ros.pipeline.envelope import (combine, Guard, guard_batch, measure, resolve,
-                                               too_fast, untrusted)
+                                               sustained, sustained_bound, too_fast, untrusted)
 import numpy as np
 import pytest
 
@@ -27,6 +27,22 @@ def test_the_envelope_is_the_largest_gyro_norm_and_accelerometer_offset_trained_
     # the fallback: the mean correction over every sample
     corrections = [np.full((100, 3), 0.01), np.full((50, 3), 0.04)]
     np.testing.assert_allclose(measure([a, b], corrections).fallback_rad_s, [0.02] * 3)
+
+
+def test_the_sustained_excursion_is_the_causal_mean_over_the_last_window_of_samples():
+    imu = _imu(60, 2)
+    dev = np.abs(np.linalg.norm(imu[:, 3:], axis=1) - GRAVITY_M_S2)
+    expected = [dev[max(0, n - 9):n + 1].mean() for n in range(60)]
+    np.testing.assert_allclose(sustained(imu, 10), expected, rtol=1e-12)
+    # the bound: the largest over recordings, over one second of samples
+    b = _imu(30, 3)
+    b[5:25, 3:] = [0.0, 0.0, GRAVITY_M_S2 + 4.0]  # 20 samples 4 m/s^2 off gravity
+    assert sustained_bound([imu, b], 20.0) == pytest.approx(4.0)
+    assert sustained_bound([imu], 20.0) == pytest.approx(sustained(imu, 20).max())
+    assert combine([InputEnvelope(1.0, 2.0, sustained_accel_m_s2=0.5),
+                    InputEnvelope(1.0, 2.0, sustained_accel_m_s2=0.7)]).sustained_accel_m_s2 == 0.7
+    assert combine([InputEnvelope(1.0, 2.0, sustained_accel_m_s2=0.5),
+                    InputEnvelope(1.0, 2.0)]).sustained_accel_m_s2 is None
 
 
 def test_the_fallback_replaces_the_correction_for_a_receptive_field_after_a_sample_outside():

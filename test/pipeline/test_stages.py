@@ -2,15 +2,18 @@
 # SPDX-License-Identifier: Apache-2.0
 """The stage table: one order, one reset matrix, per sample equal to over arrays."""
 
+import dataclasses
 import re
 
 from denoise_imu_ros.core.modelfile import read_model_file
-from denoise_imu_ros.core.schema import RestBiasSettings
+from denoise_imu_ros.core.schema import Blend, RestBiasSettings
 from denoise_imu_ros.data.load import load_imu
-from denoise_imu_ros.pipeline import stages
+from denoise_imu_ros.pipeline import envelope, stages
+from denoise_imu_ros.pipeline.blend import Blender
 from denoise_imu_ros.pipeline.online import OnlineDenoiser
-from denoise_imu_ros.pipeline.stages import (Attitude, correction, Event, Flow, Orientation,
-                                             Pipeline, STAGES, TurnOnBias, VerticalDrop)
+from denoise_imu_ros.pipeline.stages import (Attitude, ClassicalMix, correction, Event, Flow,
+                                             Orientation, Pipeline, STAGES, TurnOnBias,
+                                             VerticalDrop)
 from helpers import DATA
 import numpy as np
 import pytest
@@ -28,18 +31,27 @@ def recording():
 
 
 def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
-    """broad_network has every stage (the vertical drop added): node and eval agree bit for bit."""
+    """
+    broad_network has every stage (a blend and the vertical drop added): node and eval agree.
+
+    Bit for bit, with the guard and the blend's sustained fallback acting on part of it.
+    """
     stamps, imu = recording
     model = read_model_file('broad_network')
     rate, fusion = model.meta.sample_rate_hz, model.meta.fusion.chosen
+    field = model.config.receptive_field
+    held = float(np.median(envelope.sustained(imu, round(rate))))  # half of it beyond
+    bounds = dataclasses.replace(model.meta.input_envelope, sustained_accel_m_s2=held)
 
     def every_stage():
-        return Pipeline([*correction(model), VerticalDrop(rate), Attitude(fusion.accel_bias_m_s2),
-                         Orientation(rate, fusion)])
+        mix = ClassicalMix(Blender(Blend(0.6, model.meta.bias_tracking), rate, bounds, field))
+        return Pipeline([*correction(model), mix, VerticalDrop(rate),
+                         Attitude(fusion.accel_bias_m_s2), Orientation(rate, fusion)])
     online = OnlineDenoiser(every_stage(), rate)
     assert [type(s) for s in online.pipeline.stages] == [kind for kind, _ in STAGES]
     outs = [online.process(int(t), row[:3], row[3:]) for t, row in zip(stamps, imu)]
     assert online.counts['accepted'] == len(imu) and online.guard.guarded > 0  # the guard acted
+    assert 0 < online.pipeline.get(ClassicalMix).blender.classical_only < len(imu)
     batch = every_stage().run(Flow.recording(imu, stamps, rate))
     np.testing.assert_array_equal(np.array([o.gyro for o in outs]), batch.out)
     np.testing.assert_array_equal(np.array([o.attitude for o in outs]), batch.attitude)

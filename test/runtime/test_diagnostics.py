@@ -69,3 +69,20 @@ def test_a_turn_on_bias_far_from_its_prior_is_a_warning(model_file):
     assert said.level == Level.WARN and said.message.startswith('turn-on bias found at rest 1.49')
     assert said.values['rest_bias_ambiguous'] == 'True'
     assert said.values['rest_bias_source'] == 'stillness'
+
+
+def test_a_blend_says_its_weight_and_the_samples_given_the_classical_pipeline_alone(model_file):
+    """Accelerating longer than in training: the classical pipeline's output alone."""
+    add_metadata(model_file, blend={'weight': 0.7, 'tracking': None},
+                 input_envelope={'gyro_rad_s': 10.0, 'accel_offset_m_s2': 20.0,
+                                 'sustained_accel_m_s2': 1.0})
+    den = OnlineDenoiser.from_model_file(read_model_file(model_file))
+    said = status(den, WITHHELD, None, '/imu/data_raw')
+    assert said.values['classical_blend_applied'] == 'True'
+    assert said.values['classical_blend_weight'] == '0.7'
+    _fed(den, 50)
+    assert status(den, WITHHELD, 0.01, '/imu/data_raw').values['classical_only_samples'] == '0'
+    for k in range(100):  # 2.8 m/s^2 off gravity for 0.5 s: 1.4 m/s^2 over the last second
+        den.process(2 * 10**9 + k * 5_000_000, STILL[0], np.array([8.0, 0.0, 9.81]))
+    assert int(status(den, WITHHELD, 0.01, '/imu/data_raw').values[
+        'classical_only_samples']) > 0

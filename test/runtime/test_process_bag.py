@@ -454,7 +454,9 @@ def test_process_bag_with_the_nodes_params_file_writes_what_that_node_publishes(
     add_metadata(model_file,
                  rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict(),
                  bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0},
-                 input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0})
+                 input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0},
+                 blend={'weight': 0.5, 'tracking': {'sigma_motion_deg_s': 0.1,
+                                                    'forgetting_s': 100.0}})
     imu = read_imu_messages(SAMPLE)[:700]
     t0 = msgs.stamp_ns(imu[0].header)
     stamps = [t0 + 5_000_000 * (k if k < 300 else k + 3) for k in range(600)]
@@ -470,7 +472,9 @@ def test_process_bag_with_the_nodes_params_file_writes_what_that_node_publishes(
               'time_jump_threshold': 0.5, 'rate_tolerance': 0.1, 'publish_fused': fused,
               'fusion_tau_acc': 7.0, 'fusion_bias_estimation': 'on',
               'fusion_accel_bias': 'off', 'rest_bias': 'off', 'envelope_guard': 'off',
-              'fused_orientation_stddev': 0.02}
+              'classical_blend': 'off', 'fused_orientation_stddev': 0.02}
+    from denoise_imu_ros.runtime.settings import Settings  # every one but the model's and depth
+    assert set(params) == {n for n, _, _ in Settings.specs()} - {'model', 'input_queue_depth'}
     path = tmp_path / 'params.yaml'
     path.write_text(yaml.safe_dump({'/**': {'ros__parameters': {
         'model': str(model_file), **params}}}))
