@@ -1,6 +1,6 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
-"""Store the input envelope in model files trained before training stored it."""
+"""Store the input envelope, its sustained bound too, in model files trained before it was stored."""
 
 import argparse
 from pathlib import Path
@@ -38,7 +38,7 @@ def main() -> None:
         if folder is None:
             sys.exit(f'{path}: the file names no training folder: give --data')
         folder = Path(folder)
-        imus, corrections = [], []
+        imus, corrections, whole = [], [], []
         for name in meta.train_sequences:
             seq = load_sequence(folder / name, meta.recipe('imu_topic'),
                                 meta.recipe('pose_topic'), meta.recipe('max_gt_gap_s'),
@@ -46,13 +46,16 @@ def main() -> None:
                                 poses=meta.recipe('poses'))
             fed = seq.on_poses(stages.model_input(loaded, seq.stream))[:meta.training_span]
             imus.append(fed)
+            whole.append(seq.imu)
             corrections.append(correct_gyro(loaded.model, fed) - fed[:, :3])
         # as training: the mean correction is the fallback where the turn-on bias is not
         # removed before the model
-        bounds = envelope.measure(imus, None if meta.rest_bias else corrections)
+        bounds = envelope.measure(imus, None if meta.rest_bias else corrections,
+                                  envelope.sustained_bound(whole, meta.sample_rate_hz))
         add_metadata(path, input_envelope=bounds.as_dict())
         print(f'{path}: gyro {bounds.gyro_rad_s:.3f} rad/s, accelerometer '
-              f'{bounds.accel_offset_m_s2:.2f} m/s^2 off gravity, fallback '
+              f'{bounds.accel_offset_m_s2:.2f} m/s^2 off gravity ('
+              f'{bounds.sustained_accel_m_s2:.2f} over a second), fallback '
               f'{[round(v, 5) for v in bounds.fallback_rad_s]} rad/s, over '
               f'{len(imus)} recordings')
 

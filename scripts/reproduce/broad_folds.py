@@ -28,7 +28,8 @@ def ratios(recordings: dict[str, Any], names: list[str], row: str) -> dict[str, 
 def open_loop(report: dict[str, Any]) -> list[str]:
     """Markdown lines: each fold's held-out recordings, every row, each seed and the targets."""
     seeds = report.get('seeds', [])
-    rows = [m for m in ('raw', 'rest bias', BAR, 'calibrated', 'network') if m in report['mean']]
+    rows = [m for m in ('raw', 'rest bias', BAR, 'calibrated', 'network unblended', 'network')
+            if m in report['mean']]
     lines = []
     for i, held in enumerate(report['folds']):
         per_seed = {s: report['per_seed'][str(s)]['recordings'] for s in seeds}
@@ -42,7 +43,9 @@ def open_loop(report: dict[str, Any]) -> list[str]:
                          + ' |')
         for label, recs in [('ensemble', report['recordings'])] + [
                 (f'seed {s}', per_seed[s]) for s in seeds]:
-            for row in ('network', 'calibrated'):
+            for row in ('network', 'network unblended', 'calibrated'):
+                if row not in recs[held[0]]:
+                    continue
                 t = ratios(recs, held, row)
                 lines.append(f'- {label}, {row}: mean {t["mean"]:.2f} against {t["bar"]:.2f} '
                              f'({t["ratio"]:.2f}x), mean per-trial ratio {t["mean_ratio"]:.2f}, '
@@ -51,8 +54,14 @@ def open_loop(report: dict[str, Any]) -> list[str]:
 
 
 def fused(out: Path, dest: Path, data: str, report: dict[str, Any]) -> list[str]:
-    """Markdown lines: ``imu/data`` of each fold's seeds and ensemble against VQF's defaults."""
+    """
+    Markdown lines: ``imu/data`` of each fold's seeds and ensemble against VQF's defaults.
+
+    Each fold's models with the tracking, and the network with the blend, that the other
+    folds chose (the report's ``per_fold``), as its open-loop figures.
+    """
     from denoise_imu_ros.core.modelfile import add_metadata
+    from denoise_imu_ros.core.schema import Blend
     from denoise_imu_ros.evaluation.crossval import CANDIDATES
     from denoise_imu_ros.evaluation.evaluate import evaluate
     from denoise_imu_ros.learn.checkpoint import save_ensemble
@@ -77,6 +86,10 @@ def fused(out: Path, dest: Path, data: str, report: dict[str, Any]) -> list[str]
                 chosen = CANDIDATES[choice[row]]
                 add_metadata(folder / f'{row}.safetensors',
                              bias_tracking=None if chosen is None else chosen.as_dict())
+            if 'blend' in report:
+                classical = CANDIDATES[choice['tracker only']]
+                add_metadata(folder / 'network.safetensors', blend=Blend(
+                    report['blend']['per_fold'][str(i)], classical).as_dict())
             if not (folder / 'eval' / 'results.json').exists():
                 evaluate(str(folder / 'network.safetensors'), data, held, str(folder / 'eval'),
                          baseline=str(folder / 'calibrated.safetensors'), plots=False,
@@ -119,6 +132,8 @@ def main() -> None:
     report = json.loads((args.out / 'crossval.json').read_text())
     lines = [f'Verdict ({report["fold_kind"]}): {report["verdict"]}.',
              f'Tracking chosen: {json.dumps(report["tracking"]["per_fold"])}']
+    if 'blend' in report:
+        lines.append(f'Blend weights chosen: {json.dumps(report["blend"]["per_fold"])}')
     lines += open_loop(report)
     if args.data:
         lines += fused(args.out, args.dest or args.out / 'fused', args.data, report)
