@@ -10,9 +10,11 @@ alternating rounds so that a change in the machine's speed hits both alike, and 
 estimator alone (``RestBias.update``, ``BiasTracker.update``), and the input envelope's
 guard alone where the file has one (``Guard.check`` and ``Guard.apply``, which both
 settings run), and the vertical's projection alone (``Vertical.apply``, which both run for
-a model taught without its poses' heading). Prints the median per-sample time of each,
-and the ratio on/off.
-Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
+a model taught without its poses' heading). Where the file blends its output with the
+classical pipeline's (its ``blend``), also rounds with ``rest_bias`` on and
+``classical_blend`` off, and the blend alone (``Blender.apply``). Prints the median
+per-sample time of each, and the ratios on/off and blend/no blend.
+Run: .venv/bin/python bench/rest_bias_cost.py [--model broad]
      [--data ../shared/data/broad] [--recording 03_undisturbed_slow_rotation_C]
      [--samples 20000] [--rounds 5]
 """
@@ -23,6 +25,7 @@ import time
 
 from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
 from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.pipeline.blend import Blender
 from denoise_imu_ros.pipeline.envelope import Guard
 from denoise_imu_ros.pipeline.online import OnlineDenoiser
 from denoise_imu_ros.pipeline.rest_bias import BiasTracker, resolve, RestBias
@@ -44,7 +47,7 @@ def per_sample_s(step, stamps: np.ndarray, imu: np.ndarray) -> float:
 def main() -> None:
     """Print the per-sample cost with rest_bias off and on, and of each estimator alone."""
     parser = argparse.ArgumentParser()
-    parser.add_argument('--model', default='broad_network')
+    parser.add_argument('--model', default='broad')
     parser.add_argument('--data', type=Path, default=DATA)
     parser.add_argument('--recording', default='03_undisturbed_slow_rotation_C')
     parser.add_argument('--samples', type=int, default=20000)
@@ -53,12 +56,17 @@ def main() -> None:
     model = read_model_file(args.model)
     rec = load_imu(args.data / args.recording)
     stamps, imu = rec.imu_stamp_ns[:args.samples], rec.imu[:args.samples]
-    times = {'off': [], 'on': [], 'estimator alone': [], 'tracker alone': [],
-             'envelope guard alone': [], 'vertical alone': []}
+    blended = model.meta.blend is not None
+    times = {'off': [], 'on': [], 'on, no blend': [], 'estimator alone': [],
+             'tracker alone': [], 'envelope guard alone': [], 'blend alone': [],
+             'vertical alone': []}
     for _ in range(args.rounds):
-        for choice in ('off', 'on'):
-            den = OnlineDenoiser.from_model_file(model, rest_choice=choice)
-            times[choice].append(per_sample_s(den.process, stamps, imu))
+        for name, choice, mix in (('off', 'off', 'model'), ('on', 'on', 'model'),
+                                  ('on, no blend', 'on', 'off')):
+            if mix == 'off' and not blended:
+                continue
+            den = OnlineDenoiser.from_model_file(model, rest_choice=choice, blend_choice=mix)
+            times[name].append(per_sample_s(den.process, stamps, imu))
         rest = RestBias(resolve(model.meta, 'on'), sample_rate(model))
         times['estimator alone'].append(
             per_sample_s(lambda t, g, a: rest.update(g, a), stamps, imu))
@@ -75,6 +83,14 @@ def main() -> None:
                 return guard.apply(g, fed)
 
             times['envelope guard alone'].append(per_sample_s(guarded, stamps, imu))
+        if blended:
+            blender = Blender(model.meta.blend, sample_rate(model), model.meta.input_envelope,
+                              model.config.receptive_field)
+
+            def mixed(t: int, g: np.ndarray, a: np.ndarray) -> np.ndarray:
+                return blender.apply(g, np.concatenate([g, a]))
+
+            times['blend alone'].append(per_sample_s(mixed, stamps, imu))
         vertical = Vertical(sample_rate(model))
 
         def projected(t: int, g: np.ndarray, a: np.ndarray) -> np.ndarray:
@@ -85,9 +101,11 @@ def main() -> None:
     print(f'{model.path.name}, {len(stamps)} samples of {args.recording}, '
           f'{args.rounds} rounds alternating, median per sample:')
     for name, value in median.items():
-        print(f'  rest_bias {name}: {value * 1e6:.1f} us' if name in ('off', 'on')
-              else f'  the {name.replace(" alone", "")} alone: {value * 1e6:.1f} us')
+        print(f'  the {name.replace(" alone", "")} alone: {value * 1e6:.1f} us'
+              if name.endswith(' alone') else f'  rest_bias {name}: {value * 1e6:.1f} us')
     print(f'  on / off: {median["on"] / median["off"]:.3f}')
+    if blended:
+        print(f'  blend / no blend (rest_bias on): {median["on"] / median["on, no blend"]:.3f}')
 
 
 if __name__ == '__main__':

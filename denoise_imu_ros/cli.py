@@ -267,12 +267,13 @@ def _noise(args: argparse.Namespace) -> None:
     sys.stdout.write(yaml_snippet(report['pooled'], ', '.join(report['recordings'])))
 
 
-def _start_up_warnings(model: str, rest: str = 'model') -> None:
-    """Say what the node says at start-up of a model run so: its verdict, its turn-on bias."""
+def _start_up_warnings(model: str, rest: str = 'model', mix: str = 'model') -> None:
+    """Say what the node says at start-up of a model run so: its verdict, bias and blend."""
     from .core.modelfile import read_model_file
-    from .runtime.advice import deployment_warning, rest_warnings
+    from .runtime.advice import blend_warnings, deployment_warning, rest_warnings
     loaded = read_model_file(model)
-    for warning in [deployment_warning(loaded), *rest_warnings(loaded, rest)]:
+    for warning in [deployment_warning(loaded), *rest_warnings(loaded, rest),
+                    *blend_warnings(loaded, mix)]:
         if warning:
             print(f'warning: {warning}', file=sys.stderr)
 
@@ -306,7 +307,7 @@ def _correct(args: argparse.Namespace) -> None:
     mix = settings.choice('classical_blend')
     _guard_output(args.out, [args.input, read_model_file(settings.model).path],
                   args.overwrite)
-    _start_up_warnings(settings.model, rest)
+    _start_up_warnings(settings.model, rest, mix)
     n = correct_to_csv(settings.model, args.input, args.out, imu_topic=args.imu_topic,
                        engine=args.engine, rest=rest, guard=guard, mix=mix)
     print(f'wrote {n} corrected gyro samples to {args.out}')
@@ -334,7 +335,8 @@ def _process_bag(args: argparse.Namespace) -> None:
     settings = _node_settings(args)
     _guard_output(args.out, [args.input, read_model_file(settings.model).path], False,
                   NEVER_OVER_A_BAG)
-    _start_up_warnings(settings.model, settings.choice('rest_bias'))
+    _start_up_warnings(settings.model, settings.choice('rest_bias'),
+                       settings.choice('classical_blend'))
     counts = process_bag(args.input, args.out, settings, imu_topic=args.imu_topic,
                          storage=args.storage, compress=args.compress,
                          namespace=args.namespace,
@@ -493,7 +495,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = command('rest-model', "a model file that only removes the turn-on bias (crossval's "
                 "verdict 'rest bias'), or that and tracks the bias left ('tracker only'), "
                 'from a model trained with rest_bias',
-                '--like broad_network --tracker-only --out tracker_only.safetensors')
+                '--like broad --tracker-only --out tracker_only.safetensors')
     p.add_argument('--like', required=True, help='a model trained with rest_bias: its rate, '
                    'estimator and prior, recordings and verdict')
     p.add_argument('--tracker-only', action='store_true', help='track the bias left too, '

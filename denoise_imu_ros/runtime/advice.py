@@ -8,7 +8,8 @@ from ..core.modelfile import ModelFile
 from ..core.schema import JUDGED, NO_MODEL, REST_ONLY, RestBiasSettings, TRACKER_ONLY
 from ..pipeline.rest_bias import resolve, RestBias
 
-__all__ = ['ambiguous_rest', 'deployment_warning', 'model_kind', 'rest_warnings']
+__all__ = ['ambiguous_rest', 'blend_warnings', 'deployment_warning', 'model_kind',
+           'rest_warnings']
 
 _ROWS = {'network': 'network', 'calibration': 'calibrated', REST_ONLY: 'rest bias',
          TRACKER_ONLY: 'tracker only', 'none': 'raw'}  # the report's row of each kind
@@ -50,6 +51,25 @@ def ambiguous_rest(rest: RestBias) -> str:
             f'prior (clip {rest.settings.bias_clip_deg_s:g} deg/s): a still IMU with that '
             'bias and a steady turn about gravity at that rate look alike; if the robot was '
             'turning, the gyro is off by that much until the next stillness')
+
+
+def blend_warnings(loaded: ModelFile, choice: str) -> list[str]:
+    """
+    Say that a run without the model's blend is not what its verdict judged (node, CLI alike).
+
+    ``choice`` is the node's ``classical_blend`` (``model``, ``off``).
+    """
+    if choice != 'off' or loaded.meta.blend is None:
+        return []
+    verdict = loaded.meta.crossval
+    figures = {} if verdict is None else verdict.mean_deg
+    said = (f' (unseen recordings, mean {JUDGED[verdict.judged_on]}: '
+            f'{figures["network unblended"]:.2f}° alone against {figures["network"]:.2f}° '
+            'blended)' if verdict is not None and {'network', 'network unblended'} <= set(figures)
+            else '')
+    return [f'classical_blend off: the network alone, not the output its cross-recording '
+            f'validation judged, blended with the classical pipeline at weight '
+            f'{loaded.meta.blend.weight:g}{said}']
 
 
 def rest_warnings(loaded: ModelFile, choice: str) -> list[str]:

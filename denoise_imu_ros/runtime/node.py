@@ -38,7 +38,7 @@ from std_srvs.srv import Trigger
 import yaml
 
 from . import diagnostics
-from .advice import deployment_warning, rest_warnings
+from .advice import blend_warnings, deployment_warning, rest_warnings
 from .outputs import Outputs
 from .rclpy_internals import (given_parameters, integer_given_for_double, RCLError,
                               RCLInvalidROSArgsError, take_waiting)
@@ -153,7 +153,8 @@ class GyroDenoiser(Node):
             + f', {self._pub_att.topic_name}')
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)
-        for said in rest_warnings(loaded, rest_choice):
+        for said in [*rest_warnings(loaded, rest_choice),
+                     *blend_warnings(loaded, settings.choice('classical_blend'))]:
             self.get_logger().warning(said)
         # rclpy ignores a value given for a parameter no node declares: say so, since a
         # misspelt name would otherwise run with the default (the QoS overrides are

@@ -1,6 +1,6 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
-"""Store the input envelope, its sustained bound too, in model files trained before it was stored."""
+"""Store the input envelope and its sustained bound in model files trained before they were."""
 
 import argparse
 from pathlib import Path

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 TRIAL = DATA / 'broad' / '07_undisturbed_fast_rotation_B'
-PART = slice(30500, 34500)  # where it turns faster than broad_network's envelope
+PART = slice(30500, 34500)  # where it turns faster than broad's envelope
 
 
 @pytest.fixture(scope='module')
@@ -32,12 +32,13 @@ def recording():
 
 def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
     """
-    broad_network has every stage (a blend and the vertical drop added): node and eval agree.
+    The shipped broad has every stage (the vertical drop added): node and eval agree bit for bit.
 
-    Bit for bit, with the guard and the blend's sustained fallback acting on part of it.
+    With the guard, and the blend's fallback to the classical pipeline (at a bound that
+    half the samples exceed), acting on part of it.
     """
     stamps, imu = recording
-    model = read_model_file('broad_network')
+    model = read_model_file('broad')
     rate, fusion = model.meta.sample_rate_hz, model.meta.fusion.chosen
     field = model.config.receptive_field
     held = float(np.median(envelope.sustained(imu, round(rate))))  # half of it beyond
@@ -45,7 +46,7 @@ def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
 
     def every_stage():
         mix = ClassicalMix(Blender(Blend(0.6, model.meta.bias_tracking), rate, bounds, field))
-        return Pipeline([*correction(model), mix, VerticalDrop(rate),
+        return Pipeline([*correction(model, mix='off'), mix, VerticalDrop(rate),
                          Attitude(fusion.accel_bias_m_s2), Orientation(rate, fusion)])
     online = OnlineDenoiser(every_stage(), rate)
     assert [type(s) for s in online.pipeline.stages] == [kind for kind, _ in STAGES]
@@ -61,7 +62,7 @@ def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
 def test_the_batch_path_is_the_table_up_to_and_after_the_network(recording):
     """model_input is the stages before the network; finish those after it."""
     stamps, imu = recording
-    model = read_model_file('broad_network')
+    model = read_model_file('broad')
     whole = stages.corrected(model, imu)
     fed = stages.model_input(model, imu)
     np.testing.assert_array_equal(fed, Pipeline(correction(model)).run(
@@ -70,7 +71,7 @@ def test_the_batch_path_is_the_table_up_to_and_after_the_network(recording):
     field = model.config.receptive_field
     np.testing.assert_array_equal(whole, stages.finish(
         network, fed, model.meta.sample_rate_hz, model.meta.bias_tracking,
-        model.meta.input_envelope, field))
+        model.meta.input_envelope, field, blend=model.meta.blend))
 
 
 def test_a_pipeline_runs_its_stages_in_the_table_order_whatever_order_given():

@@ -4,7 +4,7 @@
 
 from denoise_imu_ros.core.modelfile import read_model_file
 from denoise_imu_ros.core.schema import RestBiasSettings
-from denoise_imu_ros.runtime.advice import deployment_warning, rest_warnings
+from denoise_imu_ros.runtime.advice import blend_warnings, deployment_warning, rest_warnings
 from helpers import write_untrained_model
 import pytest
 
@@ -53,3 +53,20 @@ def test_a_no_model_file_against_its_verdict_is_not_told_about_the_network(tmp_p
         'r.safetensors runs rest bias (no model), but the cross-recording validation of its '
         'recipe recommends network (rest bias 2.00° against network 1.00° in mean AOE on '
         'unseen recordings)')
+
+
+def test_a_blended_model_run_without_its_blend_is_said_to_be_what_its_verdict_did_not_judge(
+        tmp_path):
+    report = {'deploy': 'network', 'verdict': 'deploy the network', 'judged_on': 'aoe_deg',
+              'mean': {'network': {'aoe_deg': 4.3}, 'network unblended': {'aoe_deg': 4.48}}}
+    blended = read_model_file(write_untrained_model(tmp_path / 'b.safetensors', {
+        'sample_rate_hz': 200.0, 'crossval': report,
+        'blend': {'weight': 0.5, 'tracking': None}}))
+    assert blend_warnings(blended, 'model') == []
+    assert blend_warnings(blended, 'off') == [
+        'classical_blend off: the network alone, not the output its cross-recording validation '
+        'judged, blended with the classical pipeline at weight 0.5 (unseen recordings, mean '
+        'AOE: 4.48° alone against 4.30° blended)']
+    unblended = read_model_file(write_untrained_model(tmp_path / 'u.safetensors',
+                                                      {'sample_rate_hz': 200.0}))
+    assert blend_warnings(unblended, 'off') == []
