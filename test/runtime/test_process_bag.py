@@ -38,7 +38,10 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
         4.0, False, (0.02, -0.1, 0.05)).as_dict(), 'orientation_std_rad': [0.01, 0.02, 0.03]},
         rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict() if rest else None,
         bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0} if track else None,
-        input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0} if track else None,
+        input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0,
+                        'sustained_accel_m_s2': 0.025} if track else None,
+        blend={'weight': 0.6, 'tracking': {'sigma_motion_deg_s': 0.1, 'forgetting_s': 100.0}}
+        if track else None,
         train_config={'heading_weight': heading})
     assert cli(['process-bag', '--input', str(SAMPLE), '--out', str(tmp_path / 'out'), '--model',
                 str(model_file), '--envelope-guard', guard]) == 0
@@ -70,6 +73,9 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     assert diagnostics['tracked_bias_applied'] == str(track)
     assert diagnostics['vertical_correction_dropped'] == str(heading == 0)
     assert diagnostics['envelope_guard_applied'] == str(track and guard == 'model')
+    assert diagnostics['classical_blend_applied'] == str(track)
+    if track and guard == 'model':  # over a second 0.025 m/s^2 off gravity: the classical alone
+        assert int(diagnostics['classical_only_samples']) > 0
     if track and guard == 'model':  # the still start's noise exceeds 0.002 rad/s
         assert int(diagnostics['envelope_guarded_samples']) > 0
     assert ('tracked_bias_rad_s' in diagnostics) == track
