@@ -6,7 +6,7 @@ The network's output blended with the classical pipeline's; the classical alone 
 On a power-on it never saw, a network's output and the classical pipeline's (the gyro
 less its turn-on bias, its bias tracked: the "tracker only" row, no model) err in part
 independently: their weighted mean T + W (N - T) loses less often to T than N does, and
-keeps most of N's gain where T's tracker diverges (BROAD's other session, run 26 of
+keeps part of N's gain where T's tracker diverges (BROAD's other session, run 26 of
 docs/experiments.md). Where a sample of the receptive field has a mean | |accel| - g |
 over the last SUSTAINED_S above the largest any training recording reached (the model
 file's ``input_envelope.sustained_accel_m_s2``), the network is fed motion longer and
