@@ -70,7 +70,7 @@ class Sustained:
 
     def reset(self) -> None:
         """Forget the past: another run."""
-        self._totals = np.zeros(self.window)  # the running sum at the last window samples
+        self._totals = [0.0] * self.window  # the running sum at the last window samples
         self._total, self._n = 0.0, 0
 
     def update(self, accel: np.ndarray) -> float:

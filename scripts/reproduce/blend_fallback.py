@@ -19,10 +19,8 @@ scripts/reproduce/blend_fallback.py OUT ../shared/data/broad --weights 1 0.7 0.5
 """
 
 import argparse
-import importlib.util
 import json
 from pathlib import Path
-from typing import Any
 
 from denoise_imu_ros.core.metrics import integrate, score
 from denoise_imu_ros.data.load import load_sequence
@@ -30,26 +28,16 @@ from denoise_imu_ros.evaluation.crossval import CANDIDATES
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
 from denoise_imu_ros.pipeline import envelope, stages
+from denoise_imu_ros.pipeline.envelope import sustained, within_field
 from denoise_imu_ros.pipeline.rest_bias import track_bias, tracked_bias
 import numpy as np
 
 WINDOW = 286  # samples of the sustained-acceleration mean (1 s at BROAD's 285.7 Hz)
 
 
-def _guard_variants() -> Any:
-    """Return the sibling script whose sustained-acceleration flag this one shares."""
-    spec = importlib.util.spec_from_file_location(
-        'guard_variants', Path(__file__).resolve().parent / 'guard_variants.py')
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def trials(out: Path, data: Path) -> dict[str, dict]:
     """Return, per held-out trial: its fold, sequence, T, each N and their flags."""
     report = json.loads((out / 'crossval.json').read_text())
-    helpers = _guard_variants()
-    sustained, within_field = helpers.sustained, helpers.within_field
     found = {}
     for i, held in enumerate(report['folds']):
         chosen = report['tracking']['per_fold'][str(i)]

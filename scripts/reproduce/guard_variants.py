@@ -20,35 +20,19 @@ import argparse
 import json
 from pathlib import Path
 
-from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.metrics import score
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation.crossval import CANDIDATES
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
 from denoise_imu_ros.pipeline import envelope, stages
+from denoise_imu_ros.pipeline.envelope import sustained, within_field
 from denoise_imu_ros.pipeline.rest_bias import track_bias, tracked_bias
 from denoise_imu_ros.pipeline.vertical import drops_vertical
 import numpy as np
 
 VARIANTS = ('guard', 'guard + sustained', 'classical fallback',
             'classical fallback + sustained')
-
-
-def sustained(imu: np.ndarray, window: int) -> np.ndarray:
-    """Return the causal mean of ||a| - g| over the last ``window`` samples, per sample."""
-    dev = np.abs(np.linalg.norm(imu[:, 3:], axis=1) - GRAVITY_M_S2)
-    total = np.concatenate([[0.0], np.cumsum(dev)])
-    n = np.arange(len(dev))
-    start = np.maximum(n + 1 - window, 0)
-    return (total[n + 1] - total[start]) / (n + 1 - start)
-
-
-def within_field(flag: np.ndarray, field: int) -> np.ndarray:
-    """Whether any of samples n - field + 1 ... n is flagged, for each n."""
-    count = np.concatenate([[0], np.cumsum(flag)])
-    n = np.arange(len(flag))
-    return count[n + 1] > count[np.maximum(n + 1 - field, 0)]
 
 
 def main() -> None:
