@@ -60,7 +60,7 @@ CLASSICAL = ('raw', 'rest bias', TRACKER_ONLY)  # what a practitioner runs with 
 LOSS_LIMIT = 1.1  # a learnt row deployed loses to tracker only by no more on one recording
 # the network's weight against the classical pipeline's (pipeline/blend.py): the first of
 # equal ones is chosen, so the network's own output wins a tie
-BLEND_WEIGHTS = (1.0, 0.7, 0.5, 0.3)
+BLEND_WEIGHTS = (1.0, 0.7, 0.5, 0.3, 0.2, 0.1)
 UNBLENDED = 'network unblended'  # the network row before the blend, reported beside it
 # the candidates: VQF's biasSigmaMotion (its default 0.1 deg/s) and biasForgettingTime
 # (its default 100 s), beside none; each starts as certain of its 0 as its motion updates
