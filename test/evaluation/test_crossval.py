@@ -7,7 +7,8 @@ import json
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import TrainingError
 from denoise_imu_ros.core.schema import judged_on, parse_meta
-from denoise_imu_ros.evaluation.crossval import attach_mismatches, crossval, folds, summarize
+from denoise_imu_ros.evaluation.crossval import (attach_mismatches, BLEND_WEIGHTS, crossval, folds,
+                                                   summarize)
 from denoise_imu_ros.evaluation.reports import crossval_table
 from denoise_imu_ros.learn.checkpoint import load_model
 from helpers import write_asl
@@ -374,7 +375,7 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
         assert blend['per_fold'][fold] == min(ratios, key=ratios.get)
         assert report['recordings'][name]['network']['aoe_deg'] == blend['recordings'][name][
             str(blend['per_fold'][fold])]
-    assert set(blend['candidates']) == {'1.0', '0.7', '0.5', '0.3'}
+    assert set(blend['candidates']) == {str(w) for w in BLEND_WEIGHTS}
     assert 'The network rows blend' in printed.out
     assert main(args + ['--seeds', '3', '3']) == 1
     assert '--seeds must list distinct seeds' in capsys.readouterr().err
