@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 import hashlib
+import math
 
 import numpy as np
 from scipy.spatial.transform import Rotation, RotationSpline, Slerp
@@ -33,6 +34,12 @@ MS_HINT_S = 10.0  # poses this far apart (median) are more likely stamped in ms 
 # a spline over 10^5-10^6 poses costs far more to fit than its knots cost to hash
 _SPLINES: OrderedDict[str, dict[tuple[int, int], RotationSpline]] = OrderedDict()
 SPLINES_KEPT = 3  # recordings: check() interleaves its poses with two of its own
+# A long stretch is fitted in pieces of this many knots, each fitted SPLINE_OVERLAP knots
+# beyond its ends: a cubic spline's knots sway it less by 2 - sqrt(3) per knot away, so
+# the pieces equal one spline over the whole stretch to rounding, and the fit's memory
+# stays that of one piece (one spline over 10^6 poses: over a gigabyte)
+SPLINE_KNOTS = 20_000
+SPLINE_OVERLAP = 64
 
 
 def _between(rec: Recording, t0: int, t1: int) -> Recording:
@@ -74,7 +81,7 @@ def gt_gap_limit(gt_stamp_ns: np.ndarray, max_gt_gap_s: float | None = None) -> 
 def poses_at(rec: Recording, stamps_ns: np.ndarray,
              max_gt_gap_s: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
-    Ground truth interpolated to stamps inside its span: xyzw (N, 4), position (N, 3), valid.
+    Ground truth at increasing stamps inside its span: xyzw (N, 4), position (N, 3), valid.
 
     Stamps whose bracketing ground-truth samples are further apart than
     :func:`gt_gap_limit` (by default relative to the ground truth's own rate) are marked
@@ -105,15 +112,31 @@ def poses_at(rec: Recording, stamps_ns: np.ndarray,
     breaks = np.flatnonzero(np.diff(t_gt) * 1e-9 > limit) + 1
     fitted = _splines(rel_gt, rec.gt_quat)
     for lo, hi in zip(np.r_[0, breaks], np.r_[breaks, len(t_gt)]):
-        inside = valid & (rel >= rel_gt[lo]) & (rel <= rel_gt[hi - 1])
-        if hi - lo >= 3 and inside.any():
-            if (lo, hi) not in fitted:
-                fitted[lo, hi] = RotationSpline(rel_gt[lo:hi], rot_gt[lo:hi])
-            quat[inside] = fitted[lo, hi](rel[inside]).as_quat()
-            splined |= inside
+        if hi - lo < 3:
+            continue
+        for a, b in _pieces(lo, hi):  # each piece scores the stamps from knot a to knot b
+            first, last = np.searchsorted(rel, rel_gt[[a, b - 1]],
+                                          side='left').tolist()
+            if b == hi:  # the stretch's last knot is its own
+                last = int(np.searchsorted(rel, rel_gt[b - 1], side='right'))
+            inside = np.flatnonzero(valid[first:last]) + first
+            if not len(inside):
+                continue
+            fit = (max(lo, a - SPLINE_OVERLAP), min(hi, b + SPLINE_OVERLAP))
+            if fit not in fitted:
+                fitted[fit] = RotationSpline(rel_gt[slice(*fit)], rot_gt[slice(*fit)])
+            quat[inside] = fitted[fit](rel[inside]).as_quat()
+            splined[inside] = True
     if not splined.all():  # holes (never trusted) and stretches too short for a spline
         quat[~splined] = Slerp(rel_gt, rot_gt)(rel[~splined]).as_quat()
     return quat, pos, valid
+
+
+def _pieces(lo: int, hi: int) -> list[tuple[int, int]]:
+    """Split the knots lo..hi - 1 into runs of at most SPLINE_KNOTS, sharing their ends."""
+    count = max(1, math.ceil((hi - 1 - lo) / SPLINE_KNOTS))
+    ends = np.linspace(lo, hi - 1, count + 1).round().astype(int).tolist()
+    return [(a, b + 1) for a, b in zip(ends[:-1], ends[1:])]
 
 
 def _splines(t: np.ndarray, quat: np.ndarray) -> dict[tuple[int, int], RotationSpline]:

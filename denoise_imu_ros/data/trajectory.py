@@ -23,15 +23,15 @@ error.
 
 from __future__ import annotations
 
+from array import array
 import dataclasses
 from dataclasses import dataclass
-from decimal import Decimal, InvalidOperation, ROUND_HALF_EVEN
+from decimal import Decimal, ROUND_HALF_EVEN
 from pathlib import Path
 import re
 
 import numpy as np
 
-from .asl import text_lines
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError
 from ..core.limits import MAX_POSITION_M
@@ -74,28 +74,9 @@ def read_tum(path: str | Path) -> Trajectory:
     path = Path(path)
     if not path.is_file():
         raise DatasetError(f'{path}: no such trajectory file or folder')
-    with path.open(encoding='utf-8-sig', errors='strict') as f:
-        header, lines = _header_and_poses(text_lines(f, path))
-    if not lines:
-        raise DatasetError(f'{path}: no poses')
-    width = len(lines[0].replace(',', ' ').split())
-    if width not in COLUMNS:
-        raise DatasetError(
-            f'{path}: line "{lines[0].strip()[:60]}" has {width} values, not the 8 of a '
-            "TUM pose (t x y z qx qy qz qw), nor 11, 17 or 20 (those 8, then ASL's velocity "
-            "and biases or OpenVINS's covariance)")
-    rows = np.full((len(lines), width), np.nan)
-    stamps = np.empty(len(lines), dtype=object)  # exact: a float64 of seconds misses ns
-    for i, line in enumerate(lines):
-        parts = line.replace(',', ' ').split()
-        if len(parts) != width:
-            raise DatasetError(f'{path}: line "{line.strip()[:60]}" has {len(parts)} '
-                               f'values where the first pose has {width}')
-        try:
-            rows[i] = [float(p) for p in parts]
-            stamps[i] = Decimal(parts[0])
-        except (ValueError, InvalidOperation):
-            raise DatasetError(f'{path}: unparsable line "{line.strip()[:60]}"') from None
+    header, values, texts = _read_poses(path)
+    width = len(values) // len(texts)
+    rows = np.frombuffer(values, dtype=np.float64).reshape(-1, width)
     read_as = [f'the first 8 of its {width} columns read (t x y z and a quaternion), the '
                'rest unused'] if width > 8 else []
     rows = rows[:, :8]
@@ -108,8 +89,8 @@ def read_tum(path: str | Path) -> Trajectory:
         rows = rows[:, [0, 1, 2, 3, 5, 6, 7, 4]]
         read_as.append(f'quaternions read w first, {w_first}')
     dropped: dict[str, int] = {}
-    rows, stamps = drop_rows(not_poses(rows, rows[:, 4:8], rows[:, 1:4]), dropped, rows,
-                             stamps)
+    rows, kept = drop_rows(not_poses(rows, rows[:, 4:8], rows[:, 1:4]), dropped, rows,
+                           np.arange(len(rows)))
     if len(rows) < 2:
         raise DatasetError(f'{path}: fewer than two usable poses')
     large = np.abs(rows[:, 0]) >= NANOSECOND_STAMPS
@@ -121,11 +102,13 @@ def read_tum(path: str | Path) -> Trajectory:
     if nano:
         read_as.append('stamps read as nanoseconds')
     scale = 1 if nano else 1_000_000_000
-    exact = [int((t * scale).to_integral_value(ROUND_HALF_EVEN)) for t in stamps]
-    if max(map(abs, exact)) >= 2 ** 63:
+    try:  # exact from the text: a float64 of seconds misses nanoseconds
+        stamp_ns = np.fromiter(
+            (int((Decimal(texts[i]) * scale).to_integral_value(ROUND_HALF_EVEN))
+             for i in kept), np.int64, len(kept))
+    except OverflowError:
         raise DatasetError(f'{path}: stamps up to {np.abs(rows[:, 0]).max():.6g}: no clock '
-                           'in nanoseconds')
-    stamp_ns = np.array(exact, dtype=np.int64)
+                           'in nanoseconds') from None
     rows, stamp_ns = drop_rows(out_of_order(stamp_ns), dropped, rows, stamp_ns)
     if len(rows) < 2:
         raise DatasetError(f'{path}: fewer than two usable poses')
@@ -180,23 +163,58 @@ def dropped_text(dropped: dict[str, int]) -> str:
     return 'dropped ' + ', '.join(f'{n} {why}' for why, n in dropped.items())
 
 
-def _header_and_poses(lines: list[str]) -> tuple[list[str], list[str]]:
+def _read_poses(path: Path) -> tuple[list[str], array, list[str]]:
     """
-    Split a file's lines into its header's column names and its pose lines.
+    Read a file's header's column names, its poses' values (row-major) and stamps' text.
 
-    The header is the last comment before the first pose, or a first line none of whose
-    values is a number (OKVIS writes its names so).
+    One line at a time: a file of millions of poses is held as its numbers only. The
+    header is the last comment before the first pose, or a first line none of whose values
+    is a number (OKVIS writes its names so).
     """
-    text = [line.strip() for line in lines if line.strip()]
     header: list[str] = []
-    if text and not text[0].startswith('#') and not any(
-            map(_is_number, text[0].replace(',', ' ').split())):
-        header, text = _names(text[0]), text[1:]
-    poses = [line for line in text if not line.startswith('#')]
-    if poses and not header:
-        before = [line for line in text[:text.index(poses[0])] if line.startswith('#')]
-        header = _names(before[-1].lstrip('#')) if before else []
-    return header, poses
+    comment = None
+    values, stamps = array('d'), []
+    width, offset = 0, 0
+    with path.open('rb') as f:
+        for raw in f:
+            try:
+                line = raw.decode('utf-8').strip()
+            except UnicodeDecodeError as err:
+                raise DatasetError(f'{path}: not a text file (byte {offset + err.start} is '
+                                   'not UTF-8)') from err
+            if not offset:
+                line = line.removeprefix('\ufeff')
+            offset += len(raw)
+            if not line:
+                continue
+            if line.startswith('#'):
+                comment = comment if stamps else line
+                continue
+            parts = line.replace(',', ' ').split()
+            if not stamps and not header and comment is None and not any(
+                    map(_is_number, parts)):
+                header, comment = _names(line), ''
+                continue
+            if not width:
+                width = len(parts)
+                if width not in COLUMNS:
+                    raise DatasetError(
+                        f'{path}: line "{line[:60]}" has {width} values, not the 8 of a TUM '
+                        "pose (t x y z qx qy qz qw), nor 11, 17 or 20 (those 8, then ASL's "
+                        "velocity and biases or OpenVINS's covariance)")
+                if not header and comment:
+                    header = _names(comment.lstrip('#'))
+            if len(parts) != width:
+                raise DatasetError(f'{path}: line "{line[:60]}" has {len(parts)} values '
+                                   f'where the first pose has {width}')
+            try:
+                values.extend(map(float, parts))
+            except ValueError:
+                raise DatasetError(f'{path}: unparsable line "{line[:60]}"') from None
+            stamps.append(parts[0])
+    if not stamps:
+        raise DatasetError(f'{path}: no poses')
+    return header, values, stamps
 
 
 def _names(text: str) -> list[str]:

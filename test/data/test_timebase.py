@@ -93,3 +93,21 @@ def test_poses_at_fits_each_stretch_once_and_serves_only_the_same_poses(monkeypa
     other = dataclasses.replace(rec, gt_quat=quat[::-1].copy())  # same stamps, other poses
     assert not np.allclose(timebase.poses_at(other, stamps)[0], first)
     assert len(fits) == 6
+
+
+def test_a_long_stretch_fitted_in_pieces_is_one_spline_over_it(monkeypatch):
+    """Pieces of a few hundred knots give what one spline over 2000 knots gives, to rounding."""
+    from denoise_imu_ros.data import timebase
+    from scipy.spatial.transform import Rotation, RotationSpline
+    t = np.arange(0, 20_000_000_000, 10_000_000)  # 2000 poses at 100 Hz, no hole
+    quat = Rotation.from_rotvec(np.stack([np.sin(t * 1.3e-9), np.cos(t * 0.7e-9),
+                                          np.sin(t * 2.9e-9) ** 2], axis=1)).as_quat()
+    stamps = np.arange(0, t[-1] + 1, 2_500_000)  # both ends and every knot among them
+    rec = Recording('r', 'r', stamps, np.zeros((len(stamps), 6)), t, quat, np.zeros((len(t), 3)))
+    monkeypatch.setattr(timebase, 'SPLINE_KNOTS', 300)
+    pieces = timebase.poses_at(rec, stamps)[0]
+    whole = RotationSpline(t * 1e-9, Rotation.from_quat(quat))(stamps * 1e-9).as_quat()
+    np.testing.assert_allclose(np.abs((pieces * whole).sum(1)), 1.0, atol=1e-13)
+    np.testing.assert_allclose(pieces * np.sign((pieces * whole).sum(1))[:, None], whole,
+                               atol=1e-12)
+    assert len(timebase._pieces(0, 2000)) == 7

@@ -165,6 +165,19 @@ def test_a_file_that_is_no_trajectory_is_one_line(tmp_path, rows, message):
         read_tum(_write(tmp_path / 't.txt', rows))
 
 
+def test_a_byte_order_mark_and_crlf_are_read_and_a_byte_not_utf8_is_named(tmp_path):
+    """Read a line at a time: the file's first bytes and its line ends as a text editor's."""
+    text = '\r\n'.join(['t x y z qw qx qy qz', f'1.0 {POSE}', f'1.1 {POSE}']) + '\r\n'
+    path = tmp_path / 't.txt'
+    path.write_bytes(b'\xef\xbb\xbf' + text.encode())
+    traj = read_tum(path)
+    assert traj.stamp_ns.tolist() == [1_000_000_000, 1_100_000_000]
+    assert traj.read_as == ('quaternions read w first, as its header names them',)
+    path.write_bytes(text.encode() + b'1.2 0 0 0 0 0 0 \xff1\n')
+    with pytest.raises(DatasetError, match=f'{len(text) + 16} is not UTF-8'):
+        read_tum(path)
+
+
 def test_a_folder_of_trajectories_is_looked_up_by_recording_name(tmp_path):
     _write(tmp_path / 'a.txt', [f'1.0 {POSE}', f'2.0 {POSE}'])
     _write(tmp_path / 'b.tum', [f'1.0 {POSE}', f'2.0 {POSE}'])
