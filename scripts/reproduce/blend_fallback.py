@@ -3,13 +3,14 @@
 """
 The network's output blended with the classical pipeline's, on a session crossval's folds.
 
-For each held-out trial of ``crossval --sessions ... --seeds ...`` (its models in OUT),
-each seed's and the ensemble's guarded, tracked output N (as the product computes it) and
-the classical pipeline's gyro T (the gyro less its turn-on bias, its bias tracked as the
+For each held-out trial of ``crossval --sessions ... [--motions ...] --seeds ...`` (its
+models in OUT), each seed's and the ensemble's guarded, tracked output N (as the product
+computes it) and the classical pipeline's gyro T (the gyro less its turn-on bias, its bias tracked as the
 fold's tracker-only row) are combined per sample:
 - ``blend W``: T + W (N - T), with T alone where the fallback rule flags the sample
-  (``sustained``: the causal 1 s mean of ||a| - g| above the largest any training trial
-  reached; ``envelope``: that or the model's own envelope; ``none``);
+  (``sustained``: a sample of the receptive field whose causal 1 s mean of ||a| - g| is
+  above the largest any training trial reached, the model file's; ``envelope``: that or
+  the model's own envelope, as the product's classical mix; ``none``);
 - ``gravity``: N or T, whichever kept the accelerometer's direction steadier in its own
   open-loop world frame over the last WIN s (low-passed over LP s): a causal selector.
 Prints, per fold and setting, the mean against tracker only, the mean per-trial ratio and
@@ -32,8 +33,6 @@ from denoise_imu_ros.pipeline.envelope import sustained, within_field
 from denoise_imu_ros.pipeline.rest_bias import track_bias, tracked_bias
 import numpy as np
 
-WINDOW = 286  # samples of the sustained-acceleration mean (1 s at BROAD's 285.7 Hz)
-
 
 def trials(out: Path, data: Path) -> dict[str, dict]:
     """Return, per held-out trial: its fold, sequence, T, each N and their flags."""
@@ -47,16 +46,13 @@ def trials(out: Path, data: Path) -> dict[str, dict]:
         bounds.append(envelope.combine(bounds))  # the ensemble's
         field, rate = nets[0].model.receptive_field, nets[0].meta.sample_rate_hz
         tracking = CANDIDATES[chosen['network']]
-        train = [n for j, f in enumerate(report['folds']) if j != i for n in f]
-        bound = max(sustained(load_sequence(data / n, min_samples=field,
-                                            align_poses='auto').stream, WINDOW).max()
-                    for n in train)
         for name in held:
             seq = load_sequence(data / name, min_samples=field, align_poses='auto')
             fed = stages.model_input(nets[0], seq.stream)
             gyros = [correct_gyro(m.model, fed) for m in nets]
             gyros.append(np.mean(gyros, axis=0))
-            outputs, untrusted = [], []
+            outputs, untrusted, held = [], [], []
+            mean_off = sustained(fed, max(1, round(envelope.SUSTAINED_S * rate)))
             for g, env in zip(gyros, bounds):
                 hold = envelope.too_fast(fed, env, field)
                 bias = (np.zeros_like(g) if tracking is None
@@ -65,12 +61,13 @@ def trials(out: Path, data: Path) -> dict[str, dict]:
                 own = fed[:, :3] + np.array(env.fallback_rad_s) - bias
                 outputs.append(np.where(base[:, None], own, g - bias))
                 untrusted.append(base)
+                held.append(np.zeros(len(g), bool) if env.sustained_accel_m_s2 is None else
+                            within_field(mean_off > env.sustained_accel_m_s2, field))
             found[name] = {
                 'fold': i, 'seq': seq, 'accel': fed[:, 3:], 'rate': rate,
                 'classical': track_bias(fed[:, :3], fed[:, 3:], rate,
                                         CANDIDATES[chosen['tracker only']]),
-                'nets': outputs, 'untrusted': untrusted,
-                'sustained': within_field(sustained(fed, WINDOW) > bound, field)}
+                'nets': outputs, 'untrusted': untrusted, 'sustained': held}
     return found
 
 
@@ -116,9 +113,9 @@ def main() -> None:
             for n in names:
                 t = found[n]
                 row = []
-                for net, untrusted in zip(t['nets'], t['untrusted']):
-                    flag = {'none': np.zeros(len(net), bool), 'sustained': t['sustained'],
-                            'envelope': t['sustained'] | untrusted}[args.fallback]
+                for net, untrusted, held in zip(t['nets'], t['untrusted'], t['sustained']):
+                    flag = {'none': np.zeros(len(net), bool), 'sustained': held,
+                            'envelope': held | untrusted}[args.fallback]
                     if weight is None:
                         use = gravity_drift(net, t['accel'], t['rate'], *args.gravity) <= \
                             gravity_drift(t['classical'], t['accel'], t['rate'], *args.gravity)

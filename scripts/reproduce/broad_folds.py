@@ -53,17 +53,21 @@ def open_loop(report: dict[str, Any]) -> list[str]:
     return lines
 
 
-def fused(out: Path, dest: Path, data: str, report: dict[str, Any]) -> list[str]:
+def fused(out: Path, dest: Path, data: str, report: dict[str, Any],
+          tune: bool = False) -> list[str]:
     """
     Markdown lines: ``imu/data`` of each fold's seeds and ensemble against VQF's defaults.
 
     Each fold's models with the tracking, and the network with the blend, that the other
-    folds chose (the report's ``per_fold``), as its open-loop figures.
+    folds chose (the report's ``per_fold``), as its open-loop figures; with ``tune``, their
+    filters chosen on their own training trials' validation tails (``tune-fusion
+    --attach``, as the shipped file's), else at the defaults ``train`` stores.
     """
     from denoise_imu_ros.core.modelfile import add_metadata
     from denoise_imu_ros.core.schema import Blend
     from denoise_imu_ros.evaluation.crossval import CANDIDATES
     from denoise_imu_ros.evaluation.evaluate import evaluate
+    from denoise_imu_ros.evaluation.filters import attach, tune_model
     from denoise_imu_ros.learn.checkpoint import save_ensemble
     seeds = report['seeds']
     names = [f'seed{s}' for s in seeds] + ['ensemble']
@@ -90,6 +94,10 @@ def fused(out: Path, dest: Path, data: str, report: dict[str, Any]) -> list[str]
                 classical = CANDIDATES[choice['tracker only']]
                 add_metadata(folder / 'network.safetensors', blend=Blend(
                     report['blend']['per_fold'][str(i)], classical).as_dict())
+            if tune and not (folder / 'tuned').exists():
+                nets = [str(folder / f'{row}.safetensors') for row in ('network', 'calibrated')]
+                attach(*nets, tune_model(*nets, data, progress=False))
+                (folder / 'tuned').touch()
             if not (folder / 'eval' / 'results.json').exists():
                 evaluate(str(folder / 'network.safetensors'), data, held, str(folder / 'eval'),
                          baseline=str(folder / 'calibrated.safetensors'), plots=False,
@@ -128,6 +136,8 @@ def main() -> None:
     parser.add_argument('--data', help='the recordings (../shared/data/broad): also imu/data')
     parser.add_argument('--dest', type=Path, help='where the fold models with their tracking '
                         'and their eval go (default: OUT/fused)')
+    parser.add_argument('--tune', action='store_true', help="imu/data's filters chosen on "
+                        "each fold model's training trials' tails, as the shipped file's")
     args = parser.parse_args()
     report = json.loads((args.out / 'crossval.json').read_text())
     lines = [f'Verdict ({report["fold_kind"]}): {report["verdict"]}.',
@@ -136,7 +146,8 @@ def main() -> None:
         lines.append(f'Blend weights chosen: {json.dumps(report["blend"]["per_fold"])}')
     lines += open_loop(report)
     if args.data:
-        lines += fused(args.out, args.dest or args.out / 'fused', args.data, report)
+        dest = args.dest or args.out / ('tuned' if args.tune else 'fused')
+        lines += fused(args.out, dest, args.data, report, args.tune)
     print('\n'.join(lines))
 
 
