@@ -123,25 +123,6 @@ def test_the_papers_increments_follow_the_rate_in_seconds():
         (8, 16), (16, 32), (16, 32), (32, 64), (64, 128)]
 
 
-@pytest.mark.parametrize('offset_ms, rotvec_deg', [
-    (37.3, (30.0, -20.0, 45.0)), (-12.6, (0.0, 90.0, 0.0)), (81.0, (-170.0, 5.0, 10.0))])
-def test_a_shifted_clock_and_a_rotated_pose_frame_are_recovered(euroc, offset_ms, rotvec_deg):
-    rec = read_asl(euroc / 'V1_03_difficult')
-    # poses of a marker body (rotated, 12 cm lever arm) on a clock offset_ms late
-    marker = Rotation.from_rotvec(rotvec_deg, degrees=True)  # imu_from_pose
-    body = Rotation.from_quat(rec.gt_quat)
-    moved = dataclasses.replace(
-        rec, gt_stamp_ns=rec.gt_stamp_ns - int(offset_ms * 1e6),
-        gt_quat=(body * marker).as_quat(), gt_pos=rec.gt_pos + body.apply([0.12, 0.0, 0.05]))
-    base = estimate_pose_alignment(rec)
-    found = estimate_pose_alignment(moved)
-    assert abs(found['time_offset_s'] - base['time_offset_s'] - offset_ms * 1e-3) < 1e-3
-    rot = Rotation.from_quat(found['imu_from_pose_rotation_xyzw'])
-    assert math.degrees((rot * marker.inv()).magnitude()) < 0.2
-    assert found['time_offset_std_s'] < 1e-3 and found['imu_from_pose_rotation_std_deg'] < 0.2
-    assert check(moved)['usable'] == 'after alignment'
-
-
 def test_label_noise_and_supervision_are_judged_on_the_poses_as_training_aligns_them(euroc):
     rec = read_asl(euroc / 'MH_01_easy')
     # a camera's 10 Hz poses: its frame 90 deg from the IMU's, its clock 90 ms late
@@ -277,86 +258,6 @@ def test_poses_stamped_on_a_clock_the_imus_overlaps_nowhere_are_found(euroc, tmp
     with pytest.raises(DatasetError, match=r"on another clock than the IMU's \(IMU .*\) and do "
                                            "not follow .* another recording's trajectory"):
         check(other)
-
-
-def test_init_recipe_follows_the_data(data_dir, tmp_path, capsys):
-    from denoise_imu_ros.learn.config import load_config
-    rooms = ['dataset-room1_512_16', 'dataset-room5_512_16']
-    out = tmp_path / 'recipe.yaml'
-    assert main(['init-recipe', '--data', str(data_dir / 'tumvi'), '--sequences', *rooms,
-                 '--out', str(out)]) == 0
-    cfg = load_config(out)  # a recipe train accepts as it is
-    assert cfg.increments == [64, 128]  # the mocap's 16/32 are noise-dominated
-    assert cfg.gyro_std_deg == [0.2, 0.2, 0.2] and cfg.align == 'none'
-    assert cfg.window % 128 == 0 and 75 < cfg.window / 199.4 <= 80
-    assert cfg.sequences == rooms
-    assert '16/32 are noise-dominated' in out.read_text().splitlines()[2]
-    assert out.read_text().splitlines()[6].startswith('# rest_bias off: 0 of 2 recordings '
-                                                      'are still within 5 s of their start')
-    assert not cfg.rest_bias  # TUM-VI's rooms start moving
-    # its heading disagrees as a VIO's does (the gyro's drift): taught, and the user asked
-    assert cfg.heading_weight == 1.0 and out.read_text().splitlines()[7].startswith(
-        '# heading_weight 1: the poses are taken as motion capture (not said to be an '
-        "estimate); the poses' heading disagrees with the gyro 1.75x")
-    assert out.read_text().splitlines()[8].startswith(
-        '# supervision: the poses of dataset-room5_512_16 do not lower their own attitude')
-    assert 'one recording' not in capsys.readouterr().out  # two: crossval can hold one out
-    one = tmp_path / 'one.yaml'
-    assert main(['init-recipe', '--data', str(data_dir / 'tumvi'), '--sequences', rooms[0],
-                 '--out', str(one)]) == 0
-    assert 'one recording: train works, crossval' in capsys.readouterr().out
-
-
-def test_init_recipe_leaves_out_what_the_poses_cannot_supervise_and_says_so(
-        data_dir, tmp_path, capsys, monkeypatch):
-    """BROAD: the fast trials under slow motion capture no longer refuse the whole set."""
-    from denoise_imu_ros.learn.config import load_config
-    broad = data_dir / 'broad'
-    if not broad.is_dir():
-        pytest.skip('BROAD not found')
-    trials = ['02_undisturbed_slow_rotation_B', '07_undisturbed_fast_rotation_B',
-              '21_undisturbed_fast_combined']
-    out = tmp_path / 'recipe.yaml'
-    monkeypatch.chdir(broad.parent)  # a folder given relative to where the user stands
-    assert main(['init-recipe', '--data', 'broad', '--sequences', *trials,
-                 '--out', str(out)]) == 0
-    monkeypatch.chdir(tmp_path)
-    cfg = load_config(out)
-    assert cfg.data == str(broad.resolve())  # written absolute: it trains from anywhere
-    # 07 at 250 deg/s: its poses' 4.7 ms clock offset made every increment "noise" until
-    # the label noise was judged with the offset applied; from 128 samples it is clean
-    assert cfg.sequences == trials[:2] and not cfg.rest_bias  # measured, not assumed
-    assert cfg.increments == [128, 256] and cfg.align == 'auto'
-    said = capsys.readouterr().out
-    assert ('left out: 21_undisturbed_fast_combined: its poses do not lower its own attitude '
-            'error') in said
-    assert 'rest_bias off: 2 of 2 recordings are still within 5 s of their start' in said
-
-
-def test_init_recipe_leaves_out_a_recording_it_cannot_use_and_names_it(euroc, tmp_path):
-    from denoise_imu_ros.learn.recipe import init_recipe
-    (tmp_path / 'MH_01_easy').symlink_to(euroc / 'MH_01_easy')
-    write_asl(tmp_path / 'flat', n_imu=8000)  # yaw only: no rotation about x
-    csv = write_asl(tmp_path / 'broken', n_imu=8000) / 'mav0' / 'imu0' / 'data.csv'
-    csv.write_text(csv.read_text().replace('\n', '\nnot a row\n', 1))
-    recipe, said = init_recipe(tmp_path, ['flat', 'MH_01_easy', 'broken'])
-    assert recipe['sequences'] == ['MH_01_easy']
-    assert any(s.startswith(f'left out: {tmp_path / "flat"}: not usable for training: no '
-                            'rotation about the IMU x axis') for s in said)
-    assert any(s.startswith(f'left out: {csv}:2: expected 7 columns') for s in said)
-    assert said[-1] == ('the recipe uses 1 of the 3 recordings given (left out: flat, broken; '
-                        'above)')
-    with pytest.raises(DatasetError, match=r'^no recording is usable for training: .*flat: not '
-                                           r'usable for training: no rotation .*; .*broken.*: '
-                                           'expected 7 columns'):
-        init_recipe(tmp_path, ['flat', 'broken'])
-    with pytest.raises(DatasetError, match='mistyped: no such sequence folder or bag'):
-        init_recipe(tmp_path, ['MH_01_easy', 'mistyped'])  # said, not left out
-    with pytest.raises(DatasetError, match='one trajectory file for 2 recordings; give a folder'):
-        init_recipe(tmp_path, ['MH_01_easy', 'flat'], poses=csv)
-    with pytest.raises(DatasetError, match='^--poses .*vio_typo: no such trajectory file or '
-                                           'folder$'):
-        init_recipe(tmp_path, ['MH_01_easy', 'flat'], poses=tmp_path / 'vio_typo')
 
 
 def test_stamps_in_microseconds_and_a_bad_search_range_are_one_line_errors(tmp_path, capsys):
@@ -517,36 +418,6 @@ def test_keyframes_a_few_times_a_second_are_too_sparse_for_a_drone(euroc):
                                      full['excitation_rms_deg_s']))
 
 
-def test_an_axis_that_only_vibrates_has_no_interpolation_scale_to_judge(tmp_path):
-    from denoise_imu_ros.data.pose_alignment import interpolation_scale_error
-    rec = read_asl(write_asl(tmp_path / 's', n_imu=12000, gt_rate=10.0, gt_dir='mocap0'))
-    # a yawing robot whose body shakes by 4 deg/s at 8 Hz about x and y
-    t = (rec.imu_stamp_ns - rec.imu_stamp_ns[0]) * 1e-9
-    shaken = rec.imu.copy()
-    shaken[:, 0] += np.radians(4.0) * np.sin(2 * np.pi * 8.0 * t)
-    shaken[:, 1] += np.radians(4.0) * np.cos(2 * np.pi * 8.0 * t)
-    found = interpolation_scale_error(dataclasses.replace(rec, imu=shaken))
-    assert found[:2] == [None, None] and abs(found[2]) < 0.5
-
-
-def test_the_frame_fit_leaves_out_a_few_windows_it_cannot_explain_not_many():
-    from denoise_imu_ros.data.pose_alignment import fit_frame, robust_fit
-    rng = np.random.default_rng(8)
-    frame = Rotation.from_rotvec([0.1, -0.4, 1.5])
-    pose = rng.normal(0, 0.5, (2000, 3))
-    imu = frame.apply(pose) + [0.01, -0.02, 0.03] + rng.normal(0, 1e-3, (2000, 3))
-    for wrong, left_out in ((0.1, True), (0.3, False)):  # windows whose poses jumped
-        spoilt = pose.copy()
-        spoilt[:int(wrong * len(pose))] = rng.normal(0, 2.0, (int(wrong * len(pose)), 3))
-        rot, bias, rms, out = robust_fit(imu, spoilt)
-        if left_out:  # the frame and bias as if those windows were not there
-            assert out.sum() == int(wrong * len(pose))
-            assert math.degrees((rot * frame.inv()).magnitude()) < 0.01 and rms < 2e-3
-            np.testing.assert_allclose(bias, [0.01, -0.02, 0.03], atol=1e-3)
-        else:  # more than a fifth: the poses do not follow, and the residual says so
-            assert not out.any() and rms == fit_frame(imu, spoilt)[2] and rms > 0.1
-
-
 @pytest.mark.parametrize('way', ['inverted', 'with w first'])
 def test_poses_written_inverted_or_w_first_are_read_so_by_every_command(euroc, tmp_path, way):
     from denoise_imu_ros.core.errors import DataWarning
@@ -595,13 +466,3 @@ def test_inverted_poses_on_the_imu_clock_and_frame_are_judged_and_trained_as_rea
     recipe, said = init_recipe(euroc, ['MH_01_easy'], poses=tmp_path)
     assert recipe['align'] == 'auto'
     assert 'align auto: MH_01_easy read inverted (world-in-camera poses' in ' '.join(said)
-
-
-@pytest.mark.parametrize('n', [1, 2, 100, 1001, 4096])
-def test_the_rate_norms_lag_is_scipys_full_correlation(n):
-    from denoise_imu_ros.data.pose_alignment import best_lag
-    from scipy.signal import correlate
-    rng = np.random.default_rng(n)
-    a = rng.normal(size=n)
-    b = np.roll(a, min(37, n // 3)) + 0.1 * rng.normal(size=n)
-    assert best_lag(a, b) == int(np.argmax(correlate(a, b, mode='full'))) - n + 1
