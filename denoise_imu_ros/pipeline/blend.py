@@ -7,16 +7,14 @@ On a power-on it never saw, a network's output and the classical pipeline's (the
 less its turn-on bias, its bias tracked: the "tracker only" row, no model) err in part
 independently: their weighted mean T + W (N - T) loses less often to T than N does, and
 keeps part of N's gain where T's tracker diverges (BROAD's other session, run 26 of
-docs/experiments.md). The output is T alone where the network is fed motion it did not
-learn: wherever the envelope guards (a sample of the receptive field outside its bounds:
-the guard's own fallback carries the network's tracked bias, which on another session's
-fast rotation cost 3.9x T where T costs 1.0x, run 27), and where a sample of the
-receptive field has a mean | |accel| - g | over the last SUSTAINED_S above the largest any
-training recording reached (the model file's ``input_envelope.sustained_accel_m_s2``:
-another session's fast translation). ``crossval`` chooses W on held-out recordings; the
-model file's ``blend`` stores it with T's tracking. It comes after the envelope's guard
-(N is the guarded, tracked output), reset with every run. :func:`blend_batch` over
-arrays and :class:`Blender` per sample agree bit for bit.
+docs/experiments.md). Where a sample of the receptive field has a mean | |accel| - g |
+over the last SUSTAINED_S above the largest any training recording reached (the model
+file's ``input_envelope.sustained_accel_m_s2``), the network is fed motion longer and
+harder than it learnt (another session's fast translation) and the output is T alone.
+``crossval`` chooses W on held-out recordings; the model file's ``blend`` stores it with
+T's tracking. It comes after the envelope's guard (N is the guarded, tracked output),
+reset with every run. :func:`blend_batch` over arrays and :class:`Blender` per sample
+agree bit for bit.
 """
 
 from __future__ import annotations
@@ -47,19 +45,15 @@ def _window(rate_hz: float) -> int:
 
 
 def blend_batch(output: np.ndarray, fed: np.ndarray, rate_hz: float, blend: Blend,
-                bounds: InputEnvelope | None, field: int,
-                trusted: np.ndarray | None = None) -> np.ndarray:
+                bounds: InputEnvelope | None, field: int) -> np.ndarray:
     """
     Return a network's finished ``output`` (N, 3) blended for its input ``fed`` (N, 6), one run.
 
     ``bounds``: the envelope whose sustained bound sends a sample to the classical
-    pipeline alone (None, or none stored: the blend everywhere); ``trusted`` (N,): the
-    envelope guard's verdict (None: no guard), False sends a sample there too.
+    pipeline alone (None, or none stored: the blend everywhere).
     """
     classical = rest_bias.track_bias(fed[:, :3], fed[:, 3:], rate_hz, blend.tracking)
     weight = np.full(len(output), blend.weight)
-    if trusted is not None:
-        weight[~trusted] = 0.0
     held = None if bounds is None else bounds.sustained_accel_m_s2
     if held is not None:
         beyond = envelope.sustained(fed, _window(rate_hz)) > held
@@ -109,20 +103,15 @@ class Blender:
         self.sustained.reset()
         self._since_beyond = self.field  # none within the field
 
-    def apply(self, output: np.ndarray, fed: np.ndarray, trusted: bool = True) -> np.ndarray:
-        """
-        Return the finished ``output`` (3,) blended, for the model's input ``fed`` (6,).
-
-        ``trusted``: the envelope guard's verdict on this sample (False: T alone).
-        """
+    def apply(self, output: np.ndarray, fed: np.ndarray) -> np.ndarray:
+        """Return the finished ``output`` (3,) blended, for the model's input ``fed`` (6,)."""
         classical = fed[:3] if self.tracker is None else (
             fed[:3] - self.tracker.update(fed[:3], fed[3:]))
-        alone = not trusted
+        weight = self.blend.weight
         if self.held is not None:
             beyond = self.sustained.update(fed[3:]) > self.held
             self._since_beyond = 0 if beyond else self._since_beyond + 1
-            alone = alone or self._since_beyond < self.field
-        if alone:
-            self.classical_only += 1
-            return classical
-        return classical + self.blend.weight * (output - classical)
+            if self._since_beyond < self.field:
+                weight = 0.0
+                self.classical_only += 1
+        return classical + weight * (output - classical)

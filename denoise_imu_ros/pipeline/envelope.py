@@ -24,8 +24,6 @@ correction taken in motion carries that motion's scale terms into faster motion)
 guarding before the tracking (its estimate then follows the fallback through fast
 motion), holding the estimate wherever the guard is (what it learns through tapping is
 then discarded), and feeding the tracker the fallback through the held stretches.
-Where the model file blends the network with the classical pipeline (pipeline/blend.py),
-a guarded sample gets the classical pipeline's output alone instead of this fallback.
 Every path uses it identically (:func:`too_fast` and :func:`guard_batch` over arrays for
 ``eval``, ``correct`` and ``crossval``; :class:`Guard` per sample for the node and
 ``process-bag``; equal bit for bit), in the order of

@@ -75,12 +75,11 @@ class Flow:
 
     ``fed`` is the model's input (the raw gyro less the turn-on bias, and the
     accelerometer), ``out`` the gyro so far; the rest are set by the stages that have
-    them (``bias`` the tracked bias removed, ``too_fast`` the envelope's hold, ``trusted``
-    its guard's verdict).
+    them (``bias`` the tracked bias removed, ``too_fast`` the envelope's hold).
     """
 
-    __slots__ = ('fed', 'out', 'bias', 'too_fast', 'trusted', 'event', 'dt_s', 'periods',
-                 'attitude', 'orientation')
+    __slots__ = ('fed', 'out', 'bias', 'too_fast', 'event', 'dt_s', 'periods', 'attitude',
+                 'orientation')
 
     def __init__(self, fed: np.ndarray, event: Event | None = None, dt_s: Any = 0.0,
                  periods: Any = 0.0, out: np.ndarray | None = None) -> None:
@@ -88,7 +87,6 @@ class Flow:
         self.out: Any = out
         self.bias: Any = None
         self.too_fast: Any = False
-        self.trusted: Any = True
         self.attitude: Any = None
         self.orientation: Any = None
 
@@ -167,13 +165,11 @@ class EnvelopeCheck(Stage):
     def step(self, flow: Flow) -> None:
         """Take the model's input; the tracker holds while it turns too fast."""
         self.guard.check(flow.fed)
-        flow.too_fast, flow.trusted = self.guard.too_fast, self.guard.trusted
+        flow.too_fast = self.guard.too_fast
 
     def run(self, flow: Flow) -> None:
-        """Mark the samples whose receptive field turns faster than, or lies outside, it."""
-        bounds, field = self.guard.envelope, self.guard.field
-        flow.too_fast = envelope.too_fast(flow.fed, bounds, field)
-        flow.trusted = ~envelope.untrusted(flow.fed, bounds, field)
+        """Mark the samples whose receptive field turns faster than the envelope."""
+        flow.too_fast = envelope.too_fast(flow.fed, self.guard.envelope, self.guard.field)
 
 
 class Network(Stage):
@@ -251,15 +247,13 @@ class ClassicalMix(Stage):
         self.blender.reset()
 
     def step(self, flow: Flow) -> None:
-        """Blend one output (the classical alone where the envelope guards it)."""
-        flow.out = self.blender.apply(flow.out, flow.fed, flow.trusted)
+        """Blend one output."""
+        flow.out = self.blender.apply(flow.out, flow.fed)
 
     def run(self, flow: Flow) -> None:
         """Blend every output."""
         b = self.blender
-        trusted = flow.trusted if isinstance(flow.trusted, np.ndarray) else None
-        flow.out = blend_batch(flow.out, flow.fed, b.rate_hz, b.blend, b.bounds, b.field,
-                               trusted)
+        flow.out = blend_batch(flow.out, flow.fed, b.rate_hz, b.blend, b.bounds, b.field)
 
 
 class VerticalDrop(Stage):

@@ -10,7 +10,10 @@ fold's tracker-only row) are combined per sample:
 - ``blend W``: T + W (N - T), with T alone where the fallback rule flags the sample
   (``sustained``: a sample of the receptive field whose causal 1 s mean of ||a| - g| is
   above the largest any training trial reached, the model file's; ``envelope``: that or
-  the model's own envelope, as the product's classical mix; ``none``);
+  the model's own envelope, as the product's classical mix; ``held``: as ``envelope``,
+  but there T's tracker held through the stretches faster than the envelope as the
+  network's is (its estimate from before each restored after it); ``held everywhere``:
+  that T blended everywhere; ``none``);
 - ``gravity``: N or T, whichever kept the accelerometer's direction steadier in its own
   open-loop world frame over the last WIN s (low-passed over LP s): a causal selector.
 Prints, per fold and setting, the mean against tracker only, the mean per-trial ratio and
@@ -51,7 +54,8 @@ def trials(out: Path, data: Path) -> dict[str, dict]:
             fed = stages.model_input(nets[0], seq.stream)
             gyros = [correct_gyro(m.model, fed) for m in nets]
             gyros.append(np.mean(gyros, axis=0))
-            outputs, untrusted, held = [], [], []
+            outputs, untrusted, held, steady = [], [], [], []
+            classical_tracking = CANDIDATES[chosen['tracker only']]
             mean_off = sustained(fed, max(1, round(envelope.SUSTAINED_S * rate)))
             for g, env in zip(gyros, bounds):
                 hold = envelope.too_fast(fed, env, field)
@@ -61,13 +65,16 @@ def trials(out: Path, data: Path) -> dict[str, dict]:
                 own = fed[:, :3] + np.array(env.fallback_rad_s) - bias
                 outputs.append(np.where(base[:, None], own, g - bias))
                 untrusted.append(base)
+                steady.append(track_bias(fed[:, :3], fed[:, 3:], rate, classical_tracking,
+                                         hold))
                 held.append(np.zeros(len(g), bool) if env.sustained_accel_m_s2 is None else
                             within_field(mean_off > env.sustained_accel_m_s2, field))
             found[name] = {
                 'fold': i, 'seq': seq, 'accel': fed[:, 3:], 'rate': rate,
                 'classical': track_bias(fed[:, :3], fed[:, 3:], rate,
                                         CANDIDATES[chosen['tracker only']]),
-                'nets': outputs, 'untrusted': untrusted, 'sustained': held}
+                'nets': outputs, 'untrusted': untrusted, 'sustained': held,
+                'steady': steady}
     return found
 
 
@@ -94,8 +101,8 @@ def main() -> None:
     parser.add_argument('out', type=Path, help="crossval's --out (crossval.json, seedS/foldF)")
     parser.add_argument('data', type=Path, help='the folder of the trials')
     parser.add_argument('--weights', type=float, nargs='+', default=[1.0, 0.7, 0.5, 0.3])
-    parser.add_argument('--fallback', choices=('none', 'sustained', 'envelope'),
-                        default='sustained')
+    parser.add_argument('--fallback', choices=('none', 'sustained', 'envelope', 'held',
+                                               'held everywhere'), default='sustained')
     parser.add_argument('--gravity', type=float, nargs=2, metavar=('LP', 'WIN'),
                         help='also the gravity selector, low-pass LP s, window WIN s')
     args = parser.parse_args()
@@ -113,9 +120,13 @@ def main() -> None:
             for n in names:
                 t = found[n]
                 row = []
-                for net, untrusted, held in zip(t['nets'], t['untrusted'], t['sustained']):
+                for net, untrusted, held, steady in zip(t['nets'], t['untrusted'],
+                                                        t['sustained'], t['steady']):
                     flag = {'none': np.zeros(len(net), bool), 'sustained': held,
-                            'envelope': held | untrusted}[args.fallback]
+                            'envelope': held | untrusted, 'held': held | untrusted,
+                            'held everywhere': held | untrusted}[args.fallback]
+                    classical = {'held': np.where(untrusted[:, None], steady, t['classical']),
+                                 'held everywhere': steady}.get(args.fallback, t['classical'])
                     if weight is None:
                         use = gravity_drift(net, t['accel'], t['rate'], *args.gravity) <= \
                             gravity_drift(t['classical'], t['accel'], t['rate'], *args.gravity)
@@ -124,7 +135,7 @@ def main() -> None:
                         w = np.full(len(net), weight)
                     w = np.where(flag, 0.0, w)[:, None]
                     row.append(score(t['seq'], t['seq'].on_poses(
-                        t['classical'] + w * (net - t['classical'])))['aoe_deg'])
+                        classical + w * (net - classical)))['aoe_deg'])
                 aoe.append(row)
             aoe = np.array(aoe)  # trials x (seeds..., ensemble)
             ratio = aoe / bar[:, None]

@@ -1,6 +1,6 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
-"""The classical mix: T + W (N - T), T alone where the network is fed motion it did not learn."""
+"""The classical mix: T + W (N - T), T alone where the acceleration stays off gravity too long."""
 
 import math
 
@@ -21,33 +21,28 @@ def _stream(n=600, seed=3):
     fed[:, 3:] = rng.normal(0.0, 0.2, (n, 3)) + [0.0, 0.0, GRAVITY_M_S2]
     fed[400:, 3:] *= 3.0  # hard acceleration to the end: beyond the bound within a second
     output = fed[:, :3] + rng.normal(0.0, 0.01, (n, 3)) - 0.002
-    trusted = np.ones(n, bool)
-    trusted[100:150] = False  # the envelope guards these
-    return fed, output, trusted
+    return fed, output
 
 
-def test_the_classical_alone_where_the_guard_acts_or_the_bound_is_passed_the_blend_elsewhere():
-    fed, output, trusted = _stream()
+def test_the_classical_alone_where_the_bound_is_passed_the_blend_elsewhere():
+    fed, output = _stream()
     bounds = InputEnvelope(10.0, 50.0, (0.0, 0.0, 0.0), sustained_accel_m_s2=5.0)
     blend = Blend(WEIGHT, TRACKING)
-    out = blend_batch(output, fed, RATE, blend, bounds, FIELD, trusted)
+    out = blend_batch(output, fed, RATE, blend, bounds, FIELD)
     classical = fed[:, :3] - rest_bias.tracked_bias(fed[:, :3], fed[:, 3:], RATE, TRACKING)
     beyond = int(np.argmax(envelope.sustained(fed, round(RATE)) > 5.0))
     assert 400 < beyond < 500
-    alone = ~trusted
-    alone[beyond:] = True
-    np.testing.assert_array_equal(out[alone], classical[alone])
-    blended = np.r_[0:100, 150:400]
-    np.testing.assert_allclose(out[blended], (classical + WEIGHT * (output - classical))[blended],
+    np.testing.assert_array_equal(out[beyond:], classical[beyond:])
+    np.testing.assert_allclose(out[:beyond], (classical + WEIGHT * (output - classical))[:beyond],
                                rtol=0, atol=1e-15)
     blender = Blender(blend, RATE, bounds, FIELD)
-    per_sample = np.array([blender.apply(o, f, bool(t)) for o, f, t in zip(output, fed, trusted)])
+    per_sample = np.array([blender.apply(o, f) for o, f in zip(output, fed)])
     np.testing.assert_array_equal(per_sample, out)
-    assert blender.classical_only == alone.sum()
+    assert blender.classical_only == len(out) - beyond
 
 
 def test_without_a_guard_every_sample_is_blended():
-    fed, output, _ = _stream()
+    fed, output = _stream()
     blend = Blend(WEIGHT, TRACKING)
     out = blend_batch(output, fed, RATE, blend, None, FIELD)
     blender = Blender(blend, RATE, None, FIELD)
