@@ -5,8 +5,8 @@ The network's output blended with the classical pipeline's, on a session crossva
 
 For each held-out trial of ``crossval --sessions ... [--motions ...] --seeds ...`` (its
 models in OUT), each seed's and the ensemble's guarded, tracked output N (as the product
-computes it) and the classical pipeline's gyro T (the gyro less its turn-on bias, its bias tracked as the
-fold's tracker-only row) are combined per sample:
+computes it) and the classical pipeline's gyro T (the gyro less its turn-on bias, its bias
+tracked as the fold's tracker-only row) are combined per sample:
 - ``blend W``: T + W (N - T), with T alone where the fallback rule flags the sample
   (``sustained``: a sample of the receptive field whose causal 1 s mean of ||a| - g| is
   above the largest any training trial reached, the model file's; ``envelope``: that or

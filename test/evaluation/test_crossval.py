@@ -8,7 +8,7 @@ from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import TrainingError
 from denoise_imu_ros.core.schema import judged_on, parse_meta
 from denoise_imu_ros.evaluation.crossval import (attach_mismatches, BLEND_WEIGHTS, crossval, folds,
-                                                   summarize)
+                                                 summarize)
 from denoise_imu_ros.evaluation.reports import crossval_table
 from denoise_imu_ros.learn.checkpoint import load_model
 from helpers import write_asl
