@@ -14,7 +14,7 @@ a model taught without its poses' heading). Where the file blends its output wit
 classical pipeline's (its ``blend``), also rounds with ``rest_bias`` on and
 ``classical_blend`` off, and the blend alone (``Blender.apply``). Prints the median
 per-sample time of each, and the ratios on/off and blend/no blend.
-Run: .venv/bin/python bench/rest_bias_cost.py [--model broad]
+Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
      [--data ../shared/data/broad] [--recording 03_undisturbed_slow_rotation_C]
      [--samples 20000] [--rounds 5]
 """
@@ -47,7 +47,7 @@ def per_sample_s(step, stamps: np.ndarray, imu: np.ndarray) -> float:
 def main() -> None:
     """Print the per-sample cost with rest_bias off and on, and of each estimator alone."""
     parser = argparse.ArgumentParser()
-    parser.add_argument('--model', default='broad')
+    parser.add_argument('--model', default='broad_network')
     parser.add_argument('--data', type=Path, default=DATA)
     parser.add_argument('--recording', default='03_undisturbed_slow_rotation_C')
     parser.add_argument('--samples', type=int, default=20000)

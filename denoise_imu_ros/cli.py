@@ -495,7 +495,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = command('rest-model', "a model file that only removes the turn-on bias (crossval's "
                 "verdict 'rest bias'), or that and tracks the bias left ('tracker only'), "
                 'from a model trained with rest_bias',
-                '--like broad --tracker-only --out tracker_only.safetensors')
+                '--like broad_network --tracker-only --out tracker_only.safetensors')
     p.add_argument('--like', required=True, help='a model trained with rest_bias: its rate, '
                    'estimator and prior, recordings and verdict')
     p.add_argument('--tracker-only', action='store_true', help='track the bias left too, '

@@ -57,7 +57,7 @@ def test_correct_and_process_bag_say_what_the_node_says_of_the_turn_on_bias(tmp_
     for run in (['correct', '--input', str(SAMPLE), '--out', str(tmp_path / 'c.csv')],
                 ['process-bag', '--input', str(SAMPLE), '--out', str(tmp_path / 'out')]):
         # EuRoC's 200 Hz against BROAD's 285.7: refused, after the warnings
-        assert main([*run, '--model', 'broad', '--rest-bias', 'off']) == 1
+        assert main([*run, '--model', 'broad_network', '--rest-bias', 'off']) == 1
         assert ('warning: rest_bias off: the model was trained on the gyro less its turn-on '
                 'bias, it now gets the raw gyro') in capsys.readouterr().err.splitlines()
     assert main(['correct', '--model', 'euroc', '--rest-bias', 'on', '--input', str(SAMPLE),

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Train the shipped models and their seed repeats (the figures in the README), the EuRoC
 # and TUM-VI ensembles of the seeds, the cross-recording reports of the recipes and the
-# filter settings, and the BROAD models (broad, broad_calibrated).
+# filter settings, and the BROAD models (broad, broad_network, broad_calibrated).
 #   scripts/reproduce/train_models.sh OUT_DIR [SEEDS...]    (EuRoC seeds, default: 0 1 2 3 4)
 #   TUMVI_SEEDS="0 1" scripts/reproduce/train_models.sh ... (TUM-VI seeds, default: 0 to 10)
 #   TUMVI_CV_SEEDS="0 1" ...                                (its crossval seeds, default: 0 1 2)
@@ -62,10 +62,10 @@ for ds in euroc tumvi; do  # the filter settings, chosen on the training recordi
     --attach --quiet > "$out/tune_$ds.log.part" 2>&1
   mv "$out/tune_$ds.log.part" "$out/tune_$ds.log"
 done
-# BROAD: three trainings of its recipe and its calibration on both power-on sessions, broad
-# (their ensemble), the leave-one-session-out verdict with the output's tracking and its
-# blend with the classical pipeline (the folds' ensembles of the three seeds), and the
-# filter settings
+# BROAD: three trainings of its recipe and its calibration on both power-on sessions,
+# broad_network (their ensemble), the leave-one-session-out verdict with the output's
+# tracking and its blend with the classical pipeline (the folds' ensembles of the three
+# seeds), the filter settings, and broad: the tracker-only model the verdict recommends
 broad_b=02_undisturbed_slow_rotation_B,05_undisturbed_slow_rotation_with_breaks_B,07_undisturbed_fast_rotation_B,11_undisturbed_slow_translation_B,14_undisturbed_slow_translation_with_breaks_B,16_undisturbed_fast_translation_B,21_undisturbed_fast_combined,29_disturbed_stationary_magnet_B
 broad_c=03_undisturbed_slow_rotation_C,12_undisturbed_slow_translation_C,25_disturbed_tapping_B,27_disturbed_phone_vibration_B
 broad=()
@@ -74,12 +74,17 @@ for seed in 0 1 2; do
   broad+=("$out/broad_s$seed.safetensors")
 done
 run broad_calibrated --recipe config/train_broad.yaml --calibration-only
-[ -f "$out/broad.safetensors" ] || "$bin/denoise-imu" ensemble "${broad[@]}" \
-  --out "$out/broad.safetensors"
+[ -f "$out/broad_network.safetensors" ] || "$bin/denoise-imu" ensemble "${broad[@]}" \
+  --out "$out/broad_network.safetensors"
 [ -f "$out/crossval_broad/crossval.json" ] || "$bin/denoise-imu" crossval \
   --recipe config/train_broad.yaml --sessions "$broad_b" "$broad_c" --seeds 0 1 2 \
-  --out "$out/crossval_broad" --quiet --attach "$out/broad.safetensors" \
+  --out "$out/crossval_broad" --quiet --attach "$out/broad_network.safetensors" \
   "$out/broad_calibrated.safetensors" > "$out/crossval_broad.log" 2>&1
 [ -f "$out/tune_broad.log" ] || "$bin/denoise-imu" tune-fusion \
-  --model "$out/broad.safetensors" --baseline "$out/broad_calibrated.safetensors" \
+  --model "$out/broad_network.safetensors" --baseline "$out/broad_calibrated.safetensors" \
   --data "${DATA:-../shared/data}/broad" --attach --quiet > "$out/tune_broad.log" 2>&1
+[ -f "$out/broad.safetensors" ] || { "$bin/denoise-imu" rest-model \
+  --like "$out/broad_network.safetensors" --tracker-only --out "$out/broad.safetensors"
+  "$bin/denoise-imu" tune-fusion --model "$out/broad.safetensors" \
+    --baseline "$out/broad_calibrated.safetensors" --data "${DATA:-../shared/data}/broad" \
+    --attach --quiet > "$out/tune_broad_rest.log" 2>&1; }

@@ -19,9 +19,9 @@ def test_a_calibration_of_the_models_rate_pairs_and_nothing_else_does(tmp_path):
     with pytest.raises(ModelFileError, match='a calibration of 199.37 Hz, the model '
                                              'euroc.safetensors is of 200.00 Hz'):
         check_baseline(net, read_model_file('tumvi_calibrated'))
-    write_rest_only_model(read_model_file('broad'), tmp_path / 'rest')
+    write_rest_only_model(read_model_file('broad_network'), tmp_path / 'rest')
     with pytest.raises(ModelFileError, match='a rest-only model, not a calibration'):
-        check_baseline(read_model_file('broad'), read_model_file(tmp_path / 'rest'))
+        check_baseline(read_model_file('broad_network'), read_model_file(tmp_path / 'rest'))
 
 
 def test_a_recording_is_checked_against_the_models_rate_units_and_mounting():

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 TRIAL = DATA / 'broad' / '07_undisturbed_fast_rotation_B'
-PART = slice(30500, 34500)  # where it turns faster than broad's envelope
+PART = slice(30500, 34500)  # where it turns faster than broad_network's envelope
 
 
 @pytest.fixture(scope='module')
@@ -32,13 +32,13 @@ def recording():
 
 def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
     """
-    The shipped broad has every stage (the vertical drop added): node and eval agree bit for bit.
+    broad_network has every stage (the vertical drop added): node and eval agree bit for bit.
 
     With the guard, and the blend's fallback to the classical pipeline (at a bound that
     half the samples exceed), acting on part of it.
     """
     stamps, imu = recording
-    model = read_model_file('broad')
+    model = read_model_file('broad_network')
     rate, fusion = model.meta.sample_rate_hz, model.meta.fusion.chosen
     field = model.config.receptive_field
     held = float(np.median(envelope.sustained(imu, round(rate))))  # half of it beyond
@@ -62,7 +62,7 @@ def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
 def test_the_batch_path_is_the_table_up_to_and_after_the_network(recording):
     """model_input is the stages before the network; finish those after it."""
     stamps, imu = recording
-    model = read_model_file('broad')
+    model = read_model_file('broad_network')
     whole = stages.corrected(model, imu)
     fed = stages.model_input(model, imu)
     np.testing.assert_array_equal(fed, Pipeline(correction(model)).run(

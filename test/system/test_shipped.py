@@ -116,40 +116,44 @@ def test_shipped_tumvi_is_the_ensemble_of_eleven_family_trainings_and_its_folds_
     assert report['seeds'] == [0, 1, 2] and set(report['per_seed']) == {'0', '1', '2'}
 
 
-def test_shipped_broad_is_what_its_session_folds_say_the_network_blended():
-    """The network blended with the classical pipeline held within 10 % of it on every trial."""
-    broad = load_model('broad')
+def test_shipped_broad_is_what_its_session_folds_say_the_classical_pipeline():
+    """No learnt row held within 10 % of tracker only on every unseen trial: broad tracks."""
+    broad, network = read_model_file('broad'), load_model('broad_network')
+    assert broad.meta.kind == 'tracker only' and broad.config.calibration_only
     report = broad.meta.raw['crossval']
-    assert report == load_model('broad_calibrated').meta.raw['crossval']
+    assert report == network.meta.raw['crossval'] == load_model(
+        'broad_calibrated').meta.raw['crossval']
     assert report['fold_kind'] == 'leave one power-on session out'
     assert len(report['folds']) == 2 and report['seeds'] == [0, 1, 2]
-    assert len(broad.meta.train_sequences) == 12  # every trial, the fast ones too
+    assert len(network.meta.train_sequences) == 12  # every trial, the fast ones too
     assert set(report['mean']) == {'raw', 'rest bias', 'tracker only', 'calibrated',
                                    'network unblended', 'network'}
-    assert report['deploy'] == 'network' and deployment_warning(broad) is None
-    assert deployment_warning(read_model_file('broad_calibrated')).startswith(
-        'broad_calibrated.safetensors is a calibration model, but')
+    assert report['deploy'] == 'tracker only' and deployment_warning(broad) is None
+    for name in ('broad_network', 'broad_calibrated'):
+        assert deployment_warning(read_model_file(name)).endswith('(tracker only)')
     # what differs between recordings (sessions) was learnt apart from the model
-    assert report['train_config']['recording_bias'] and broad.meta.recipe('recording_bias')
+    assert report['train_config']['recording_bias'] and network.meta.recipe('recording_bias')
     # each file tracks its output's bias as the held-out sessions chose for its row, and
-    # broad blends its output with the classical pipeline's as they chose
-    for name, row in (('broad_calibrated', 'calibrated'), ('broad', 'network')):
+    # the network blends its output with the classical pipeline's as they chose
+    for name, row in (('broad', 'tracker only'), ('broad_calibrated', 'calibrated'),
+                      ('broad_network', 'network')):
         chosen = report['tracking']['chosen'][row]
         assert read_model_file(name).meta.bias_tracking == BiasTracking(
             chosen['sigma_motion_deg_s'], chosen['forgetting_s'], chosen['sigma_init_deg_s'])
     classical = report['tracking']['chosen']['tracker only']
-    assert broad.meta.blend == Blend(report['blend']['chosen']['weight'], BiasTracking(
+    assert network.meta.blend == Blend(report['blend']['chosen']['weight'], BiasTracking(
         classical['sigma_motion_deg_s'], classical['forgetting_s'],
         classical['sigma_init_deg_s']))
-    assert broad.meta.blend.weight in BLEND_WEIGHTS
+    assert network.meta.blend.weight in BLEND_WEIGHTS
     # beyond the second-long acceleration of its training trials, the classical alone
-    assert 1.0 < broad.meta.input_envelope.sustained_accel_m_s2 < 100.0
-    assert broad.model.config.members == 3
-    assert sorted(m['seed'] for m in broad.meta.raw['members']) == [0, 1, 2]
+    assert 1.0 < network.meta.input_envelope.sustained_accel_m_s2 < 100.0
+    assert network.model.config.members == 3
+    assert sorted(m['seed'] for m in network.meta.raw['members']) == [0, 1, 2]
     # one estimator, its prior between the two sessions' turn-on biases (rad/s)
     settings = broad.meta.rest_bias
+    assert settings == network.meta.rest_bias
     for axis, (b, c) in enumerate(((3.6e-3, 8.6e-3), (2.1e-3, -3.3e-3), (-4.0e-3, -4.4e-3))):
         assert min(b, c) - 3e-4 < settings.prior_rad_s[axis] < max(b, c) + 3e-4
-    for name in ('broad', 'broad_calibrated'):  # imu/data's settings
+    for name in ('broad', 'broad_network', 'broad_calibrated'):  # imu/data's settings
         assert read_model_file(name).meta.raw['fusion']['chosen_on'].startswith(
             'validation tails of 02_undisturbed_slow_rotation_B')
