@@ -122,9 +122,8 @@ def main() -> None:
                 row = []
                 for net, untrusted, held, steady in zip(t['nets'], t['untrusted'],
                                                         t['sustained'], t['steady']):
-                    flag = {'none': np.zeros(len(net), bool), 'sustained': held,
-                            'envelope': held | untrusted, 'held': held | untrusted,
-                            'held everywhere': held | untrusted}[args.fallback]
+                    flag = {'none': np.zeros(len(net), bool), 'sustained': held}.get(
+                        args.fallback, held | untrusted)
                     classical = {'held': np.where(untrusted[:, None], steady, t['classical']),
                                  'held everywhere': steady}.get(args.fallback, t['classical'])
                     if weight is None:
