@@ -119,6 +119,10 @@ class TrainConfig:
     accel_noise: float = 1e-3          # m/s^2
     gyro_bias: float = 1e-3            # rad/s, uniform +- per sequence and step
     accel_bias: float = 1e-3           # m/s^2
+    # True: the gyro bias drawn above stays in what the loss compares with the poses, so the
+    # network learns to pass a constant offset through to the output's bias tracker rather
+    # than guess from a window a constant that no window shows (the next power-on's)
+    gyro_bias_kept: bool = False
     huber_delta: float = 0.005         # rad
     increments: list[int] = field(default_factory=lambda: [16, 32])  # loss increments
     increment_weights: list[float] = field(default_factory=lambda: [1.0, 0.5])

@@ -207,6 +207,9 @@ def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.T
     """
     Draw this process's windows, one per sequence at a random offset, with noise and bias.
 
+    Returns the input, the time steps, the poses, their validity, where poses were stamped
+    and the gyro bias each window was given (S, 1, 3).
+
     The draws are made for every sequence, in one order, whatever the process count:
     the batch of a data-parallel run is that of a one-process run.
     """
@@ -221,7 +224,20 @@ def batch(split: Split, cfg: TrainConfig, gen: torch.Generator) -> tuple[torch.T
     rows = torch.arange(len(mine))[:, None]
     u = split.imu[rows, idx[:, :-1]] + noise[mine] + bias[mine]    # (S_mine, W, 6)
     return (u, split.dt[rows, idx[:, :-1]], split.quat[rows, idx], split.valid[rows, idx],
-            split.pose_at[rows, idx])
+            split.pose_at[rows, idx], bias[mine, :, :3])
+
+
+def batch_loss(model: GyroNet, drawn: tuple[torch.Tensor, ...], cfg: TrainConfig,
+               offsets: torch.Tensor | None, mine: torch.Tensor) -> torch.Tensor:
+    """Return the loss of one batch from ``batch``; ``offsets``: the recordings' own biases."""
+    u, dt, quat, valid, pose_at, bias = (x.to(cfg.device) for x in drawn)
+    omega = model(u)
+    if cfg.gyro_bias_kept:  # the offset passes through: the output tracker's to remove
+        omega = omega - bias
+    if offsets is not None:  # each window's recording adds its own constant
+        omega = omega + model.gyro_std * offsets[mine, None, :]
+    return increment_loss(omega, dt, quat, valid, cfg.loss_config(),
+                          parallel.sum_over_processes, pose_at)
 
 
 def _pose_at(seq: Sequence) -> np.ndarray:
@@ -508,12 +524,7 @@ def _run(cfg: TrainConfig, rank: int, seqs: list[Sequence],
     bar = tqdm(range(0, cfg.steps + 1), disable=not progress, desc='train', unit='step')
     for step in bar:
         if step > 0:
-            u, dt, quat, valid, pose_at = (x.to(cfg.device) for x in batch(split, cfg, gen))
-            omega = model(u)
-            if offsets is not None:  # each window's recording adds its own constant
-                omega = omega + model.gyro_std * offsets[split.mine, None, :]
-            loss = increment_loss(omega, dt, quat, valid, loss_cfg,
-                                  parallel.sum_over_processes, pose_at)
+            loss = batch_loss(model, batch(split, cfg, gen), cfg, offsets, split.mine)
             optimizer.zero_grad(set_to_none=True)
             loss.backward()
             if cfg.workers > 1:

@@ -11,7 +11,7 @@ from denoise_imu_ros.data.load import load_imu, load_sequence
 from denoise_imu_ros.learn import train as train_module
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.config import load_config
-from denoise_imu_ros.learn.train import batch, build_model, train, training_split
+from denoise_imu_ros.learn.train import batch, batch_loss, build_model, train, training_split
 from helpers import ROOT
 import numpy as np
 import pytest
@@ -169,6 +169,30 @@ def test_data_parallel_processes_draw_the_one_process_batch(euroc):
             assert torch.equal(whole[rank::2], part)
 
 
+@pytest.mark.parametrize('kept', [False, True])
+def test_a_kept_gyro_bias_is_passed_through_not_learnt(euroc, kept):
+    # an untrained calibration is the identity: it passes every offset through, which is
+    # right when the drawn bias is kept in the target and an error to learn when it is not
+    cfg = _short(euroc, calibration_only=True, gyro_noise=0.0, accel_noise=0.0,
+                 gyro_bias_kept=kept)
+    seqs = [load_sequence(euroc / name) for name in cfg.sequences]
+    model, split, _ = build_model(cfg, seqs, 0)
+    loss = {}
+    for bias in (0.0, 0.1):
+        drawn = batch(split, dataclasses.replace(cfg, gyro_bias=bias),
+                      torch.Generator().manual_seed(0))
+        u_gyro, applied = drawn[0][..., :3], drawn[-1]
+        unbiased = batch(split, dataclasses.replace(cfg, gyro_bias=0.0),
+                         torch.Generator().manual_seed(0))[0][..., :3]
+        torch.testing.assert_close(applied.expand_as(u_gyro), u_gyro - unbiased)
+        with torch.no_grad():
+            loss[bias] = batch_loss(model, drawn, cfg, None, split.mine).item()
+    if kept:
+        assert loss[0.1] == pytest.approx(loss[0.0], rel=1e-3)
+    else:
+        assert loss[0.1] > 1.3 * loss[0.0]
+
+
 def test_whole_sequence_windows_are_normalised_without_the_padding(tmp_path):
     from helpers import write_asl
     for name, n, rate in (('short', 2400, 0.3), ('long', 6000, 0.6)):
@@ -191,7 +215,7 @@ def test_windows_are_drawn_from_the_head_or_the_whole_of_each_sequence(euroc, wh
     gen = torch.Generator().manual_seed(0)
     last_stamp_seen = [0] * len(seqs)
     for _ in range(300):
-        u, dt, quat, valid, pose_at = batch(split, cfg, gen)
+        u, dt, quat, valid, pose_at, _ = batch(split, cfg, gen)
         assert u.shape == (2, cfg.window, 6) and quat.shape == (2, cfg.window + 1, 4)
         assert bool(valid.all()) and bool((dt > 0).all())  # never the zero padding
         for i, s in enumerate(seqs):
