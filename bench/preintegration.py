@@ -3,8 +3,10 @@
 """
 What a VIO back-end gets from imu/corrected: its increments pre-integrated by GTSAM, beside ours.
 
-For each recording and window length, the IMU as ``imu/corrected`` carries it (the gyro of
-each row, the accelerometer as it came) is pre-integrated over back-to-back windows by
+For each recording and window length, the IMU as ``imu/corrected`` carries it (each model's
+corrected gyro and its accelerometer less the bias the model fitted, ``fusion_accel_bias``;
+beside it the raw IMU and the accelerometer as it came, ``fusion_accel_bias:=off``) is
+pre-integrated over back-to-back windows by
 GTSAM's PreintegratedImuMeasurements (what GTSAM-based smoothers use; ``pip install
 gtsam``) and by denoise_imu_ros.evaluation.preintegration, and compared with the ground
 truth's increments (its velocity EuRoC's state estimate's where the recording has one, as
@@ -94,17 +96,21 @@ def main() -> None:
         rate = 1 / float(np.median(dt))
         vel, vel_source = ground_truth_velocity(Path(args.data) / name, seq.stamp_ns,
                                                 seq.gt_pos, stamp_s)
-        accel = seq.imu[:, 3:]
         accel_var = np.full((len(dt), 3), ACCEL_DENSITY ** 2 * rate)
-        gyros = {'raw': (seq.imu[:, :3], np.full((len(dt), 3), GYRO_DENSITY ** 2 * rate))}
+        imus = {'raw': (seq.imu[:, :3], seq.imu[:, 3:],
+                        np.full((len(dt), 3), GYRO_DENSITY ** 2 * rate))}
         for label, mf in models.items():
-            var = np.diag(np.reshape(gyro_covariance(mf), (3, 3)))
-            gyros[label] = (corrected_gyro(mf, seq.imu), np.broadcast_to(var, (len(dt), 3)))
+            var = np.broadcast_to(np.diag(np.reshape(gyro_covariance(mf), (3, 3))), (len(dt), 3))
+            # from the recording's first sample, as the node and process-bag run it
+            gyro = corrected_gyro(mf, np.vstack([seq.lead_in, seq.imu]))[len(seq.lead_in):]
+            bias = np.array(mf.meta.fusion.chosen.accel_bias_m_s2)
+            imus[f'{label}, accelerometer as it came'] = (gyro, seq.imu[:, 3:], var)
+            imus[label] = (gyro, seq.imu[:, 3:] - bias, var)
         for window_s in args.windows:
             length = int(round(window_s * rate))
             starts = window_starts(seq.gt_valid, length)
             ref = reference(seq.gt_quat, seq.gt_pos, vel, stamp_s, starts, length)
-            for label, (gyro, gyro_var) in gyros.items():
+            for label, (gyro, accel, gyro_var) in imus.items():
                 ours = preintegrate(gyro, accel, dt, starts, length, gyro_var, accel_var)
                 theirs = gtsam_increments(gyro, accel, dt, starts, length, gyro_var, accel_var)
                 largest['increment'] = max(
@@ -116,7 +122,7 @@ def main() -> None:
                 largest['covariance'] = max(largest['covariance'], float(rel.max()))
                 rows.setdefault((window_s, label), []).append(errors(theirs, ref))
         print(f'{name}: {len(seq.imu)} samples, velocity from its {vel_source}', flush=True)
-    print('\n| window | gyro | rotation (deg) | velocity (m/s) | position (m) | NEES rotation '
+    print('\n| window | IMU | rotation (deg) | velocity (m/s) | position (m) | NEES rotation '
           '(in 2 sigma) | NEES velocity (in 2 sigma) | windows |')
     print('|---|---|---|---|---|---|---|---|')
     for (window_s, label), per_seq in rows.items():

@@ -305,12 +305,13 @@ def _correct(args: argparse.Namespace) -> None:
     settings = _node_settings(args)
     rest, guard = settings.choice('rest_bias'), settings.choice('envelope_guard')
     mix = settings.choice('classical_blend')
-    _guard_output(args.out, [args.input, read_model_file(settings.model).path],
-                  args.overwrite)
+    model = read_model_file(settings.model)
+    _guard_output(args.out, [args.input, model.path], args.overwrite)
     _start_up_warnings(settings.model, rest, mix)
     n = correct_to_csv(settings.model, args.input, args.out, imu_topic=args.imu_topic,
-                       engine=args.engine, rest=rest, guard=guard, mix=mix)
-    print(f'wrote {n} corrected gyro samples to {args.out}')
+                       engine=args.engine, rest=rest, guard=guard, mix=mix,
+                       accel_bias=settings.fusion(model).accel_bias_m_s2)
+    print(f'wrote {n} corrected IMU samples to {args.out}')
 
 
 def _convert(args: argparse.Namespace) -> None:
@@ -547,10 +548,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--poses', **POSES_OPTION)
     p.set_defaults(func=_noise)
 
-    p = command('correct', 'write the corrected gyro of every IMU sample as CSV',
+    p = command('correct', 'write every IMU sample corrected, as imu/corrected carries it, as CSV',
                 '--model euroc --input ../shared/data/euroc/MH_02_easy --out MH_02.csv')
     _input(p, 'ASL sequence folder or bag')
-    _out(p, 'CSV: timestamp_ns,wx,wy,wz', legacy_option='--output')
+    _out(p, 'CSV: timestamp_ns,wx,wy,wz,ax,ay,az (an ASL imu0/data.csv)',
+         legacy_option='--output')
     _topics(p, poses=False)
     _node_options(p)
     p.add_argument('--engine', choices=('batch', 'streaming'), default='batch',

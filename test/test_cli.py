@@ -25,17 +25,22 @@ def _error(capsys):
 
 
 def test_correct_writes_every_sample_of_a_bag_as_csv(model_file, tmp_path):
+    from denoise_imu_ros.core.modelfile import add_metadata
+    from denoise_imu_ros.pipeline.fusion import FusionSettings
+    bias = (0.02, -0.1, 0.05)  # fitted by tune-fusion: imu/data's and imu/corrected's
+    add_metadata(model_file, fusion={'settings': FusionSettings(3.0, False, bias).as_dict()})
     out = tmp_path / 'corrected.csv'
     assert main(['correct', '--model', str(model_file), '--input', str(SAMPLE),
                  '--out', str(out)]) == 0
     lines = out.read_text().splitlines()
-    assert lines[0] == 'timestamp_ns,wx,wy,wz'
+    assert lines[0] == 'timestamp_ns,wx,wy,wz,ax,ay,az'
     rec = load_imu(SAMPLE)
     assert len(lines) == len(rec.imu) + 1
     table = np.loadtxt(out, delimiter=',', skiprows=1, dtype=np.float64)
     assert [int(x.split(',')[0]) for x in lines[1:4]] == rec.imu_stamp_ns[:3].tolist()
     expect = correct_gyro(load_model(model_file).model, rec.imu)
-    np.testing.assert_allclose(table[:, 1:], expect, rtol=1e-8, atol=1e-9)
+    np.testing.assert_allclose(table[:, 1:4], expect, rtol=1e-8, atol=1e-9)
+    np.testing.assert_allclose(table[:, 4:], rec.imu[:, 3:] - bias, rtol=1e-8, atol=1e-9)
 
 
 def test_a_model_its_validation_advises_against_runs_with_a_warning(tmp_path, capsys):

@@ -95,11 +95,13 @@ def finite_covariance(cov: Any) -> np.ndarray:
 
 def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
                   attitude: np.ndarray | None = None, orientation_cov: Any = None,
-                  accel_cov: Any = None, into: Any = None) -> Any:
+                  accel_cov: Any = None, into: Any = None,
+                  accel: np.ndarray | None = None) -> Any:
     """
     Build the imu/corrected message of a raw one: its header, never re-stamped.
 
-    The accelerometer and its covariance pass through (``accel_cov`` when the caller has
+    The accelerometer is ``accel`` (None: the raw message's); its covariance passes
+    through (``accel_cov`` when the caller has
     already checked it; a non-finite one becomes zeros, 'unknown', never NaN on the
     wire); the orientation is the attitude
     with ``orientation_cov`` when given, else absent (covariance[0] = -1, REP-145).
@@ -110,9 +112,13 @@ def corrected_imu(types: MsgTypes, raw: Any, gyro: np.ndarray, gyro_cov: Any,
     """
     msg = imu(types, raw.header, gyro, (0.0, 0.0, 0.0)) if into is None else into
     msg.header = raw.header
-    w, a, la = msg.angular_velocity, raw.linear_acceleration, msg.linear_acceleration
+    w, la = msg.angular_velocity, msg.linear_acceleration
     w.x, w.y, w.z = float(gyro[0]), float(gyro[1]), float(gyro[2])
-    la.x, la.y, la.z = a.x, a.y, a.z
+    if accel is None:
+        a = raw.linear_acceleration
+        la.x, la.y, la.z = a.x, a.y, a.z
+    else:
+        la.x, la.y, la.z = float(accel[0]), float(accel[1]), float(accel[2])
     msg.angular_velocity_covariance = np.asarray(gyro_cov, np.float64)
     msg.linear_acceleration_covariance = finite_covariance(
         raw.linear_acceleration_covariance) if accel_cov is None else accel_cov

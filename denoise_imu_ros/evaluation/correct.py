@@ -1,7 +1,7 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
 """
-``denoise-imu correct``: the corrected gyro of every IMU sample of a recording, as CSV.
+``denoise-imu correct``: a recording's IMU samples as imu/corrected carries them, in CSV.
 
 Two engines give the same numbers (within 1e-6 rad/s): ``streaming``, the per-sample
 numpy engine the node runs (no torch), and ``batch``, the torch network over the whole
@@ -42,12 +42,15 @@ def corrected_gyro(mf: ModelFile, imu: np.ndarray, engine: str = 'batch',
 
 def correct_to_csv(model_spec: str, source: str, output: str,
                    imu_topic: str | None = None, engine: str = 'batch',
-                   rest: str = 'model', guard: str = 'model', mix: str = 'model') -> int:
+                   rest: str = 'model', guard: str = 'model', mix: str = 'model',
+                   accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> int:
     """
-    Write ``timestamp_ns,wx,wy,wz`` for every IMU sample of an ASL folder or bag.
+    Write ``timestamp_ns,wx,wy,wz,ax,ay,az`` for every IMU sample of an ASL folder or bag.
 
-    ``engine`` is ``batch`` (the torch network over the recording) or ``streaming`` (the
-    per-sample numpy engine the online node uses); their outputs agree within 1e-6 rad/s.
+    The columns of an ASL imu0/data.csv: the corrected gyro and the accelerometer less
+    ``accel_bias``, as imu/corrected carries them. ``engine`` is ``batch`` (the torch
+    network over the recording) or ``streaming`` (the per-sample numpy engine the online
+    node uses); their outputs agree within 1e-6 rad/s.
     """
     loaded = read_model_file(model_spec)
     rec = load_imu(source, imu_topic)
@@ -59,7 +62,7 @@ def correct_to_csv(model_spec: str, source: str, output: str,
                  loaded.arrays['input_std'], loaded.arrays['input_mean'])
     omega = corrected_gyro(loaded, rec.imu, engine, rest, guard, mix)
     with atomic_output(output, overwrite=True) as tmp, open(tmp, 'w') as f:
-        f.write('timestamp_ns,wx,wy,wz\n')
-        for t, w in zip(rec.imu_stamp_ns, omega):
-            f.write(f'{t},{w[0]:.9g},{w[1]:.9g},{w[2]:.9g}\n')
+        f.write('timestamp_ns,wx,wy,wz,ax,ay,az\n')
+        for t, w, a in zip(rec.imu_stamp_ns, omega, rec.imu[:, 3:] - np.array(accel_bias)):
+            f.write(f'{t},{w[0]:.9g},{w[1]:.9g},{w[2]:.9g},{a[0]:.9g},{a[1]:.9g},{a[2]:.9g}\n')
     return len(omega)

@@ -1,7 +1,7 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
 """
-IMU increments pre-integrated over windows, scored against the ground truth's, as a VIO weighs them.
+IMU increments pre-integrated over windows against the ground truth's, as a VIO weighs them.
 
 A VIO back-end (OpenVINS, VINS-Fusion, a GTSAM smoother) does not integrate the gyro
 from the start: between two keyframes i and j it pre-integrates the gyro and the
@@ -155,5 +155,6 @@ def errors(est: Increments, ref: Increments) -> dict[str, np.ndarray]:
                                  ('velocity', est.velocity - ref.velocity, slice(3, 6)),
                                  ('position', est.position - ref.position, slice(6, 9))):
             p = est.covariance[:, block, block]
-            out[f'nees_{name}'] = np.einsum('wi,wi->w', err, np.linalg.solve(p, err[..., None])[..., 0])
+            solved = np.linalg.solve(p, err[..., None])[..., 0]
+            out[f'nees_{name}'] = np.einsum('wi,wi->w', err, solved)
     return out

@@ -5,8 +5,8 @@
 
 ``imu/data`` is the imu_tools contract (what imu_filter_madgwick publishes): the
 gravity-aided orientation of the corrected gyro, with its covariance, the corrected
-angular velocity and the accelerometer passed through. ``imu/attitude`` is the paper's
-open-loop integral of the corrected gyro.
+angular velocity and the accelerometer less its fitted bias, as in ``imu/corrected``.
+``imu/attitude`` is the paper's open-loop integral of the corrected gyro.
 
 A thin ROS wrapper around :class:`~denoise_imu_ros.pipeline.online.OnlineDenoiser`: it converts
 messages, owns the parameters and topics, and reports on ``/diagnostics``. Header stamps

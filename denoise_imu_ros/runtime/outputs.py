@@ -82,7 +82,7 @@ class Outputs:
         embed = out.attitude if self.embed_attitude and decision.attitude is None else None
         self._corrected = msgs.corrected_imu(
             self.types, raw, out.gyro, self.gyro_cov, embed, self.orientation_cov,
-            out.accel_cov, into=self._corrected)
+            out.accel_cov, into=self._corrected, accel=out.accel)
         if decision.corrected is None:
             self.send_corrected(self._corrected)
         else:

@@ -105,9 +105,10 @@ class Settings:
         "on or off. On stacks a second estimator on the network's correction.",
         read_only=True, switches=(True, False))
     fusion_accel_bias: str | bool = _p(
-        'model', "The accelerometer bias removed before the filter and from imu/attitude's "
-        "initial tilt: 'model' (the one the model file fitted on its training poses, if it "
-        'chose to) or off (none).', read_only=True, switches=(False,))
+        'model', "The accelerometer bias removed from imu/corrected's and imu/data's "
+        "accelerometer, before the filter and from imu/attitude's initial tilt: 'model' (the "
+        'one the model file fitted on its training poses, if it chose to) or off (none: the '
+        'accelerometer as it came).', read_only=True, switches=(False,))
     rest_bias: str | bool = _p(
         'model', "The gyro's turn-on bias, estimated from stillness (at start and later) and "
         "removed before the model, and the output's bias tracked after it where the model "

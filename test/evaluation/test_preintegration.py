@@ -12,7 +12,7 @@ RATE = 200.0
 
 
 def _trajectory(n: int, seed: int = 0) -> dict[str, np.ndarray]:
-    """A tumbling, accelerating body and the perfect IMU of it: the steps the VIO assumes."""
+    """Return a tumbling, accelerating body and its perfect IMU: the steps a VIO assumes."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) / RATE
     dt = np.full(n - 1, 1 / RATE)

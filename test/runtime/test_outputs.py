@@ -13,7 +13,7 @@ OFF, GAP = Withheld.OFF_RATE, Withheld.GAP
 
 
 def _output(event=None, rate_suspect=False):
-    return Output(stamp_ns=10**9, gyro=np.array([0.1, 0.2, 0.3]),
+    return Output(stamp_ns=10**9, gyro=np.array([0.1, 0.2, 0.3]), accel=np.array([0, 0, 9.7]),
                   attitude=np.array([0.0, 0.0, 0.6, 0.8]), event=event,
                   orientation=np.array([0.6, 0.0, 0.0, 0.8]), rate_suspect=rate_suspect,
                   accel_cov=np.zeros(9))
