@@ -310,7 +310,7 @@ def _correct(args: argparse.Namespace) -> None:
     _start_up_warnings(settings.model, rest, mix)
     n = correct_to_csv(settings.model, args.input, args.out, imu_topic=args.imu_topic,
                        engine=args.engine, rest=rest, guard=guard, mix=mix,
-                       accel_bias=settings.fusion(model).accel_bias_m_s2)
+                       accel_bias=settings.corrected_accel_bias(model))
     print(f'wrote {n} corrected IMU samples to {args.out}')
 
 

@@ -34,11 +34,12 @@ INPUT_STD = [0.3, 0.3, 0.3, 1.0, 1.0, 1.0]
 
 def write_asl(root: Path, n_imu=1000, imu_rate=200.0, gt_rate=200.0, gt_offset_s=0.0,
               gt_dir='state_groundtruth_estimate0', yaw_rate=0.3, gt_hole=None, gyro_bias=0.0,
-              still_s=0.0):
+              still_s=0.0, accel=(0.0, 0.0, 9.81)):
     """
     Write a synthetic ASL folder: constant yaw rate (+ z bias), ground truth w,x,y,z.
 
-    ``still_s``: the IMU is still (its gyro the bias alone) for that long first.
+    ``still_s``: the IMU is still (its gyro the bias alone) for that long first; ``accel``
+    its accelerometer reading throughout (level and still: gravity, plus any bias).
     """
     (root / 'mav0' / 'imu0').mkdir(parents=True)
     (root / 'mav0' / gt_dir).mkdir(parents=True)
@@ -47,7 +48,7 @@ def write_asl(root: Path, n_imu=1000, imu_rate=200.0, gt_rate=200.0, gt_offset_s
         f.write('#timestamp [ns],w_x,w_y,w_z,a_x,a_y,a_z\n')
         for t in t_imu:
             turn = yaw_rate if (t - T0) * 1e-9 >= still_s else 0.0
-            f.write(f'{t},0.0,0.0,{turn + gyro_bias},0.0,0.0,9.81\n')
+            f.write(f'{t},0.0,0.0,{turn + gyro_bias},{accel[0]},{accel[1]},{accel[2]}\n')
     duration = n_imu / imu_rate
     t_gt = T0 + np.round((gt_offset_s + np.arange(int(duration * gt_rate)) / gt_rate)
                          * 1e9).astype(np.int64)

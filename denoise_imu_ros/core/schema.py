@@ -20,9 +20,9 @@ from typing import Any, Callable
 from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
 
-__all__ = ['BiasTracking', 'Blend', 'Fusion', 'FusionSettings', 'InputEnvelope', 'JUDGED',
-           'judged_on', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'NO_MODEL', 'parse_meta', 'REST_ONLY',
-           'RestBiasSettings', 'TRACKER_ONLY', 'Validation', 'Verdict']
+__all__ = ['ACCEL_CHOICES', 'AS_IT_CAME', 'BiasTracking', 'Blend', 'Fusion', 'FusionSettings',
+           'InputEnvelope', 'JUDGED', 'judged_on', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'NO_MODEL',
+           'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'TRACKER_ONLY', 'Validation', 'Verdict']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
 # the ``kind`` of a model file that runs the classical pipeline, no model: the turn-on bias
@@ -31,6 +31,10 @@ TRACKER_ONLY = 'tracker only'
 NO_MODEL = (REST_ONLY, TRACKER_ONLY)  # kinds whose file corrects nothing itself
 MAX_ACCEL_BIAS_M_S2 = 2.0  # a larger "bias" is a wrong fit or a wrong unit, not an IMU's
 DEPLOY_CHOICES = ('network', 'calibration', TRACKER_ONLY, REST_ONLY, 'none')
+# the accelerometer imu/corrected carries: less the bias fitted on the training poses, or
+# as it came where that bias did not carry to unseen recordings (crossval's verdict)
+AS_IT_CAME = 'as it came'
+ACCEL_CHOICES = ('bias removed', AS_IT_CAME)
 JUDGED = {'aoe_deg': 'AOE', 'tilt_deg': 'tilt error'}  # figures a verdict compares, named
 
 
@@ -282,6 +286,9 @@ class Verdict:
     steps: int | None               # how long the folds trained
     train_config: dict[str, Any]    # the folds' recipe
     report: dict[str, Any]          # the whole report, as stored
+    # whether the accelerometer's bias fitted on training recordings carries to unseen ones
+    # (ACCEL_CHOICES); None: not judged (a report before it)
+    accel_deploy: str | None = None
 
 
 @dataclass(frozen=True)
@@ -410,8 +417,14 @@ def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:
     cfg = report.get('train_config') or {}
     if not isinstance(cfg, dict):
         raise _fail(where, 'crossval.train_config', cfg, 'a mapping')
+    accel = report.get('accelerometer')
+    if accel is not None and not (isinstance(accel, dict)
+                                  and accel.get('deploy') in ACCEL_CHOICES):
+        raise _fail(where, 'crossval.accelerometer', accel,
+                    f'a mapping whose deploy is one of {", ".join(ACCEL_CHOICES)}')
     return Verdict(deploy, str(report.get('verdict', '')), figures, key,
-                   tuple(str(n) for fold in folds for n in fold), steps, cfg, report)
+                   tuple(str(n) for fold in folds for n in fold), steps, cfg, report,
+                   None if accel is None else accel['deploy'])
 
 
 def _settings(raw: dict[str, Any], key: str, where: str,

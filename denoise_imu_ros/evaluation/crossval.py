@@ -21,6 +21,12 @@ held-out recording
 (none among them); the figures of a fold's recordings use the candidate the other folds'
 recordings choose, so that no figure was picked on itself.
 
+The accelerometer is judged apart (:func:`accel_verdict`): each fold fits its bias on its
+training recordings' poses (as ``tune-fusion`` does) and scores the held-out recordings'
+velocity increments over ACCEL_WINDOW_S, as a VIO pre-integrates them, with the bias removed
+and as it came; the bias carries only if it never loses by more than LOSS_LIMIT (an IMU's
+accelerometer, like its gyro, may take a new bias at each power-on).
+
 Both compare the AOE, or the tilt error alone where the recipe does not trust the poses'
 heading (:func:`~denoise_imu_ros.core.schema.judged_on`); then neither deploys nor
 chooses what ruins the heading beyond the poses' drift (:func:`heading_off`).
@@ -37,14 +43,18 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .filters import fit_accel_bias
+from .preintegration import (errors as increment_errors, preintegrate, reference,
+                             velocity_from_positions, window_starts)
 from .reports import CROSSVAL_METHODS
 from ..core import jsonio
 from ..core.atomic import write_text
 from ..core.errors import TrainingError
 from ..core.metrics import score
 from ..core.modelfile import sample_rate
-from ..core.schema import (BiasTracking, Blend, InputEnvelope, JUDGED, judged_on, ModelMeta,
-                           parse_meta, REST_ONLY, TRACKER_ONLY)
+from ..core.records import Sequence
+from ..core.schema import (ACCEL_CHOICES, AS_IT_CAME, BiasTracking, Blend, InputEnvelope,
+                           JUDGED, judged_on, ModelMeta, parse_meta, REST_ONLY, TRACKER_ONLY)
 from ..data.load import load_sequence
 from ..learn import parallel
 from ..learn.checkpoint import load_model, LoadedModel
@@ -67,6 +77,8 @@ UNBLENDED = 'network unblended'  # the network row before the blend, reported be
 # ever make it, not at VQF's 0.5 deg/s for a raw gyro: what is left after the model is
 # small, and from 0.5 deg/s a start whose accelerations are not gravity (a drone carried)
 # teaches it a bias an open-loop attitude never forgets (docs/method.md)
+ACCEL_WINDOW_S = 1.0  # the velocity increments the accelerometer is judged on (keyframes')
+BIAS_REMOVED = ACCEL_CHOICES[0]
 TRACKING_GRID = tuple(BiasTracking(sigma, forget, sigma)
                       for sigma in (0.03, 0.05, 0.07, 0.1, 0.2) for forget in (30.0, 100.0, 300.0))
 
@@ -191,6 +203,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     tracked_seed: dict[str, Any] = {}  # the same for each seed alone
     networks: dict[str, Networks] = {}  # recording -> the network's outputs, to blend
     fold_of: dict[str, int] = {}
+    accel: dict[str, dict[str, float]] = {}  # recording -> velocity increment error per choice
     if sessions is not None and k is not None:
         raise TrainingError('--folds and --sessions: give one (sessions are the folds)')
     pairs = (motion_folds(recipe.sequences, sessions, motions) if motions is not None else [
@@ -222,11 +235,12 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
         ensemble_bounds = {TRACKER_ONLY: None,
                            'calibrated': bounds[0]['calibrated'],  # the calibration: seed 0's
                            'network': envelope.combine([b['network'] for b in bounds])}
-        for name in held_out:  # read as the recipe reads its recordings
-            seq = load_sequence(Path(recipe.data) / name, recipe.imu_topic, recipe.pose_topic,
-                                recipe.max_gt_gap_s,
-                                min_samples=models[0][0].model.receptive_field,
-                                align_poses=recipe.align, poses=recipe.poses)
+        field = models[0][0].model.receptive_field
+        trained = [_read(recipe, name, field) for name in train_on]
+        fitted = fit_accel_bias(trained, max(len(s) for s in trained))
+        del trained
+        for name in held_out:
+            seq = _read(recipe, name, field)
             rest = rest_bias.baseline_gyro(models[0][0], seq.stream)
             raw_rows[name] = {'raw': score(seq, seq.imu[:, :3]),
                               'rest bias': score(seq, seq.on_poses(rest))}
@@ -243,6 +257,8 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                 [ensemble['network']] + ([g['network'] for g in gyros] if seeds else []),
                 [ensemble_bounds['network']] + ([b['network'] for b in bounds] if seeds else []))
             fold_of[name] = i
+            accel[name] = accel_rows(seq, ensemble['network'],
+                                     None if fitted is None else fitted[0])
     key, why = judged_on(recipe.heading_weight)
     per_recording, per_seed, tracking = _nested(raw_rows, tracked, tracked_seed, fold_of,
                                                 seeds or [], key)
@@ -258,6 +274,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                  'the whole recipe trains on all of them, so these figures '
                                  'judge networks trained on less data than it'),
                   tracking=tracking, blend=blend, judged_on=key,
+                  accelerometer=accel_verdict(accel),
                   **({} if why is None else {'judged_on_why': why}),
                   **({'seed': recipe.seed} if seeds is None else {
                       'seeds': runs, 'per_seed': {str(s): summarize(r, key)
@@ -266,6 +283,62 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
         out.mkdir(parents=True, exist_ok=True)
         write_text(out / 'crossval.json', jsonio.dumps(report, indent=2))
     return report
+
+
+def _read(recipe: TrainConfig, name: str, min_samples: int) -> Sequence:
+    """Return a recording of the recipe, read as training reads it."""
+    return load_sequence(Path(recipe.data) / name, recipe.imu_topic, recipe.pose_topic,
+                         recipe.max_gt_gap_s, min_samples=min_samples,
+                         align_poses=recipe.align, poses=recipe.poses)
+
+
+def accel_rows(seq: Sequence, gyro: np.ndarray, bias: np.ndarray | None) -> dict[str, float]:
+    """
+    Return the RMS velocity increment error (m/s) of ``seq`` per accelerometer choice.
+
+    Over back-to-back ACCEL_WINDOW_S windows with ``gyro``, against the poses (their
+    velocity their derivative); the accelerometer as it came and, where a fold fitted one,
+    less its training recordings' ``bias``.
+    """
+    stamp_s = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
+    dt = np.diff(stamp_s, append=2 * stamp_s[-1] - stamp_s[-2])
+    length = max(1, round(ACCEL_WINDOW_S * seq.rate_hz))
+    starts = window_starts(seq.gt_valid, length)
+    if not len(starts):
+        return {}
+    ref = reference(seq.gt_quat, seq.gt_pos, velocity_from_positions(seq.gt_pos, stamp_s),
+                    stamp_s, starts, length)
+    choices = {AS_IT_CAME: seq.imu[:, 3:]}
+    if bias is not None:
+        choices[BIAS_REMOVED] = seq.imu[:, 3:] - bias
+    return {label: float(np.sqrt(np.mean(increment_errors(
+        preintegrate(gyro, accel, dt, starts, length), ref)['velocity_m_s'] ** 2)))
+        for label, accel in choices.items()}
+
+
+def accel_verdict(per_recording: dict[str, dict[str, float]]) -> dict[str, Any]:
+    """
+    Return whether the accelerometer's training bias carries to unseen recordings, and why.
+
+    Removed only if it lowers the mean velocity increment error and loses on no recording
+    by more than LOSS_LIMIT; a recording no fold could fit a bias for, or too short for
+    one window, leaves the accelerometer as it came.
+    """
+    scored = {n: r for n, r in per_recording.items() if r}
+    report: dict[str, Any] = {'window_s': ACCEL_WINDOW_S, 'recordings': per_recording}
+    if not scored or any(BIAS_REMOVED not in r for r in scored.values()):
+        return dict(report, deploy=AS_IT_CAME, verdict='no bias fitted on the training '
+                    "recordings' poses for every fold: the accelerometer as it came")
+    mean = {c: float(np.mean([r[c] for r in scored.values()])) for c in ACCEL_CHOICES}
+    worst = max(scored, key=lambda n: scored[n][BIAS_REMOVED] / scored[n][AS_IT_CAME])
+    ratio = scored[worst][BIAS_REMOVED] / scored[worst][AS_IT_CAME]
+    carries = mean[BIAS_REMOVED] < mean[AS_IT_CAME] and ratio <= LOSS_LIMIT
+    line = (f'velocity increments over {ACCEL_WINDOW_S:g} s, mean over {len(scored)} unseen '
+            f'recordings: {mean[BIAS_REMOVED]:.3f} m/s with the training bias removed against '
+            f'{mean[AS_IT_CAME]:.3f} as it came, at worst {ratio:.2f}x ({worst}): '
+            + ('remove it' if carries else 'the accelerometer as it came'))
+    return dict(report, mean=mean, deploy=BIAS_REMOVED if carries else AS_IT_CAME,
+                verdict=line)
 
 
 # recipe keys a fold and the model it judges may differ in (steps: compared apart)

@@ -41,10 +41,12 @@ import numpy as np
 from scipy.signal import savgol_filter
 from scipy.spatial.transform import Rotation
 
+from ..core.limits import GRAVITY_M_S2
+
 __all__ = ['GRAVITY', 'VELOCITY_SPAN_S', 'Increments', 'errors', 'preintegrate', 'reference',
            'velocity_from_positions', 'window_starts']
 
-GRAVITY = 9.81           # m/s^2, as VIO configurations set it
+GRAVITY = GRAVITY_M_S2   # m/s^2, standard gravity, the poses' world's
 VELOCITY_SPAN_S = 0.1    # s, the fit of the positions that gives a velocity
 
 

@@ -105,6 +105,9 @@ def crossval_table(report: dict[str, Any]) -> str:
         lines.append(f'\nThe network rows average the corrected gyros of seeds '
                      f'{", ".join(map(str, report["seeds"]))} (the ensemble); each seed '
                      f'alone, mean {JUDGED[key]}: {", ".join(alone)}.\n')
+    if 'accelerometer' in report:
+        lines.append("\nThe accelerometer (imu/corrected's): the bias fitted on each fold's "
+                     f"training poses against none, {report['accelerometer']['verdict']}.\n")
     return ''.join(lines)
 
 

@@ -76,7 +76,7 @@ class Output(NamedTuple):
 
     stamp_ns: int           # the sample's own stamp
     gyro: np.ndarray        # (3,) corrected angular velocity, rad/s
-    accel: np.ndarray       # (3,) the accelerometer less its bias (accel_bias), m/s^2
+    accel: np.ndarray       # (3,) the accelerometer imu/corrected carries, m/s^2
     attitude: np.ndarray    # (4,) xyzw, IMU frame to the fixed frame (open loop)
     event: Event | None     # set when the state was reset at this sample
     orientation: np.ndarray | None = None  # (4,) xyzw, gravity-aided (with a filter)
@@ -102,7 +102,9 @@ class OnlineDenoiser:
     _intervals: list[int] = field(default_factory=list)  # recent ones, ns
     _input_period_ns: float = 0.0  # their median, refreshed every INPUT_WINDOW samples
     _window_off: bool = False      # that median's rate is off the model's
-    _accel_bias: np.ndarray | None = None  # accel_bias as an array, once asked
+    # the accelerometer bias removed from Output.accel; None: accel_bias (the attitude's)
+    corrected_accel_bias: tuple[float, float, float] | None = None
+    _accel_bias: np.ndarray | None = None  # that bias as an array, once asked
 
     @classmethod
     def of_engine(cls, engine: StreamingCorrector, rate_hz: float,
@@ -179,7 +181,7 @@ class OnlineDenoiser:
 
     @property
     def accel_bias(self) -> tuple[float, float, float]:
-        """Return the accelerometer bias removed: from imu/corrected's, the initial tilt's."""
+        """Return the accelerometer bias removed before the attitude's initial tilt."""
         return self.pipeline.get(Attitude).accel_bias
 
     def _count_input_periods(self, interval_ns: int) -> None:
@@ -274,7 +276,8 @@ class OnlineDenoiser:
         self._last_ns = stamp_ns
         self.counts['accepted'] += 1
         if self._accel_bias is None:
-            self._accel_bias = np.array(self.accel_bias)
+            self._accel_bias = np.array(self.accel_bias if self.corrected_accel_bias is None
+                                        else self.corrected_accel_bias)
         return Output(stamp_ns=stamp_ns, gyro=flow.out, accel=accel - self._accel_bias,
                       attitude=flow.attitude, event=event,
                       orientation=flow.orientation, rate_suspect=self.rate_suspect,

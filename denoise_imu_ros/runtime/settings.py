@@ -25,6 +25,7 @@ import yaml
 from ..core.errors import OptionError
 from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import gyro_covariance, MODEL_HELP, ModelFile
+from ..core.schema import AS_IT_CAME
 from ..pipeline.fusion import FusionSettings, orientation_covariance
 from ..pipeline.online import OnlineDenoiser
 
@@ -105,9 +106,10 @@ class Settings:
         "on or off. On stacks a second estimator on the network's correction.",
         read_only=True, switches=(True, False))
     fusion_accel_bias: str | bool = _p(
-        'model', "The accelerometer bias removed from imu/corrected's and imu/data's "
-        "accelerometer, before the filter and from imu/attitude's initial tilt: 'model' (the "
-        'one the model file fitted on its training poses, if it chose to) or off (none: the '
+        'model', "The accelerometer bias removed before the filter and from imu/attitude's "
+        "initial tilt, and from imu/corrected's and imu/data's accelerometer where the model "
+        "file's cross-validation found it carries to unseen recordings: 'model' (the one the "
+        'model file fitted on its training poses, if it chose to) or off (none: the '
         'accelerometer as it came).', read_only=True, switches=(False,))
     rest_bias: str | bool = _p(
         'model', "The gyro's turn-on bias, estimated from stillness (at start and later) and "
@@ -240,8 +242,21 @@ class Settings:
             loaded, fusion if self.publish_fused else None, self.choice('rest_bias'),
             self.choice('envelope_guard'), self.choice('classical_blend'),
             accel_bias=fusion.accel_bias_m_s2)
+        den.corrected_accel_bias = self.corrected_accel_bias(loaded)
         self.retune(den)
         return den
+
+    def corrected_accel_bias(self, loaded: ModelFile) -> tuple[float, float, float]:
+        """
+        Return the accelerometer bias imu/corrected (and imu/data) leave out of their reading.
+
+        The filter's (:meth:`fusion`), unless the model file's cross-validation found that
+        it does not carry to unseen recordings (a bias that changes at each power-on).
+        """
+        verdict = loaded.meta.crossval
+        if verdict is not None and verdict.accel_deploy == AS_IT_CAME:
+            return (0.0, 0.0, 0.0)
+        return self.fusion(loaded).accel_bias_m_s2
 
     def retune(self, den: OnlineDenoiser) -> None:
         """Apply the thresholds that may change while the node runs."""

@@ -37,6 +37,7 @@ def test_typed_entries_and_what_this_version_does_not_know_survive_a_copy():
     assert meta.crossval.mean_deg == {'raw': 9.0, 'network': 2.0}
     assert meta.crossval.judged_on == 'aoe_deg'  # a report from before the tilt verdict
     assert meta.crossval.held_out == ('a', 'b') and meta.raw is stored
+    assert meta.crossval.accel_deploy is None  # a report from before the accelerometer's
 
 
 @pytest.mark.parametrize('raw, message', [
@@ -75,6 +76,7 @@ def test_typed_entries_and_what_this_version_does_not_know_survive_a_copy():
     ({'crossval': {'deploy': 'everything'}}, 'crossval.deploy'),
     ({'crossval': {'folds': 'a'}}, 'crossval.folds'),
     ({'crossval': {'judged_on': 'aoe_yaw_deg'}}, 'crossval.judged_on'),
+    ({'crossval': {'accelerometer': {'deploy': 'calibrated'}}}, 'crossval.accelerometer'),
     ({'train_sequences': 'MH_01'}, 'train_sequences'),
     ({'kind': 3}, 'kind 3 is not a model kind'),
     ({'validation': {'step': 'last'}}, 'validation.step'),

@@ -7,6 +7,7 @@ import json
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import TrainingError
 from denoise_imu_ros.core.schema import judged_on, parse_meta
+from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation.crossval import (attach_mismatches, BLEND_WEIGHTS, crossval, folds,
                                                  summarize)
 from denoise_imu_ros.evaluation.reports import crossval_table
@@ -242,6 +243,11 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     printed = capsys.readouterr().out
     assert report['verdict'] in printed and 'rec2' in printed
     assert load_model(model_file).meta.crossval.report == report
+    # the accelerometer judged on the held-out velocity increments, its verdict stored
+    accel = report['accelerometer']
+    assert set(accel['recordings']) == {'rec0', 'rec1', 'rec2'}
+    assert load_model(model_file).meta.crossval.accel_deploy == accel['deploy']
+    assert accel['verdict'] in printed
     # the network's output bias tracking chosen over every held-out recording, stored
     chosen = report['tracking']['chosen']['network']
     stored = load_model(model_file).meta.bias_tracking
@@ -499,3 +505,30 @@ def test_every_tracking_candidate_starts_at_its_sigma_and_learns_less_from_a_sha
     for settings in TRACKING_GRID:
         as_before = dataclasses.replace(settings, sigma_init_deg_s=0.5)
         assert learnt_on_a_shaken_start(settings) < 0.5 * learnt_on_a_shaken_start(as_before)
+
+
+@pytest.mark.parametrize('biases, deploy', [
+    ([(0.1, -0.05, 0.0)] * 3, 'bias removed'),                     # a constant of the IMU
+    ([(0.1, -0.05, 0.0), (-0.1, 0.05, 0.0), (0.0, 0.1, 0.0)], 'as it came'),  # per power-on
+])
+def test_the_accelerometer_bias_is_removed_only_where_it_carries_to_unseen_recordings(
+        tmp_path, biases, deploy):
+    from denoise_imu_ros.evaluation.crossval import accel_rows, accel_verdict
+    from denoise_imu_ros.evaluation.filters import fit_accel_bias
+    from denoise_imu_ros.core.limits import GRAVITY_M_S2
+    seqs = [load_sequence(write_asl(tmp_path / f'rec{i}', n_imu=1200, accel=(
+        b[0], b[1], GRAVITY_M_S2 + b[2]))) for i, b in enumerate(biases)]
+    rows = {}
+    for i, seq in enumerate(seqs):  # each held out, the bias fitted on the others
+        fitted = fit_accel_bias([s for j, s in enumerate(seqs) if j != i], 10**9)[0]
+        rows[f'rec{i}'] = accel_rows(seq, seq.imu[:, :3], fitted)
+        if deploy == 'bias removed':  # the fit is the bias: nothing left
+            assert rows[f'rec{i}']['bias removed'] < 1e-3 < rows[f'rec{i}']['as it came']
+    report = accel_verdict(rows)
+    assert report['deploy'] == deploy and report['window_s'] == 1.0
+    assert report['verdict'].endswith('remove it' if deploy == 'bias removed'
+                                      else 'the accelerometer as it came')
+    # a fold with no fitted bias cannot judge: as it came
+    rows['rec0'] = accel_rows(seqs[0], seqs[0].imu[:, :3], None)
+    assert list(rows['rec0']) == ['as it came']
+    assert accel_verdict(rows)['deploy'] == 'as it came'

@@ -89,3 +89,25 @@ def test_a_file_that_is_not_the_nodes_params_is_refused(tmp_path, doc, said):
         Settings.from_params_file(_file(tmp_path, doc))
     with pytest.raises(OptionError, match='No such file'):
         Settings.from_params_file(tmp_path / 'missing.yaml')
+
+
+@pytest.mark.parametrize('judged, published', [
+    (None, (0.02, -0.1, 0.05)), ('bias removed', (0.02, -0.1, 0.05)),
+    ('as it came', (0.0, 0.0, 0.0))])
+def test_imu_corrected_leaves_the_accelerometer_bias_out_where_it_carries(
+        model_file, judged, published):
+    from denoise_imu_ros.core.modelfile import add_metadata, read_model_file
+    from denoise_imu_ros.pipeline.fusion import FusionSettings
+    crossval = {'deploy': 'network', 'verdict': 'v', 'mean': {}, 'folds': []}
+    add_metadata(model_file, fusion={'settings': FusionSettings(
+        3.0, False, (0.02, -0.1, 0.05)).as_dict()}, **({} if judged is None else {
+            'crossval': dict(crossval, accelerometer={'deploy': judged})}))
+    loaded = read_model_file(model_file)
+    settings = Settings(model=str(model_file))
+    assert settings.corrected_accel_bias(loaded) == published
+    den = settings.denoiser(loaded)
+    assert den.accel_bias == (0.02, -0.1, 0.05)  # the filter and the tilt: the fitted bias
+    out = den.process(10**9, [0.0, 0.0, 0.0], [0.1, 0.2, 9.8])
+    assert out.accel.tolist() == [0.1 - published[0], 0.2 - published[1], 9.8 - published[2]]
+    off = settings.with_(fusion_accel_bias='off')
+    assert off.corrected_accel_bias(loaded) == (0.0, 0.0, 0.0)
