@@ -157,3 +157,13 @@ def test_shipped_broad_is_what_its_session_folds_say_the_classical_pipeline():
     for name in ('broad', 'broad_network', 'broad_calibrated'):  # imu/data's settings
         assert read_model_file(name).meta.raw['fusion']['chosen_on'].startswith(
             'validation tails of 02_undisturbed_slow_rotation_B')
+    # one power-on's accelerometer bias worsens the other's velocity increments: the
+    # published accelerometer stays as it came, while the filter removes the fitted bias
+    from denoise_imu_ros.runtime.settings import Settings
+    accel = report['accelerometer']
+    assert accel['deploy'] == 'as it came' and len(accel['recordings']) == 12
+    assert accel['mean']['bias removed'] > accel['mean']['as it came']
+    for name in ('broad', 'broad_network', 'broad_calibrated'):
+        loaded = read_model_file(name)
+        assert Settings(model=name).corrected_accel_bias(loaded) == (0.0, 0.0, 0.0)
+        assert any(loaded.meta.fusion.chosen.accel_bias_m_s2)
