@@ -72,13 +72,13 @@ LOSS_LIMIT = 1.1  # a learnt row deployed loses to tracker only by no more on on
 # equal ones is chosen, so the network's own output wins a tie
 BLEND_WEIGHTS = (1.0, 0.7, 0.5, 0.3, 0.2, 0.1)
 UNBLENDED = 'network unblended'  # the network row before the blend, reported beside it
+ACCEL_WINDOW_S = 1.0  # the velocity increments the accelerometer is judged on (keyframes')
+BIAS_REMOVED = ACCEL_CHOICES[0]
 # the candidates: VQF's biasSigmaMotion (its default 0.1 deg/s) and biasForgettingTime
 # (its default 100 s), beside none; each starts as certain of its 0 as its motion updates
 # ever make it, not at VQF's 0.5 deg/s for a raw gyro: what is left after the model is
 # small, and from 0.5 deg/s a start whose accelerations are not gravity (a drone carried)
 # teaches it a bias an open-loop attitude never forgets (docs/method.md)
-ACCEL_WINDOW_S = 1.0  # the velocity increments the accelerometer is judged on (keyframes')
-BIAS_REMOVED = ACCEL_CHOICES[0]
 TRACKING_GRID = tuple(BiasTracking(sigma, forget, sigma)
                       for sigma in (0.03, 0.05, 0.07, 0.1, 0.2) for forget in (30.0, 100.0, 300.0))
 
