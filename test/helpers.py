@@ -63,6 +63,24 @@ def write_asl(root: Path, n_imu=1000, imu_rate=200.0, gt_rate=200.0, gt_offset_s
     return root
 
 
+def crop_asl(src: Path, dst: Path, seconds: float) -> Path:
+    """Copy an ASL folder's first ``seconds`` of IMU samples and the poses over them."""
+    end = None
+    for sub in ('imu0', 'state_groundtruth_estimate0', 'mocap0'):
+        path = src / 'mav0' / sub / 'data.csv'
+        if not path.is_file():
+            continue
+        lines = path.read_text().splitlines(keepends=True)
+        rows = [line for line in lines if not line.startswith('#')]
+        if end is None:  # the IMU's: the first folder read
+            end = int(rows[0].split(',')[0]) + int(seconds * 1e9)
+        (dst / 'mav0' / sub).mkdir(parents=True)
+        (dst / 'mav0' / sub / 'data.csv').write_text(''.join(
+            [line for line in lines if line.startswith('#')]
+            + [line for line in rows if int(line.split(',')[0]) <= end]))
+    return dst
+
+
 def write_late_trajectory(folder: Path, asl: Path, after_s: float) -> Path:
     """
     Write an ASL folder's poses as a VIO writes them (TUM), from ``after_s`` on.

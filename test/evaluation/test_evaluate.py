@@ -146,8 +146,10 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
     """Motion capture written as a VIO writes it, once as it is, once 0.2 deg noisier."""
     from denoise_imu_ros.data.asl import read_asl
     from denoise_imu_ros.data.trajectory import write_tum
+    from helpers import crop_asl
     from scipy.spatial.transform import Rotation
-    rec = read_asl(euroc / 'MH_01_easy')
+    data = tmp_path / 'euroc'  # MH_01's first 80 s: its still start and a minute of flight
+    rec = read_asl(crop_asl(euroc / 'MH_01_easy', data / 'MH_01_easy', 80))
     keep = slice(None, None, 10)  # 20 Hz, a VIO's rate
     rng = np.random.default_rng(0)
     noisy = Rotation.from_rotvec(np.radians(rng.normal(0, 0.2, (len(rec.gt_quat[keep]), 3))))
@@ -155,7 +157,7 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
                        ('noisy', (Rotation.from_quat(rec.gt_quat[keep]) * noisy).as_quat())):
         write_tum(tmp_path / name / 'MH_01_easy.txt', rec.gt_stamp_ns[keep], rec.gt_pos[keep],
                   quat)
-        assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences',
+        assert main(['eval', '--model', 'euroc', '--data', str(data), '--sequences',
                      'MH_01_easy', '--poses', str(tmp_path / name), '--align', 'auto',
                      '--out', str(tmp_path / f'e_{name}'), '--no-plots']) == 0
     capsys.readouterr()
@@ -169,7 +171,7 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
     keyframes = np.unique(np.searchsorted(t, wanted[wanted < t[-1]]))
     write_tum(tmp_path / 'keyframes' / 'MH_01_easy.txt', rec.gt_stamp_ns[keyframes],
               rec.gt_pos[keyframes], rec.gt_quat[keyframes])
-    assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences',
+    assert main(['eval', '--model', 'euroc', '--data', str(data), '--sequences',
                  'MH_01_easy', '--poses', str(tmp_path / 'keyframes'), '--align', 'auto',
                  '--out', str(tmp_path / 'e_keyframes'), '--no-plots']) == 0
     assert json.loads((tmp_path / 'e_keyframes' / 'results.json').read_text())[
@@ -178,12 +180,12 @@ def test_figures_against_a_trajectory_say_its_own_noise_beside_them(euroc, tmp_p
     assert re.search(r"Poses moved onto the IMU's clock and frame first \(--align auto; t_imu = "
                      r't_pose \+ offset\): MH_01_easy [+-]0\.\d ms, 0\.\d\d deg\.',
                      (tmp_path / 'e_noisy' / 'results.md').read_text())
-    assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences', 'MH_01_easy',
+    assert main(['eval', '--model', 'euroc', '--data', str(data), '--sequences', 'MH_01_easy',
                  '--out', str(tmp_path / 'e_mocap'), '--no-plots']) == 0  # its own poses
     assert json.loads((tmp_path / 'e_mocap' / 'results.json').read_text())[
         'reference_noise_deg'] is None
     # said to be an estimate (a bag's odometry topic): its noise beside the figures too
-    assert main(['eval', '--model', 'euroc', '--data', str(euroc), '--sequences', 'MH_01_easy',
+    assert main(['eval', '--model', 'euroc', '--data', str(data), '--sequences', 'MH_01_easy',
                  '--out', str(tmp_path / 'e_said'), '--no-plots', '--estimated-poses']) == 0
     assert json.loads((tmp_path / 'e_said' / 'results.json').read_text())[
         'reference_noise_deg']['MH_01_easy'] < 0.1
