@@ -5,7 +5,8 @@
 
 ``imu/data`` is the imu_tools contract (what imu_filter_madgwick publishes): the
 gravity-aided orientation of the corrected gyro, with its covariance, the corrected
-angular velocity and the accelerometer less its fitted bias, as in ``imu/corrected``.
+angular velocity and the accelerometer as ``imu/corrected`` carries it (less the bias the
+model fitted, where its cross-validation found that bias carries to unseen recordings).
 ``imu/attitude`` is the paper's open-loop integral of the corrected gyro.
 
 A thin ROS wrapper around :class:`~denoise_imu_ros.pipeline.online.OnlineDenoiser`: it converts
