@@ -27,7 +27,9 @@ Run: .venv/bin/python bench/preintegration.py [--data ../shared/data/euroc]
 import argparse
 from pathlib import Path
 
+from denoise_imu_ros.core.errors import DatasetError
 from denoise_imu_ros.core.modelfile import gyro_covariance, read_model_file
+from denoise_imu_ros.data.asl import read_csv
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation.correct import corrected_gyro
 from denoise_imu_ros.evaluation.preintegration import (
@@ -45,18 +47,19 @@ GYRO_DENSITY, ACCEL_DENSITY = 1.6968e-4, 2.0e-3
 def ground_truth_velocity(folder: Path, stamp_ns: np.ndarray, position: np.ndarray,
                           stamp_s: np.ndarray) -> tuple[np.ndarray, str]:
     """Return the velocity (N, 3) at the IMU stamps, and where it came from."""
-    state = folder / 'mav0' / 'state_groundtruth_estimate0' / 'data.csv'
-    if state.is_file():
-        rows = np.loadtxt(state, delimiter=',', comments='#', ndmin=2)
-        if rows.shape[1] >= 11:  # t, p xyz, q wxyz, v xyz
-            return np.stack([np.interp(stamp_ns, rows[:, 0], rows[:, c])
-                             for c in (8, 9, 10)], axis=1), 'state estimate'
-    return velocity_from_positions(position, stamp_s), 'positions'
+    try:  # t, p xyz, q wxyz, v xyz (EuRoC's has biases after them)
+        stamps, rows = read_csv(folder / 'mav0' / 'state_groundtruth_estimate0' / 'data.csv', 11)
+    except DatasetError:  # no such file, or poses without velocities
+        return velocity_from_positions(position, stamp_s), 'positions'
+    return np.stack([np.interp(stamp_ns, stamps, rows[:, c]) for c in (7, 8, 9)],
+                    axis=1), 'state estimate'
 
 
-def gtsam_increments(gyro: np.ndarray, accel: np.ndarray, dt: np.ndarray, starts: np.ndarray,
-                     length: int, gyro_var: np.ndarray, accel_var: np.ndarray) -> Increments:
+def gtsam_increments(gyro: np.ndarray, accel: np.ndarray, stamp_s: np.ndarray,
+                     starts: np.ndarray, length: int, gyro_var: np.ndarray,
+                     accel_var: np.ndarray) -> Increments:
     """Pre-integrate each window with GTSAM (constant covariances: the first sample's)."""
+    dt = np.diff(stamp_s)
     params = gtsam.PreintegrationParams.MakeSharedU(GRAVITY)
     # GTSAM takes continuous-time densities: a sample's variance times its period
     params.setGyroscopeCovariance(np.diag(gyro_var[0] * dt[0]))
@@ -92,15 +95,15 @@ def main() -> None:
     for name in args.sequences:
         seq = load_sequence(Path(args.data) / name)
         stamp_s = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
-        dt = np.append(np.diff(stamp_s), np.median(np.diff(stamp_s)))
-        rate = 1 / float(np.median(dt))
+        rate = seq.rate_hz
+        n = len(stamp_s)
         vel, vel_source = ground_truth_velocity(Path(args.data) / name, seq.stamp_ns,
                                                 seq.gt_pos, stamp_s)
-        accel_var = np.full((len(dt), 3), ACCEL_DENSITY ** 2 * rate)
+        accel_var = np.full((n, 3), ACCEL_DENSITY ** 2 * rate)
         imus = {'raw': (seq.imu[:, :3], seq.imu[:, 3:],
-                        np.full((len(dt), 3), GYRO_DENSITY ** 2 * rate))}
+                        np.full((n, 3), GYRO_DENSITY ** 2 * rate))}
         for label, mf in models.items():
-            var = np.broadcast_to(np.diag(np.reshape(gyro_covariance(mf), (3, 3))), (len(dt), 3))
+            var = np.broadcast_to(np.diag(np.reshape(gyro_covariance(mf), (3, 3))), (n, 3))
             # from the recording's first sample, as the node and process-bag run it
             gyro = corrected_gyro(mf, np.vstack([seq.lead_in, seq.imu]))[len(seq.lead_in):]
             bias = np.array(mf.meta.fusion.chosen.accel_bias_m_s2)
@@ -111,8 +114,9 @@ def main() -> None:
             starts = window_starts(seq.gt_valid, length)
             ref = reference(seq.gt_quat, seq.gt_pos, vel, stamp_s, starts, length)
             for label, (gyro, accel, gyro_var) in imus.items():
-                ours = preintegrate(gyro, accel, dt, starts, length, gyro_var, accel_var)
-                theirs = gtsam_increments(gyro, accel, dt, starts, length, gyro_var, accel_var)
+                ours = preintegrate(gyro, accel, stamp_s, starts, length, gyro_var, accel_var)
+                theirs = gtsam_increments(gyro, accel, stamp_s, starts, length, gyro_var,
+                                          accel_var)
                 largest['increment'] = max(
                     largest['increment'], *(float(np.abs(a - b).max()) for a, b in (
                         (ours.rotation, theirs.rotation), (ours.velocity, theirs.velocity),

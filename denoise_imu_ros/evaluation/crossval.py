@@ -237,7 +237,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                            'network': envelope.combine([b['network'] for b in bounds])}
         field = models[0][0].model.receptive_field
         trained = [_read(recipe, name, field) for name in train_on]
-        fitted = fit_accel_bias(trained, max(len(s) for s in trained))
+        fitted = fit_accel_bias(trained)
         del trained
         for name in held_out:
             seq = _read(recipe, name, field)
@@ -301,7 +301,6 @@ def accel_rows(seq: Sequence, gyro: np.ndarray, bias: np.ndarray | None) -> dict
     less its training recordings' ``bias``.
     """
     stamp_s = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
-    dt = np.diff(stamp_s, append=2 * stamp_s[-1] - stamp_s[-2])
     length = max(1, round(ACCEL_WINDOW_S * seq.rate_hz))
     starts = window_starts(seq.gt_valid, length)
     if not len(starts):
@@ -312,7 +311,7 @@ def accel_rows(seq: Sequence, gyro: np.ndarray, bias: np.ndarray | None) -> dict
     if bias is not None:
         choices[BIAS_REMOVED] = seq.imu[:, 3:] - bias
     return {label: float(np.sqrt(np.mean(increment_errors(
-        preintegrate(gyro, accel, dt, starts, length), ref)['velocity_m_s'] ** 2)))
+        preintegrate(gyro, accel, stamp_s, starts, length), ref)['velocity_m_s'] ** 2)))
         for label, accel in choices.items()}
 
 

@@ -156,13 +156,14 @@ def score(seq: Sequence, quat: np.ndarray) -> FusedErrors:
 SMOOTHING_S = 0.2  # the poses' second derivative: a cubic fitted over this long
 
 
-def specific_force(seqs: list[Sequence], end: int) -> tuple[np.ndarray, np.ndarray]:
+def specific_force(seqs: list[Sequence],
+                   end: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """
     Return what the accelerometer read and what it should have, (M, 3) each, from the poses.
 
     What it should read is the specific force R^T (p'' + g e_z), with p'' the poses'
     acceleration (a smoothed second derivative, Savitzky-Golay), over the samples before
-    ``end`` of every sequence whose smoothing window holds no ground-truth hole.
+    ``end`` (None: all) of every sequence whose smoothing window holds no ground-truth hole.
     Positions are taken as the IMU's (a lever arm of centimetres adds only w^2 r).
     """
     from scipy.ndimage import binary_erosion
@@ -181,7 +182,8 @@ def specific_force(seqs: list[Sequence], end: int) -> tuple[np.ndarray, np.ndarr
     return np.vstack(read), np.vstack(should)
 
 
-def fit_accel_bias(seqs: list[Sequence], end: int) -> tuple[np.ndarray, int] | None:
+def fit_accel_bias(seqs: list[Sequence],
+                   end: int | None = None) -> tuple[np.ndarray, int] | None:
     """
     Fit the accelerometer's constant bias (m/s^2, body frame) to the poses; its sample count.
 

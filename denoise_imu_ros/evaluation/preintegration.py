@@ -87,16 +87,18 @@ def _skew(v: np.ndarray) -> np.ndarray:
     return s - np.swapaxes(s, -1, -2)
 
 
-def preintegrate(gyro: np.ndarray, accel: np.ndarray, dt: np.ndarray, starts: np.ndarray,
-                 length: int, gyro_var: np.ndarray | None = None,
+def preintegrate(gyro: np.ndarray, accel: np.ndarray, stamp_s: np.ndarray,
+                 starts: np.ndarray, length: int, gyro_var: np.ndarray | None = None,
                  accel_var: np.ndarray | None = None) -> Increments:
     """
-    Pre-integrate samples ``[s, s + length)`` of every start ``s`` (dt_k: stamp k to k + 1).
+    Pre-integrate samples ``[s, s + length)`` of every start ``s``, each over its interval.
 
-    ``gyro_var`` and ``accel_var`` (N, 3): each sample's measurement variance per axis
+    Sample k holds from ``stamp_s[k]`` to ``stamp_s[k + 1]``, so the last one integrated
+    needs the stamp after it (:func:`window_starts` leaves room). ``gyro_var`` and
+    ``accel_var`` (N, 3): each sample's measurement variance per axis
     ((rad/s)^2, (m/s^2)^2); given both, the increments' covariance is propagated too.
     """
-    w = len(starts)
+    w, dt = len(starts), np.diff(stamp_s)
     rot = np.broadcast_to(np.eye(3), (w, 3, 3)).copy()
     vel, pos = np.zeros((w, 3)), np.zeros((w, 3))
     propagate = gyro_var is not None and accel_var is not None

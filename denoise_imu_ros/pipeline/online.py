@@ -102,22 +102,23 @@ class OnlineDenoiser:
     _intervals: list[int] = field(default_factory=list)  # recent ones, ns
     _input_period_ns: float = 0.0  # their median, refreshed every INPUT_WINDOW samples
     _window_off: bool = False      # that median's rate is off the model's
-    # the accelerometer bias removed from Output.accel; None: accel_bias (the attitude's)
-    corrected_accel_bias: tuple[float, float, float] | None = None
-    _accel_bias: np.ndarray | None = None  # that bias as an array, once asked
+    # the accelerometer bias removed from Output.accel (imu/corrected's), m/s^2
+    corrected_accel_bias: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     @classmethod
     def of_engine(cls, engine: StreamingCorrector, rate_hz: float,
                   accel_bias: tuple[float, float, float] = (0.0, 0.0, 0.0),
                   **options: Any) -> OnlineDenoiser:
         """Build a pipeline of a network alone and its open-loop attitude."""
-        return cls(Pipeline([Network(engine), Attitude(accel_bias)]), rate_hz, **options)
+        return cls(Pipeline([Network(engine), Attitude(accel_bias)]), rate_hz,
+                   corrected_accel_bias=np.array(accel_bias), **options)
 
     @classmethod
     def from_model_file(cls, model: ModelFile, fusion: FusionSettings | None = None,
                         rest_choice: str = 'model', guard_choice: str = 'model',
                         blend_choice: str = 'model',
                         accel_bias: tuple[float, float, float] | None = None,
+                        corrected_accel_bias: tuple[float, float, float] | None = None,
                         **options: Any) -> OnlineDenoiser:
         """
         Build the pipeline of a model file (node and process-bag): numpy only, no torch.
@@ -127,7 +128,8 @@ class OnlineDenoiser:
         ``rest_bias``, ``envelope_guard`` and ``classical_blend``), the open-loop attitude
         and, with ``fusion`` settings, the gravity-aided orientation; the accelerometer
         bias they remove is removed from the attitude's initial tilt as well (unless
-        ``accel_bias`` is given).
+        ``accel_bias`` is given), and from the accelerometer of every output (unless
+        ``corrected_accel_bias`` is given).
         """
         rate = sample_rate(model)
         if accel_bias is None:
@@ -136,7 +138,8 @@ class OnlineDenoiser:
                   Attitude(accel_bias)]
         if fusion is not None:
             stages.append(Orientation(rate, fusion))
-        return cls(Pipeline(stages), rate, **options)
+        published = accel_bias if corrected_accel_bias is None else corrected_accel_bias
+        return cls(Pipeline(stages), rate, corrected_accel_bias=np.array(published), **options)
 
     @property
     def engine(self) -> StreamingCorrector:
@@ -275,10 +278,7 @@ class OnlineDenoiser:
             self._intervals.clear()
         self._last_ns = stamp_ns
         self.counts['accepted'] += 1
-        if self._accel_bias is None:
-            self._accel_bias = np.array(self.accel_bias if self.corrected_accel_bias is None
-                                        else self.corrected_accel_bias)
-        return Output(stamp_ns=stamp_ns, gyro=flow.out, accel=accel - self._accel_bias,
+        return Output(stamp_ns=stamp_ns, gyro=flow.out, accel=accel - self.corrected_accel_bias,
                       attitude=flow.attitude, event=event,
                       orientation=flow.orientation, rate_suspect=self.rate_suspect,
                       accel_cov=accel_cov)

@@ -146,8 +146,8 @@ class GyroDenoiser(Node):
             + ('' if self._denoiser.vertical is None else
                "; no correction about the vertical (taught without its poses' heading)")
             + f'; {self._sub.topic_name} -> {self._pub_imu.topic_name} (accelerometer '
-            + ('as it came' if not any(self._denoiser.corrected_accel_bias or ()) else
-               f'less {[round(b, 4) for b in self._denoiser.corrected_accel_bias]} m/s^2') + ')'
+            + ('as it came' if not self._denoiser.corrected_accel_bias.any() else
+               f'less {self._denoiser.corrected_accel_bias.round(4).tolist()} m/s^2') + ')'
             + ('' if fusion is None else
                f', {self._pub_fused.topic_name} (VQF: tau_acc {fusion.tau_acc_s:g} s, bias '
                f'estimation {"on" if fusion.bias_estimation else "off"}, accelerometer bias '

@@ -241,8 +241,8 @@ class Settings:
         den = OnlineDenoiser.from_model_file(
             loaded, fusion if self.publish_fused else None, self.choice('rest_bias'),
             self.choice('envelope_guard'), self.choice('classical_blend'),
-            accel_bias=fusion.accel_bias_m_s2)
-        den.corrected_accel_bias = self.corrected_accel_bias(loaded)
+            accel_bias=fusion.accel_bias_m_s2,
+            corrected_accel_bias=self.corrected_accel_bias(loaded))
         self.retune(den)
         return den
 

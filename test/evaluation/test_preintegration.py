@@ -31,14 +31,14 @@ def _trajectory(n: int, seed: int = 0) -> dict[str, np.ndarray]:
         vel[k + 1] = vel[k] + acc_world[k] * dt[k]
     specific = acc_world - np.array([0.0, 0.0, -GRAVITY])
     accel = Rotation.from_quat(quat).inv().apply(specific)
-    return {'t': t, 'dt': np.append(dt, dt[-1]), 'gyro': gyro, 'accel': accel, 'quat': quat,
+    return {'t': t, 'dt': dt, 'gyro': gyro, 'accel': accel, 'quat': quat,
             'pos': pos, 'vel': vel}
 
 
 def test_the_perfect_imu_of_the_same_steps_gives_the_ground_truths_increments():
     tr = _trajectory(2000)
     starts = window_starts(np.ones(2000, bool), 200, stride=37)
-    est = preintegrate(tr['gyro'], tr['accel'], tr['dt'], starts, 200)
+    est = preintegrate(tr['gyro'], tr['accel'], tr['t'], starts, 200)
     ref = reference(tr['quat'], tr['pos'], tr['vel'], tr['t'], starts, 200)
     err = errors(est, ref)
     assert len(starts) > 40
@@ -58,7 +58,7 @@ def test_the_propagated_covariance_makes_the_nees_chi_square():
     gyro = tr['gyro'] + gyro_std * rng.standard_normal((n, 3))
     accel = tr['accel'] + accel_std * rng.standard_normal((n, 3))
     starts = window_starts(np.ones(n, bool), length)
-    est = preintegrate(gyro, accel, tr['dt'], starts, length,
+    est = preintegrate(gyro, accel, tr['t'], starts, length,
                        np.broadcast_to(gyro_std ** 2, (n, 3)),
                        np.broadcast_to(accel_std ** 2, (n, 3)))
     err = errors(est, reference(tr['quat'], tr['pos'], tr['vel'], tr['t'], starts, length))
@@ -67,7 +67,7 @@ def test_the_propagated_covariance_makes_the_nees_chi_square():
         assert 2.6 < nees.mean() < 3.4, name             # 599 windows: 3 +- 0.1 (1 sigma)
         assert 0.69 < (nees < 4).mean() < 0.79, name      # 73.9 % inside 2 sigma
     # a covariance four times too small is told apart
-    small = preintegrate(gyro, accel, tr['dt'], starts, length,
+    small = preintegrate(gyro, accel, tr['t'], starts, length,
                          np.broadcast_to(gyro_std ** 2 / 4, (n, 3)),
                          np.broadcast_to(accel_std ** 2 / 4, (n, 3)))
     truth = reference(tr['quat'], tr['pos'], tr['vel'], tr['t'], starts, length)
@@ -93,7 +93,7 @@ def test_velocity_of_positions_is_exact_on_a_quadratic():
 @pytest.mark.parametrize('length', [1, 7])
 def test_short_windows_match_one_step_by_hand(length):
     tr = _trajectory(50)
-    est = preintegrate(tr['gyro'], tr['accel'], tr['dt'], np.array([3]), length)
+    est = preintegrate(tr['gyro'], tr['accel'], tr['t'], np.array([3]), length)
     rot, vel, pos = np.eye(3), np.zeros(3), np.zeros(3)
     for k in range(3, 3 + length):
         a = rot @ tr['accel'][k]
@@ -107,9 +107,9 @@ def test_short_windows_match_one_step_by_hand(length):
 def test_gtsam_pre_integrates_the_same_increments_and_covariance():
     gtsam = pytest.importorskip('gtsam')  # the VIO back-ends' library, in requirements.txt
     tr = _trajectory(600, seed=3)
-    starts, length = np.array([0, 150, 400]), 200
+    starts, length = np.array([0, 150, 399]), 200  # the last ends one stamp before 600
     gyro_var, accel_var = np.full((600, 3), 1e-4), np.full((600, 3), 4e-3)
-    ours = preintegrate(tr['gyro'], tr['accel'], tr['dt'], starts, length, gyro_var, accel_var)
+    ours = preintegrate(tr['gyro'], tr['accel'], tr['t'], starts, length, gyro_var, accel_var)
     params = gtsam.PreintegrationParams.MakeSharedU(GRAVITY)
     params.setGyroscopeCovariance(np.eye(3) * 1e-4 / RATE)  # densities: variance x period
     params.setAccelerometerCovariance(np.eye(3) * 4e-3 / RATE)
