@@ -67,6 +67,9 @@ class Harness:
                             - self.node.fused_withheld)
 
     def close(self):
+        """Stop the node and its client (a node stopped mid-test is not stopped again)."""
+        if not self.ctx.ok():
+            return
         self.executor.shutdown()
         self.node.destroy_node()
         self.client.destroy_node()

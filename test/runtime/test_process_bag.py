@@ -354,10 +354,54 @@ def test_a_clock_set_back_mid_bag_is_two_sessions_not_one_interleaved(tmp_path, 
     assert order.tolist() == [1, 2, 0, 4, 3, 6, 5]  # the 2 starts a session
 
 
+def test_a_node_restarted_mid_bag_starts_afresh_as_process_bag_on_the_rest(
+        harness, model_file, tmp_path):
+    """
+    A node killed and started again while the IMU streams: nothing of the first run is kept.
+
+    The second node is a fresh start on what it receives: what `process-bag` writes for the
+    rest of the bag, bit for bit, with the turn-on bias from the model's prior (the restart
+    came in motion) and said so in /diagnostics.
+    """
+    from denoise_imu_ros.core import msgs
+    from denoise_imu_ros.core.modelfile import add_metadata
+    from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
+    from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
+    from denoise_imu_ros.runtime.player import read_imu_messages
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag2 import Writer
+    add_metadata(model_file, rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict(),
+                 bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0})
+    imu = read_imu_messages(SAMPLE)[:1400]
+    first = harness()
+    first.send(imu[:700])
+    assert len(first.corrected) == 700
+    first.close()
+    with Writer(tmp_path / 'rest', version=9) as w:
+        conn = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+        for m in imu[700:]:
+            w.write(conn, msgs.stamp_ns(m.header), TYPESTORE.serialize_cdr(
+                msgs.copy_imu(BAG_TYPES, m), IMU_TYPE))
+    assert main(['process-bag', '--input', str(tmp_path / 'rest'), '--out', str(tmp_path / 'out'),
+                 '--model', str(model_file)]) == 0
+    with AnyReader([tmp_path / 'out']) as reader:
+        conns = [c for c in reader.connections if c.topic == '/imu/corrected']
+        written = [_fields(reader.deserialize(raw, c.msgtype))
+                   for c, _, raw in reader.messages(connections=conns)]
+    second = harness()
+    second.send(imu[700:])
+    assert len(written) == len(second.corrected) == 700
+    assert np.array_equal(np.array([_fields(m) for m in second.corrected]), np.array(written))
+    second.diagnostics.clear()
+    second.spin_until(lambda: second.diagnostics, timeout=5.0)
+    said = {v.key: v.value for v in second.diagnostics[-1].status[0].values}
+    assert said['rest_bias_source'] == 'prior' and said['accepted'] == '700'
+
+
 @pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
-def test_a_host_clock_stepped_back_is_read_as_the_node_received_it(tmp_path, model_file,
-                                                                   storage):
-    """NTP steps header stamps and receive times alike: the bag's write order is the node's."""
+def test_a_host_clock_stepped_back_is_read_as_the_node_received_it(harness, tmp_path,
+                                                                   model_file, storage):
+    """NTP steps stamps and receive times alike: process-bag writes what the node publishes."""
     from denoise_imu_ros.core import msgs
     from denoise_imu_ros.core.modelfile import read_model_file
     from denoise_imu_ros.data.bags import (BAG_TYPES, IMU_TYPE, messages_as_written,
@@ -394,6 +438,12 @@ def test_a_host_clock_stepped_back_is_read_as_the_node_received_it(tmp_path, mod
         written = [rd.deserialize(raw, c.msgtype).angular_velocity
                    for c, _, raw in messages_as_written(rd) if c.topic == '/imu/corrected']
     assert np.array_equal(np.array([[v.x, v.y, v.z] for v in written]), np.array(expected))
+    live = harness()  # and the node itself, sent the stream as it was recorded
+    live.send([msgs.copy_imu(msgs.rclpy_types(), m) for m in sent])
+    assert live.node._denoiser.counts['time_jump_resets'] == 1
+    assert np.array_equal(np.array([[m.angular_velocity.x, m.angular_velocity.y,
+                                     m.angular_velocity.z] for m in live.corrected]),
+                          np.array(expected))
 
 
 def test_imu_stamps_on_two_clocks_are_refused_in_one_line_and_nothing_is_written(
