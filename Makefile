@@ -21,8 +21,10 @@ venv: $(VENV)/.installed
 
 # Unit, integration and lint tests (tests needing ../shared/data skip without it), on
 # two processes (each its own DDS domain); prints the wall time of the tests alone.
+# Torch's OpenMP threads sleep when idle instead of spinning: two pytest processes share
+# the cores, and one's spinning threads took CPU the other's work needed.
 test: venv
-	@start=$$(date +%s); $(ROS_ENV) $(BIN)/python -m pytest -n 2 --dist worksteal test; status=$$?; \
+	@start=$$(date +%s); $(ROS_ENV) OMP_WAIT_POLICY=PASSIVE $(BIN)/python -m pytest -n 2 --dist worksteal test; status=$$?; \
 	echo "make test: tests took $$(( $$(date +%s) - start )) s"; exit $$status
 
 # The bundled EuRoC test-sequence sample (90 s of V1_03): offline evaluation with the

@@ -10,11 +10,18 @@ from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError, DataWarning
 from denoise_imu_ros.data.load import load_recording, load_sequence
 from denoise_imu_ros.data.trajectory import read_tum, trajectory_file, write_tum
-from helpers import T0, write_asl
+from helpers import crop_asl, T0, write_asl
 import numpy as np
 import pytest
 
 POSE = '0.1 0.2 0.3 0 0 0 1'
+
+
+def _heads(euroc: Path, names: list[str], folder: Path, seconds: float = 80.0) -> Path:
+    """Return a folder of the first ``seconds`` of these EuRoC recordings."""
+    for name in names:
+        crop_asl(euroc / name, folder / name, seconds)
+    return folder
 
 
 def _write(path: Path, rows: list[str]) -> Path:
@@ -269,6 +276,7 @@ def test_the_recordings_own_poses_as_tum_files_give_the_same_recipe(euroc, tmp_p
     from denoise_imu_ros.learn.config import load_config
     from denoise_imu_ros.learn.recipe import init_recipe
     names = ['MH_01_easy', 'V2_01_easy']
+    euroc = _heads(euroc, names, tmp_path / 'euroc', 100.0)  # a training window and more
     for name in names:  # the motion capture, written as a VIO tool writes its trajectory
         rec = read(euroc / name)
         write_tum(tmp_path / f'{name}.txt', rec.gt_stamp_ns, rec.gt_pos, rec.gt_quat)
@@ -316,6 +324,7 @@ def test_poses_whose_heading_is_noisier_than_their_tilt_teach_the_tilt_alone(eur
     from denoise_imu_ros.learn.recipe import init_recipe
     from scipy.spatial.transform import Rotation
     names = ['MH_01_easy', 'V2_01_easy']
+    euroc = _heads(euroc, names, tmp_path / 'euroc')
     rng = np.random.default_rng(0)
     for name in names:  # the motion capture, its heading (about the world's z) jittered
         rec = read(euroc / name)
@@ -355,6 +364,7 @@ def test_keyframes_too_sparse_for_the_motion_train_between_their_stamps(
     from denoise_imu_ros.learn.recipe import init_recipe
     rng = np.random.default_rng(6)
     names = ['MH_01_easy', 'MH_03_medium', 'V2_01_easy']
+    euroc = _heads(euroc, names, tmp_path / 'euroc')
     for name in names:
         vins = read_tum(data_dir / 'euroc_vio' / 'vins_mono' / f'{name}.txt')
         keep = slice(None)

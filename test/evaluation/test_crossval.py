@@ -225,8 +225,8 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     for i, bias in enumerate((0.010, 0.012, 0.011)):  # one z gyro bias per "day"
         write_asl(data / f'rec{i}', n_imu=2400, yaw_rate=0.2 + 0.1 * i, gyro_bias=bias)
     recipe = {'dataset': 'synthetic', 'data': str(data), 'sequences': ['rec0', 'rec1', 'rec2'],
-              'window': 1024, 'steps': 30, 'val_every': 10, 'swa_start': 20, 'select': 'swa',
-              'restart_period': 30, 'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1}
+              'window': 1024, 'steps': 12, 'val_every': 4, 'swa_start': 8, 'select': 'swa',
+              'restart_period': 12, 'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1}
     (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
     out = tmp_path / 'cv'
     assert main(['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--out', str(out),

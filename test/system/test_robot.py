@@ -39,8 +39,8 @@ def test_train_on_your_robot_at_100_hz_with_20_hz_poses(euroc, tmp_path, capsys)
     cfg = load_config(recipe)
     assert cfg.increments == [8, 16] and cfg.window % 16 == 0 and cfg.window <= 8000
     # a short run: the user's edit of the recipe
-    text = recipe.read_text().replace('steps: 1800', 'steps: 40')
-    recipe.write_text(text.replace('swa_start: 1200', 'swa_start: 30'))
+    text = recipe.read_text().replace('steps: 1800', 'steps: 20')
+    recipe.write_text(text.replace('swa_start: 1200', 'swa_start: 15'))
     # train, then crossval with the same recipe, attached to the model
     model = tmp_path / 'my_robot.safetensors'
     assert main(['train', '--recipe', str(recipe), '--workers', '1', '--out', str(model),
