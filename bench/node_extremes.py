@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: E402
-from ros_link import start, wait_until_flowing  # noqa: E402
+from ros_link import start, stop, wait_until_flowing  # noqa: E402
 from sensor_msgs.msg import Imu  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc' / 'V1_01_easy'
@@ -87,11 +87,7 @@ def main():
           f'{sum(s in got for s in injected)}')
     print(f'non-finite values received: {int((~np.isfinite(values)).sum())}')
     print(f'node still running: {alive}')
-    ex.shutdown()
-    bench.destroy_node()
-    rclpy.try_shutdown()
-    node.terminate()
-    node.wait(timeout=10)
+    stop(ex, bench, node)
 
 
 if __name__ == '__main__':

@@ -9,7 +9,9 @@ import subprocess
 import sys
 import time
 
+import rclpy
 from rclpy.executors import Executor
+from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.subscription import Subscription
 from sensor_msgs.msg import Imu
@@ -63,6 +65,15 @@ def start_reader(topics: list[tuple[type, str]], reliability: str = 'RELIABLE',
     """
     specs = [f'{t.__module__}:{t.__name__}:{topic}' for t, topic in topics]
     return start([sys.executable, '-c', READER, reliability.upper(), *specs], cpus)
+
+
+def stop(ex: Executor, bench: Node, proc: subprocess.Popen) -> None:
+    """End a bench: its executor, its node and ROS in this process, then the process tested."""
+    ex.shutdown()
+    bench.destroy_node()
+    rclpy.try_shutdown()
+    proc.terminate()
+    proc.wait(timeout=10)
 
 
 def wait_until(due: float) -> None:
