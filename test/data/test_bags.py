@@ -9,7 +9,7 @@ from denoise_imu_ros.core.errors import DatasetError, DataWarning
 from denoise_imu_ros.data.load import load_recording, load_sequence
 from denoise_imu_ros.learn.config import load_config
 from denoise_imu_ros.learn.train import training_split
-from helpers import bag_messages, N, ROOT, ROS2, write_ros1_bag
+from helpers import bag_messages, crop_asl, N, ROOT, ROS2, write_ros1_bag
 import numpy as np
 import pytest
 from rosbags.rosbag2 import Writer as Writer2
@@ -221,16 +221,17 @@ def test_a_vios_pose_topic_said_to_be_an_estimate_gets_its_trajectory_files_reci
     from denoise_imu_ros.data.trajectory import read_tum, with_trajectory
     from denoise_imu_ros.learn.recipe import init_recipe
     name, vins = 'V2_01_easy', data_dir / 'euroc_vio' / 'vins_mono'
+    euroc = crop_asl(euroc / name, tmp_path / 'euroc' / name, 100.0).parent  # 100 s of it
     rec = with_trajectory(read_asl(euroc / name, with_gt=False), read_tum(vins / f'{name}.txt'))
-    write_bag(rec, tmp_path / name, pose_topic='/vins_estimator/odometry')
+    write_bag(rec, tmp_path / 'bags' / name, pose_topic='/vins_estimator/odometry')
     from_files, _ = init_recipe(euroc, [name], poses=vins)
-    from_bag, said = init_recipe(tmp_path, [name], estimated=True)
+    from_bag, said = init_recipe(tmp_path / 'bags', [name], estimated=True)
     differ = [k for k in from_files if from_files[k] != from_bag[k]]
     assert differ == ['dataset', 'data', 'poses']
     assert from_bag['heading_weight'] == 0.0 and from_bag['rest_bias']
     assert any(line.startswith("the poses are a VIO's or SLAM's estimate") for line in said)
     # not said to be one: motion capture's recipe, and the heading's figure asks
-    as_mocap, said = init_recipe(tmp_path, [name])
+    as_mocap, said = init_recipe(tmp_path / 'bags', [name])
     assert as_mocap['heading_weight'] == 1.0 and not as_mocap['rest_bias']
     assert any(line.startswith('heading_weight 1: the poses are taken as motion capture')
                and line.endswith('if they are an estimate, give --estimated-poses')
