@@ -54,20 +54,22 @@ def open_loop(report: dict[str, Any]) -> list[str]:
 
 
 def fused(out: Path, dest: Path, data: str, report: dict[str, Any],
-          tune: bool = False) -> list[str]:
+          tune: bool = False, vqf: tuple[float, bool] | None = None) -> list[str]:
     """
     Markdown lines: ``imu/data`` of each fold's seeds and ensemble against VQF's defaults.
 
     Each fold's models with the tracking, and the network with the blend, that the other
     folds chose (the report's ``per_fold``), as its open-loop figures; with ``tune``, their
     filters chosen on their own training trials' validation tails (``tune-fusion
-    --attach``, as the shipped file's), else at the defaults ``train`` stores.
+    --attach``, as the shipped file's); with ``vqf`` (tau_acc_s, bias estimation), that
+    VQF for every gyro of theirs (as ``tune-fusion --attach`` stores a choice); else at the
+    defaults ``train`` stores.
     """
     from denoise_imu_ros.core.modelfile import add_metadata
     from denoise_imu_ros.core.schema import Blend
     from denoise_imu_ros.evaluation.crossval import CANDIDATES
     from denoise_imu_ros.evaluation.evaluate import evaluate
-    from denoise_imu_ros.evaluation.filters import attach, tune_model
+    from denoise_imu_ros.evaluation.filters import attach, Filter, tune_model
     from denoise_imu_ros.learn.checkpoint import save_ensemble
     seeds = report['seeds']
     names = [f'seed{s}' for s in seeds] + ['ensemble']
@@ -94,6 +96,12 @@ def fused(out: Path, dest: Path, data: str, report: dict[str, Any],
                 classical = CANDIDATES[choice['tracker only']]
                 add_metadata(folder / 'network.safetensors', blend=Blend(
                     report['blend']['per_fold'][str(i)], classical).as_dict())
+            if vqf is not None:
+                chosen = Filter('vqf', *vqf)
+                for row in ('network', 'calibrated'):
+                    add_metadata(folder / f'{row}.safetensors', fusion={
+                        'settings': chosen.settings.as_dict(),
+                        'filters': {'raw vqf': chosen.as_dict()}})
             if tune and not (folder / 'tuned').exists():
                 nets = [str(folder / f'{row}.safetensors') for row in ('network', 'calibrated')]
                 attach(*nets, tune_model(*nets, data, progress=False))
@@ -138,7 +146,14 @@ def main() -> None:
                         'and their eval go (default: OUT/fused)')
     parser.add_argument('--tune', action='store_true', help="imu/data's filters chosen on "
                         "each fold model's training trials' tails, as the shipped file's")
+    parser.add_argument('--vqf', nargs=2, metavar=('TAU_S', 'BIAS'), help="imu/data's filter "
+                        'for every gyro: VQF with this tau and its bias estimation on or off')
     args = parser.parse_args()
+    if args.tune and args.vqf:
+        parser.error('--tune and --vqf choose the filter two ways: give one')
+    if args.vqf and args.vqf[1] not in ('on', 'off'):
+        parser.error(f'--vqf: bias estimation on or off, not {args.vqf[1]!r}')
+    vqf = None if args.vqf is None else (float(args.vqf[0]), args.vqf[1] == 'on')
     report = json.loads((args.out / 'crossval.json').read_text())
     lines = [f'Verdict ({report["fold_kind"]}): {report["verdict"]}.',
              f'Tracking chosen: {json.dumps(report["tracking"]["per_fold"])}']
@@ -146,8 +161,10 @@ def main() -> None:
         lines.append(f'Blend weights chosen: {json.dumps(report["blend"]["per_fold"])}')
     lines += open_loop(report)
     if args.data:
-        dest = args.dest or args.out / ('tuned' if args.tune else 'fused')
-        lines += fused(args.out, dest, args.data, report, args.tune)
+        kind = ('tuned' if args.tune else 'fused' if vqf is None
+                else f'vqf_tau{vqf[0]:g}_bias_{args.vqf[1]}')
+        lines += fused(args.out, args.dest or args.out / kind, args.data, report, args.tune,
+                       vqf)
     print('\n'.join(lines))
 
 
