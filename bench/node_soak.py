@@ -72,27 +72,31 @@ def main() -> None:
                   '-p', f'model:={args.model}', '--log-level', 'error'])
     rclpy.init()
     bench = rclpy.create_node('soak_bench')
-    got: dict[int, float] = {}
+    got: dict[int, None] = {}  # stamps answered on imu/corrected
     fused = [0]
-    diag: list[str] = []
+    diag: list[tuple[float, str]] = []  # (when received, what it said)
     pub = bench.create_publisher(Imu, 'imu/data_raw', QoSProfile(
         depth=1000, reliability=ReliabilityPolicy.RELIABLE))
     sub = bench.create_subscription(
-        Imu, 'imu/corrected', lambda m: got.setdefault(msgs.stamp_ns(m.header), time.time()),
+        Imu, 'imu/corrected', lambda m: got.setdefault(msgs.stamp_ns(m.header), None),
         QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE))
     bench.create_subscription(Imu, 'imu/data', lambda m: fused.__setitem__(0, fused[0] + 1),
                               QoSProfile(depth=10000, reliability=ReliabilityPolicy.RELIABLE))
     bench.create_subscription(DiagnosticArray, '/diagnostics',
-                              lambda m: diag.append(said(m)), 10)
+                              lambda m: diag.append((time.perf_counter(), said(m))), 10)
     reset = bench.create_client(Trigger, 'gyro_denoiser/reset_attitude')
     ex = SingleThreadedExecutor()
     ex.add_node(bench)
     stamp = wait_until_flowing(ex, pub, sub, got, 10**18, proc)
     stamp += 10**10  # a fresh recording for the node
+    ex.spin_once(timeout_sec=0.1)
+    got.clear()  # what the start-up's samples brought back is not counted
+    fused[0] = 0
     n = int(args.rate * args.minutes * 60)
     period = args.burst / args.rate
     sent: list[int] = []
     pending: list[tuple[str, float]] = []  # events whose first /diagnostics is awaited
+    settle_s = 0.2  # a status received this long after an event was sent after it
     events, rows, minute = 0, [], 0
     t0 = time.perf_counter()
     first_rss = rss_mib(proc.pid)
@@ -100,8 +104,8 @@ def main() -> None:
     print(f'{"min":>4s} {"RSS MiB":>8s} {"sent":>8s} {"corrected":>9s} {"imu/data":>8s}  '
           '/diagnostics')
     for k in range(0, n, args.burst):
-        before = len(diag)
         due = t0 + (k // args.burst) * period
+        ex.spin_once(timeout_sec=0)  # at least once a burst, however late
         while (left := due - time.perf_counter()) > 0:  # take what came back meanwhile
             ex.spin_once(timeout_sec=left)
         for j in range(k, min(k + args.burst, n)):
@@ -109,9 +113,9 @@ def main() -> None:
             row = imu[j % len(imu)]
             sent.append(stamp)
             pub.publish(msgs.imu(types, msgs.header(types, stamp, 'imu0'), row[:3], row[3:]))
-        while pending and len(diag) > before:
+        while pending and diag and diag[-1][0] - t0 > pending[0][1] + settle_s:
             what, at = pending.pop(0)
-            print(f'     {what} at {at:.0f} s, then /diagnostics: {diag[-1]} (sent {len(sent)})')
+            print(f'     {what} at {at:.0f} s, then /diagnostics: {diag[-1][1]}')
         elapsed = time.perf_counter() - t0
         if elapsed >= (events + 1) * args.event_every:
             events += 1
@@ -130,15 +134,16 @@ def main() -> None:
             rss = rss_mib(proc.pid)
             rows.append(rss)
             print(f'{minute:4d} {rss:8.1f} {len(sent):8d} {len(got):9d} {fused[0]:8d}  '
-                  f'{diag[-1] if diag else ""}', flush=True)
+                  f'{diag[-1][1] if diag else ""}', flush=True)
     deadline = time.perf_counter() + 3.0
     while len(got) < len(sent) and time.perf_counter() < deadline:
         ex.spin_once(timeout_sec=0.01)
+    rows.append(rss_mib(proc.pid))  # at the end
     missing = [s for s in sent if s not in got]
-    print(f'sent {len(sent)}, imu/corrected received {len(got)}, imu/data {fused[0]}; '
-          f'missing on imu/corrected: {len(missing)}')
+    print(f'sent {len(sent)}, answered on imu/corrected {len(sent) - len(missing)}, '
+          f'imu/data messages {fused[0]}; missing on imu/corrected: {len(missing)}')
     if len(rows) > 1:
-        hours = (len(rows) - 1) / 60
+        hours = (time.perf_counter() - t0 - 60) / 3600
         print(f'resident memory after minute 1: {rows[0]:.1f} MiB, at the end {rows[-1]:.1f} '
               f'MiB ({(rows[-1] - rows[0]) / hours:+.1f} MiB per hour), '
               f'range {min(rows):.1f}-{max(rows):.1f}')

@@ -73,7 +73,11 @@ def stop(ex: Executor, bench: Node, proc: subprocess.Popen) -> None:
     bench.destroy_node()
     rclpy.try_shutdown()
     proc.terminate()
-    proc.wait(timeout=10)
+    try:
+        proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
 
 
 def wait_until(due: float) -> None:

@@ -143,7 +143,8 @@ def main() -> None:
     parser.add_argument('out', type=Path, help='a crossval --seeds ... --out folder')
     parser.add_argument('--data', help='the recordings (../shared/data/broad): also imu/data')
     parser.add_argument('--dest', type=Path, help='where the fold models with their tracking '
-                        'and their eval go (default: OUT/fused)')
+                        'and their eval go, kept and reused (default: OUT/fused, OUT/tuned or '
+                        'OUT/vqf_tau<TAU>_bias_<on|off>)')
     parser.add_argument('--tune', action='store_true', help="imu/data's filters chosen on "
                         "each fold model's training trials' tails, as the shipped file's")
     parser.add_argument('--vqf', nargs=2, metavar=('TAU_S', 'BIAS'), help="imu/data's filter "
@@ -151,9 +152,15 @@ def main() -> None:
     args = parser.parse_args()
     if args.tune and args.vqf:
         parser.error('--tune and --vqf choose the filter two ways: give one')
-    if args.vqf and args.vqf[1] not in ('on', 'off'):
-        parser.error(f'--vqf: bias estimation on or off, not {args.vqf[1]!r}')
-    vqf = None if args.vqf is None else (float(args.vqf[0]), args.vqf[1] == 'on')
+    vqf = None
+    if args.vqf:
+        tau, bias = args.vqf
+        if bias not in ('on', 'off'):
+            parser.error(f'--vqf: bias estimation on or off, not {bias!r}')
+        try:
+            vqf = (float(tau), bias == 'on')
+        except ValueError:
+            parser.error(f'--vqf: tau in seconds, not {tau!r}')
     report = json.loads((args.out / 'crossval.json').read_text())
     lines = [f'Verdict ({report["fold_kind"]}): {report["verdict"]}.',
              f'Tracking chosen: {json.dumps(report["tracking"]["per_fold"])}']
