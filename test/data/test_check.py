@@ -124,7 +124,7 @@ def test_the_papers_increments_follow_the_rate_in_seconds():
 
 
 def test_label_noise_and_supervision_are_judged_on_the_poses_as_training_aligns_them(euroc):
-    rec = read_asl(euroc / 'MH_01_easy')
+    rec = crop(read_asl(euroc / 'MH_01_easy'), 0.0, 100.0)
     # a camera's 10 Hz poses: its frame 90 deg from the IMU's, its clock 90 ms late
     keep = slice(None, None, 20)
     camera = Rotation.from_rotvec([0.0, 0.0, 90.0], degrees=True)
@@ -203,7 +203,7 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
 
 
 def test_poses_stamped_on_a_clock_the_imus_overlaps_nowhere_are_found(euroc, tmp_path):
-    rec = read_asl(euroc / 'MH_01_easy')
+    rec = crop(read_asl(euroc / 'MH_01_easy'), 0.0, 110.0)
     part = dataclasses.replace(rec, imu_stamp_ns=rec.imu_stamp_ns[:12000], imu=rec.imu[:12000])
     camera = _camera_poses(part, slice(None, None, 20))  # 10 Hz, 90 ms late, 90 deg off
     start = int(camera.gt_stamp_ns[0])
@@ -349,7 +349,8 @@ def test_a_saturated_gyro_is_named_not_taken_for_a_frame_rotation(euroc, tmp_pat
     assert report['usable'] == 'no' and report['gyro_clipped']['axis'] == 'z'
     assert report['reasons'][0].startswith('gyro saturated: ')
     assert f'pinned at +-{math.degrees(limit):.4g} deg/s on its z axis' in report['reasons'][0]
-    assert check(rec)['gyro_clipped'] is None and check(rec)['accel_clipped'] is None
+    plain = check(rec)
+    assert plain['gyro_clipped'] is None and plain['accel_clipped'] is None
 
 
 def _camera_poses(rec, keep, late_ms=90):
@@ -387,7 +388,7 @@ def test_an_initialising_vios_first_seconds_do_not_move_the_alignment(euroc):
 
 
 def test_keyframes_a_few_times_a_second_are_too_sparse_for_a_drone(euroc):
-    rec = read_asl(euroc / 'MH_01_easy')
+    rec = crop(read_asl(euroc / 'MH_01_easy'), 0.0, 100.0)
     # a SLAM's keyframe trajectory: a pose every 0.2-1.0 s
     t = (rec.gt_stamp_ns - rec.gt_stamp_ns[0]) * 1e-9
     gaps = np.random.default_rng(4).uniform(0.2, 1.0, 1000)
