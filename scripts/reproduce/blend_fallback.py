@@ -15,7 +15,8 @@ tracked as the fold's tracker-only row) are combined per sample:
   network's is (its estimate from before each restored after it); ``held everywhere``:
   that T blended everywhere; ``none``);
 - ``gravity``: N or T, whichever kept the accelerometer's direction steadier in its own
-  open-loop world frame over the last WIN s (low-passed over LP s): a causal selector.
+  open-loop world frame over the last WIN s (low-passed over LP s), or the blend W unless
+  its turn exceeds T's by more than ``--margins``: a causal selector.
 Prints, per fold and setting, the mean against tracker only, the mean per-trial ratio and
 the worst, for the ensemble and each seed. Run: .venv/bin/python
 scripts/reproduce/blend_fallback.py OUT ../shared/data/broad --weights 1 0.7 0.5 0.3
@@ -105,17 +106,22 @@ def main() -> None:
                                                'held everywhere'), default='sustained')
     parser.add_argument('--gravity', type=float, nargs=2, metavar=('LP', 'WIN'),
                         help='also the gravity selector, low-pass LP s, window WIN s')
+    parser.add_argument('--margins', type=float, nargs='+', default=[0.0], metavar='DEG',
+                        help='the gravity selector keeps the blend unless its drift exceeds '
+                             "T's by more than DEG (one setting per weight and margin)")
     args = parser.parse_args()
     found = trials(args.out, args.data)
-    settings = [(f'blend {w:g}', w) for w in args.weights]
+    settings = [(f'blend {w:g}', w, None) for w in args.weights]
     if args.gravity:
-        settings.append((f'gravity {args.gravity[0]:g} s / {args.gravity[1]:g} s', None))
+        settings += [(f'gravity {args.gravity[0]:g} s / {args.gravity[1]:g} s, blend {w:g}, '
+                      f'margin {m:g} deg', w, np.radians(m))
+                     for w in args.weights for m in args.margins]
     for fold in sorted({t['fold'] for t in found.values()}):
         names = [n for n, t in found.items() if t['fold'] == fold]
         bar = np.array([score(found[n]['seq'], found[n]['seq'].on_poses(
             found[n]['classical']))['aoe_deg'] for n in names])
         print(f'fold {fold}: tracker only {bar.mean():.2f} over ' + ', '.join(names))
-        for label, weight in settings:
+        for label, weight, margin in settings:
             aoe = []
             for n in names:
                 t = found[n]
@@ -126,12 +132,11 @@ def main() -> None:
                         args.fallback, held | untrusted)
                     classical = {'held': np.where(untrusted[:, None], steady, t['classical']),
                                  'held everywhere': steady}.get(args.fallback, t['classical'])
-                    if weight is None:
-                        use = gravity_drift(net, t['accel'], t['rate'], *args.gravity) <= \
-                            gravity_drift(t['classical'], t['accel'], t['rate'], *args.gravity)
-                        w = use.astype(float)
-                    else:
-                        w = np.full(len(net), weight)
+                    w = np.full(len(net), weight)
+                    if margin is not None:
+                        blend = classical + weight * (net - classical)
+                        w *= gravity_drift(blend, t['accel'], t['rate'], *args.gravity) <= \
+                            gravity_drift(classical, t['accel'], t['rate'], *args.gravity) + margin
                     w = np.where(flag, 0.0, w)[:, None]
                     row.append(score(t['seq'], t['seq'].on_poses(
                         classical + w * (net - classical)))['aoe_deg'])
