@@ -22,15 +22,17 @@ are read so (:func:`other_convention`).
 
 from __future__ import annotations
 
+from collections import OrderedDict
+import copy
 import dataclasses
 import math
-from typing import Any
+from typing import Any, Callable, TypeVar
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.spatial.transform import Rotation, Slerp
 
-from .timebase import poses_at, spans
+from .timebase import content_key, poses_at, spans
 from ..core.errors import DatasetError
 from ..core.metrics import integrate
 from ..core.records import Recording, Sequence
@@ -57,6 +59,11 @@ NORM_GRID_S = 0.01         # grid of the rate norms' cross-correlation (a coarse
 NORM_DETREND_S = 2.0       # the norms less their moving mean over this: changes matched
 FAR_MARGIN = 0.5           # an offset beyond the search wins only below this times its residual
 OTHER_CLOCK_S = 10.0       # offsets said in s from this on (a clock since the poses' start)
+# The estimates of the last recordings read, by their content: crossval, eval and
+# check-data read a recording once per fold, seed or check, and an estimate is seconds
+ESTIMATES_KEPT = 32
+_ESTIMATES: OrderedDict[str, Any] = OrderedDict()
+T = TypeVar('T')
 
 
 class Rates:
@@ -129,12 +136,19 @@ def robust_fit(imu: np.ndarray,
     initialising, a relocalisation), unless more than OUTLIER_MAX_FRACTION are: then the
     poses do not follow the gyro, and the residual of them all says so.
     """
+    r, bias, rms, out = _robust_fit(imu, pose)
+    return Rotation.from_matrix(r), bias, rms, out
+
+
+def _robust_fit(imu: np.ndarray,
+                pose: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+    """Return :func:`robust_fit`'s fit with R as a matrix (the offset search's inner loop)."""
     r, bias, rms = _fit(imu, pose)
     residual = np.linalg.norm(imu - pose @ r.T - bias, axis=1)
     out = residual > OUTLIER_FACTOR * float(np.median(residual))
     if not out.any() or out.mean() > OUTLIER_MAX_FRACTION:
-        return Rotation.from_matrix(r), bias, rms, np.zeros(len(imu), dtype=bool)
-    return (*fit_frame(imu[~out], pose[~out]), out)
+        return r, bias, rms, np.zeros(len(imu), dtype=bool)
+    return (*_fit(imu[~out], pose[~out]), out)
 
 
 def _scale_error(imu: np.ndarray, pose: np.ndarray) -> list[float | None]:
@@ -143,6 +157,18 @@ def _scale_error(imu: np.ndarray, pose: np.ndarray) -> list[float | None]:
     observed = power > 1e-12 * len(pose)  # an axis without rotation has no scale
     scale = (imu * pose).sum(0) / np.where(observed, power, 1.0)
     return [float(100 * (v - 1)) if ok else None for v, ok in zip(scale, observed)]
+
+
+def _remembered(kind: str, key: str, compute: Callable[[], T]) -> T:
+    """Return compute()'s value, computed once per key among the last ESTIMATES_KEPT (a copy)."""
+    key = f'{kind} {key}'
+    if key in _ESTIMATES:
+        _ESTIMATES.move_to_end(key)
+    else:
+        _ESTIMATES[key] = compute()
+        while len(_ESTIMATES) > ESTIMATES_KEPT:
+            _ESTIMATES.popitem(last=False)
+    return copy.deepcopy(_ESTIMATES[key])
 
 
 def interpolation_scale_error(rec: Recording) -> list[float | None]:
@@ -157,6 +183,11 @@ def interpolation_scale_error(rec: Recording) -> list[float | None]:
     them learns the difference as the gyro's scale. An axis that turns less than
     MIN_EXCITATION_DEG_S over those windows (vibration) has no scale to judge: None.
     """
+    return _remembered('scale', content_key(rec.imu_stamp_ns, rec.imu[:, :3], rec.gt_stamp_ns),
+                       lambda: _interpolation_scale_error(rec))
+
+
+def _interpolation_scale_error(rec: Recording) -> list[float | None]:
     t = rec.imu_stamp_ns
     stamps = rec.gt_stamp_ns[(rec.gt_stamp_ns >= t[0]) & (rec.gt_stamp_ns <= t[-1])]
     if len(stamps) < 3:
@@ -182,7 +213,7 @@ def interpolation_scale_error(rec: Recording) -> list[float | None]:
 def _residual(rates: Rates, offset_s: float, windows: slice = slice(None)) -> float:
     """Return the frame-fitted rate residual (rad/s) of some windows at a clock offset."""
     imu, pose = rates.matched(offset_s, windows)
-    return robust_fit(imu, pose)[2] if len(imu) > 100 else math.inf
+    return _robust_fit(imu, pose)[2] if len(imu) > 100 else math.inf
 
 
 def _best_offset(rates: Rates, max_offset_s: float, part: slice = slice(None),
@@ -313,6 +344,12 @@ def estimate_pose_alignment(rec: Recording,
     omega_imu = R omega_pose_body. Also the gyro bias, per-axis scale and excitation, and
     the fraction of rate windows the fit left out (``rate_windows_left_out``).
     """
+    key = content_key(rec.imu_stamp_ns, rec.imu[:, :3], rec.gt_stamp_ns, rec.gt_quat,
+                      rec.gt_pos, salt=repr(max_offset_s))
+    return _remembered('alignment', key, lambda: _estimate_pose_alignment(rec, max_offset_s))
+
+
+def _estimate_pose_alignment(rec: Recording, max_offset_s: float) -> dict[str, Any]:
     period = float(np.median(np.diff(rec.gt_stamp_ns))) * 1e-9
     rates = Rates(rec, max(RATE_WINDOW_S, 2 * period))
     offset, center = _best_offset(rates, max_offset_s), 0.0

@@ -139,10 +139,17 @@ def _pieces(lo: int, hi: int) -> list[tuple[int, int]]:
     return [(a, b + 1) for a, b in zip(ends[:-1], ends[1:])]
 
 
+def content_key(*arrays: np.ndarray, salt: str = '') -> str:
+    """Return a digest of some arrays' values (as float64) and a salt: what a cache is keyed by."""
+    digest = hashlib.blake2b(salt.encode())
+    for a in arrays:
+        digest.update(np.ascontiguousarray(a, np.float64).tobytes())
+    return digest.hexdigest()
+
+
 def _splines(t: np.ndarray, quat: np.ndarray) -> dict[tuple[int, int], RotationSpline]:
     """Return the splines fitted so far to these poses' stretches (by their knots' indices)."""
-    key = hashlib.blake2b(np.ascontiguousarray(t, np.float64).tobytes()
-                          + np.ascontiguousarray(quat, np.float64).tobytes()).hexdigest()
+    key = content_key(t, quat)
     fitted = _SPLINES.pop(key, {})
     _SPLINES[key] = fitted  # the most recent last
     while len(_SPLINES) > SPLINES_KEPT:
