@@ -6,10 +6,28 @@ Fixtures of every test: the real data (skipped cleanly when absent) and a model 
 Torch-free: the core, data and runtime tests run without torch.
 """
 
+import os
 from pathlib import Path
 
 from helpers import DATA, write_untrained_model
 import pytest
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """
+    Give each pytest-xdist worker a core of its own, before torch is imported.
+
+    Its trainings then take one thread and one process (``threads: auto``, ``workers:
+    auto`` read the affinity), instead of every worker's threads and data-parallel
+    processes contending for every core. Tests that ask for two processes still get them.
+    """
+    worker = os.environ.get('PYTEST_XDIST_WORKER')
+    count = int(os.environ.get('PYTEST_XDIST_WORKER_COUNT', '1'))
+    cores = sorted(os.sched_getaffinity(0)) if hasattr(os, 'sched_getaffinity') else []
+    if worker and count > 1 and len(cores) >= count:
+        share = len(cores) // count
+        index = int(worker[2:])
+        os.sched_setaffinity(0, cores[index * share:(index + 1) * share])
 
 
 @pytest.fixture()

@@ -81,6 +81,22 @@ def crop_asl(src: Path, dst: Path, seconds: float) -> Path:
     return dst
 
 
+def crop_bag(src: Path, dst: Path, seconds: float) -> Path:
+    """Copy a rosbag2's first ``seconds`` of messages (received times), every topic and QoS."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    with AnyReader([src]) as reader, Writer(dst, version=9,
+                                            storage_plugin=StoragePlugin.MCAP) as writer:
+        copy = {c.id: writer.add_connection(
+            c.topic, c.msgtype, typestore=reader.typestore,
+            offered_qos_profiles=getattr(c.ext, 'offered_qos_profiles', ()))
+            for c in reader.connections}
+        end = reader.start_time + int(seconds * 1e9)
+        for conn, received, raw in reader.messages(stop=end):
+            writer.write(copy[conn.id], received, raw)
+    return dst
+
+
 def write_late_trajectory(folder: Path, asl: Path, after_s: float) -> Path:
     """
     Write an ASL folder's poses as a VIO writes them (TUM), from ``after_s`` on.
