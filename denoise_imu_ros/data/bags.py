@@ -11,6 +11,7 @@ Message header stamps are used, not the bag's receive times.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -47,6 +48,11 @@ POSE_TOPIC = '/groundtruth/pose'
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 BAG_TYPES = msgs.bag_types(TYPESTORE)
+# The messages of the last bags read, by their files' names, sizes and change times:
+# crossval, eval and check-data read a bag once per fold, seed or check, and rosbags'
+# deserialisation costs tens of microseconds a message
+BAGS_KEPT = 8
+_READ: OrderedDict[tuple, tuple[str, str, list, list, list, list]] = OrderedDict()
 
 
 def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
@@ -168,20 +174,19 @@ def messages_as_written(reader: AnyReader) -> Iterator[tuple[Any, int, bytes]]:
                 yield local[conn.id], stamp, raw
 
 
-def read_bag(path: str | Path, imu_topic: str | None = None,
-             pose_topic: str | None = None, with_pose: bool = True) -> Recording:
-    """
-    Read IMU and ground-truth pose from a ROS 1 or ROS 2 (sqlite3/mcap) bag.
+def _files(path: Path) -> tuple:
+    """Return the files of a bag (a folder or one file) with their sizes and change times."""
+    try:
+        files = sorted(path.rglob('*')) if path.is_dir() else [path]
+        return tuple((str(f.resolve()), f.stat().st_size, f.stat().st_mtime_ns)
+                     for f in files if f.is_file())
+    except OSError:  # gone while listed: read afresh (and fail there)
+        return (object(),)
 
-    With ``with_pose=False`` only the IMU is read (the ground-truth arrays are empty).
-    Samples are taken in header-stamp order: a recorder's transport latency reorders
-    the receive order by a few milliseconds, and the stamps, not the arrival, are the
-    measurement times (process-bag runs its pipeline in the same order). Poses that are
-    not poses (non-finite, a quaternion off unit by more than BAG_UNIT_TOLERANCE) or that
-    repeat a stamp, as a VIO's odometry can hold, are dropped and counted as in a
-    trajectory file (:mod:`.trajectory`); taken in stamp order, none steps back.
-    """
-    path = Path(path)
+
+def _messages(path: Path, imu_topic: str | None, pose_topic: str | None,
+              with_pose: bool) -> tuple[str, str, list, list, list, list]:
+    """Return a bag's IMU and pose topics read, and their stamps and values in bag order."""
     try:
         with open_bag(path) as reader:
             imu_conns = pick_connections(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
@@ -200,6 +205,33 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
                     gt.append((q.x, q.y, q.z, q.w, p.x, p.y, p.z))
     except CORRUPT as err:
         raise DatasetError(f'{path}: cannot read bag: {" ".join(str(err).split())}') from err
+    return (imu_conns[0].topic, pose_conns[0].topic if pose_conns else '', imu_t, imu, gt_t,
+            gt)
+
+
+def read_bag(path: str | Path, imu_topic: str | None = None,
+             pose_topic: str | None = None, with_pose: bool = True) -> Recording:
+    """
+    Read IMU and ground-truth pose from a ROS 1 or ROS 2 (sqlite3/mcap) bag.
+
+    With ``with_pose=False`` only the IMU is read (the ground-truth arrays are empty).
+    Samples are taken in header-stamp order: a recorder's transport latency reorders
+    the receive order by a few milliseconds, and the stamps, not the arrival, are the
+    measurement times (process-bag runs its pipeline in the same order). Poses that are
+    not poses (non-finite, a quaternion off unit by more than BAG_UNIT_TOLERANCE) or that
+    repeat a stamp, as a VIO's odometry can hold, are dropped and counted as in a
+    trajectory file (:mod:`.trajectory`); taken in stamp order, none steps back.
+    """
+    path = Path(path)
+    key = (_files(path), imu_topic, pose_topic, with_pose)
+    if key in _READ:
+        _READ.move_to_end(key)
+        imu_topic_read, pose_topic_read, imu_t, imu, gt_t, gt = _READ[key]
+    else:
+        imu_topic_read, pose_topic_read, imu_t, imu, gt_t, gt = _READ[key] = _messages(
+            path, imu_topic, pose_topic, with_pose)
+        while len(_READ) > BAGS_KEPT:
+            _READ.popitem(last=False)
     gt_stamps = np.array(gt_t, dtype=np.int64)
     gt_order = np.argsort(gt_stamps, kind='stable')
     gt_stamps, gt_arr = gt_stamps[gt_order], np.array(gt, dtype=np.float64).reshape(-1, 7)[
@@ -210,7 +242,7 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
     gt_stamps, gt_arr = drop_rows(out_of_order(gt_stamps), dropped, gt_stamps, gt_arr)
     if dropped:
         unset = dropped.get('duplicate stamps', 0) > len(gt_stamps)  # most share one stamp
-        warnings.warn(f'{path}: {pose_conns[0].topic}: {len(gt_stamps)} poses kept; '
+        warnings.warn(f'{path}: {pose_topic_read}: {len(gt_stamps)} poses kept; '
                       f'{dropped_text(dropped)}' + (' (header stamps not set?)' if unset else ''),
                       DataWarning, stacklevel=2)
     if with_pose and (not imu or len(gt_stamps) < 2):
@@ -218,7 +250,7 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
                            f'{"usable " if dropped else ""}poses: need IMU messages and two '
                            'poses at least')
     if not imu:
-        raise DatasetError(f'{path}: no IMU messages on {imu_conns[0].topic}')
+        raise DatasetError(f'{path}: no IMU messages on {imu_topic_read}')
     imu_order = np.argsort(np.array(imu_t, dtype=np.int64), kind='stable')
     name = path.stem if path.is_file() else path.name
     rec = Recording(name=name, source=str(path),

@@ -281,3 +281,23 @@ def test_a_pose_with_covariance_topic_is_taken_unnamed_only_where_it_is_the_only
     with pytest.raises(DatasetError, match=r"/tf is not read: record the pose source's own "
                                            r'topic, or give its poses as trajectory files'):
         read_bag(tmp_path / 'tf')
+
+
+def test_a_bag_read_again_is_read_as_it_is_now(tmp_path):
+    """Reads are remembered by the bag's files: a bag written anew is read anew."""
+    from denoise_imu_ros.data.asl import read_asl
+    from denoise_imu_ros.data.bags import read_bag, write_bag
+    from helpers import write_asl
+    first = read_asl(write_asl(tmp_path / 'a', n_imu=600, yaw_rate=0.2))
+    write_bag(first, tmp_path / 'bag')
+    read = read_bag(tmp_path / 'bag')
+    read.imu[:] = 0.0  # what a caller does to its copy stays there
+    again = read_bag(tmp_path / 'bag')
+    np.testing.assert_array_equal(again.imu, first.imu)
+    np.testing.assert_array_equal(again.gt_quat, first.gt_quat)
+    second = read_asl(write_asl(tmp_path / 'b', n_imu=700, yaw_rate=0.5))
+    for f in (tmp_path / 'bag').iterdir():
+        f.unlink()
+    (tmp_path / 'bag').rmdir()
+    write_bag(second, tmp_path / 'bag')
+    np.testing.assert_array_equal(read_bag(tmp_path / 'bag').imu, second.imu)

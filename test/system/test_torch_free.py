@@ -48,24 +48,49 @@ def _cli(env: dict, *args: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=300)
 
 
-@pytest.mark.parametrize('command', ['convert', 'process-bag', 'correct', 'check-data',
-                                     'init-recipe', 'rest-model'])
-def test_the_offline_commands_run_without_torch(no_torch_env, tmp_path, command):
+# runs commands one after another in one interpreter: {name: [args]} -> {name: [code, stdout]}
+RUNNER = '''
+import contextlib, io, json, sys, traceback
+from denoise_imu_ros.cli import main
+said = {}
+for name, args in json.loads(sys.argv[1]).items():
+    out = io.StringIO()
+    try:
+        with contextlib.redirect_stdout(out):
+            code = main(args)
+    except BaseException:
+        code, out = -1, io.StringIO(traceback.format_exc())
+    said[name] = [code, out.getvalue()]
+print(json.dumps(said))
+'''
+
+
+def test_the_offline_commands_run_without_torch(no_torch_env, tmp_path):
+    """convert, process-bag, correct, check-data, init-recipe and rest-model, one interpreter."""
+    import json
+    from helpers import crop_bag
     rest = write_untrained_model(tmp_path / 'rest.safetensors', {
         'sample_rate_hz': 200.0, 'rest_bias': RestBiasSettings().to_dict()})
-    args, expect = {
+    head = str(crop_bag(SAMPLE, tmp_path / 'head', 3.5))  # 700 IMU messages
+    commands = {
         'rest-model': (['--like', str(rest), '--out', str(tmp_path / 'r')], 'wrote'),
         'convert': (['--input', str(write_asl(tmp_path / 'asl', n_imu=2000)),
                      '--out', str(tmp_path / 'bag')], 'wrote'),
-        'process-bag': (['--input', str(SAMPLE), '--out', str(tmp_path / 'out'), '--model',
-                         'euroc'], 'wrote'),
-        'correct': (['--model', 'euroc', '--input', str(SAMPLE), '--out',
-                     str(tmp_path / 'c.csv'), '--engine', 'streaming'], 'wrote 18000'),
+        'process-bag': (['--input', head, '--out', str(tmp_path / 'out'), '--model', 'euroc'],
+                        'wrote'),
+        'correct': (['--model', 'euroc', '--input', head, '--out', str(tmp_path / 'c.csv'),
+                     '--engine', 'streaming'], 'wrote 700'),
         'check-data': (['--input', str(SAMPLE)], 'verdict: usable for training'),
         'init-recipe': (['--data', str(SAMPLE.parent), '--sequences', SAMPLE.name, '--out',
-                         str(tmp_path / 'recipe.yaml')], 'wrote')}[command]
-    run = _cli(no_torch_env, command, *args)
-    assert run.returncode == 0 and expect in run.stdout, (command, run.stderr)
+                         str(tmp_path / 'recipe.yaml')], 'wrote')}
+    run = subprocess.run([sys.executable, '-c', RUNNER, json.dumps(
+        {name: [name, *args] for name, (args, _) in commands.items()})], env=no_torch_env,
+        capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    said = json.loads(run.stdout.splitlines()[-1])
+    for name, (_, expect) in commands.items():
+        code, out = said[name]
+        assert code == 0 and expect in out, (name, out, run.stderr)
 
 
 def test_play_runs_without_torch(no_torch_env, tmp_path):
