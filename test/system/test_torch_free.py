@@ -49,7 +49,7 @@ def _cli(env: dict, *args: str) -> subprocess.CompletedProcess:
 
 
 # runs commands one after another in one interpreter: {name: [args]} -> {name: [code, stdout]}
-RUNNER = '''
+RUNNER = """
 import contextlib, io, json, sys, traceback
 from denoise_imu_ros.cli import main
 said = {}
@@ -62,7 +62,7 @@ for name, args in json.loads(sys.argv[1]).items():
         code, out = -1, io.StringIO(traceback.format_exc())
     said[name] = [code, out.getvalue()]
 print(json.dumps(said))
-'''
+"""
 
 
 def test_the_offline_commands_run_without_torch(no_torch_env, tmp_path):
