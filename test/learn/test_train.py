@@ -381,11 +381,11 @@ def test_each_recording_s_constant_bias_is_learnt_apart_from_the_model(tmp_path,
     # each recording's own offset takes its bias (the scale makes up the shared part)
     difference = np.subtract(learnt['rec0'], learnt['rec1'])
     np.testing.assert_allclose(difference, [0.0, 0.0, biases[1] - biases[0]], atol=2e-3)
-    # without it, the model's one bias fits neither recording
-    plain = train(load_config(CONFIG, **common), progress=False)
-    assert plain.meta['recording_bias_rad_s'] is None
-    assert plain.meta['history'][-1]['train_loss'] > 10 * result.meta['history'][-1][
-        'train_loss']
+    if workers == 1:  # without it, the model's one bias fits neither recording
+        plain = train(load_config(CONFIG, **common), progress=False)
+        assert plain.meta['recording_bias_rad_s'] is None
+        assert plain.meta['history'][-1]['train_loss'] > 10 * result.meta['history'][-1][
+            'train_loss']
 
 
 def test_a_network_learning_recording_biases_keeps_its_output_layer_s_bias_at_zero(euroc):
