@@ -11,13 +11,12 @@ Message header stamps are used, not the bag's receive times.
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 import struct
 import tempfile
-from typing import Any
+from typing import Any, NamedTuple
 import warnings
 
 import numpy as np
@@ -29,6 +28,7 @@ from .trajectory import drop_rows, dropped_text, not_poses, out_of_order
 from ..core import msgs
 from ..core.atomic import atomic_output
 from ..core.errors import DatasetError, DataWarning
+from ..core.memo import files_key, Kept
 from ..core.msgs import stamp_ns
 from ..core.records import check_recording, Recording
 
@@ -48,11 +48,23 @@ POSE_TOPIC = '/groundtruth/pose'
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 BAG_TYPES = msgs.bag_types(TYPESTORE)
-# The messages of the last bags read, by their files' names, sizes and change times:
-# crossval, eval and check-data read a bag once per fold, seed or check, and rosbags'
-# deserialisation costs tens of microseconds a message
-BAGS_KEPT = 8
-_READ: OrderedDict[tuple, tuple[str, str, list, list, list, list]] = OrderedDict()
+# IMU samples and poses of the last bags read, kept (core.memo; 56 bytes each): reading
+# a bag's messages costs far more than keeping their arrays
+MESSAGES_KEPT = 4_000_000
+
+
+class _Messages(NamedTuple):
+    """A bag's IMU and pose topics read, and their stamps and values in bag order."""
+
+    imu_topic: str
+    pose_topic: str
+    imu_stamp_ns: np.ndarray  # (N,) int64
+    imu: np.ndarray           # (N, 6) gyro, accelerometer
+    gt_stamp_ns: np.ndarray   # (M,) int64
+    gt: np.ndarray            # (M, 7) xyzw, position
+
+
+_READ: Kept[_Messages] = Kept(MESSAGES_KEPT, lambda m: len(m.imu) + len(m.gt))
 
 
 def _pose(msg: Any, msgtype: str) -> tuple[Any, Any]:
@@ -174,19 +186,9 @@ def messages_as_written(reader: AnyReader) -> Iterator[tuple[Any, int, bytes]]:
                 yield local[conn.id], stamp, raw
 
 
-def _files(path: Path) -> tuple:
-    """Return the files of a bag (a folder or one file) with their sizes and change times."""
-    try:
-        files = sorted(path.rglob('*')) if path.is_dir() else [path]
-        return tuple((str(f.resolve()), f.stat().st_size, f.stat().st_mtime_ns)
-                     for f in files if f.is_file())
-    except OSError:  # gone while listed: read afresh (and fail there)
-        return (object(),)
-
-
 def _messages(path: Path, imu_topic: str | None, pose_topic: str | None,
-              with_pose: bool) -> tuple[str, str, list, list, list, list]:
-    """Return a bag's IMU and pose topics read, and their stamps and values in bag order."""
+              with_pose: bool) -> _Messages:
+    """Read a bag's IMU and pose messages."""
     try:
         with open_bag(path) as reader:
             imu_conns = pick_connections(reader, imu_topic, (IMU_TYPE,), 'IMU', path)
@@ -205,8 +207,11 @@ def _messages(path: Path, imu_topic: str | None, pose_topic: str | None,
                     gt.append((q.x, q.y, q.z, q.w, p.x, p.y, p.z))
     except CORRUPT as err:
         raise DatasetError(f'{path}: cannot read bag: {" ".join(str(err).split())}') from err
-    return (imu_conns[0].topic, pose_conns[0].topic if pose_conns else '', imu_t, imu, gt_t,
-            gt)
+    return _Messages(imu_conns[0].topic, pose_conns[0].topic if pose_conns else '',
+                     np.array(imu_t, dtype=np.int64),
+                     np.array(imu, dtype=np.float64).reshape(-1, 6),
+                     np.array(gt_t, dtype=np.int64),
+                     np.array(gt, dtype=np.float64).reshape(-1, 7))
 
 
 def read_bag(path: str | Path, imu_topic: str | None = None,
@@ -223,40 +228,31 @@ def read_bag(path: str | Path, imu_topic: str | None = None,
     trajectory file (:mod:`.trajectory`); taken in stamp order, none steps back.
     """
     path = Path(path)
-    key = (_files(path), imu_topic, pose_topic, with_pose)
-    if key in _READ:
-        _READ.move_to_end(key)
-        imu_topic_read, pose_topic_read, imu_t, imu, gt_t, gt = _READ[key]
-    else:
-        imu_topic_read, pose_topic_read, imu_t, imu, gt_t, gt = _READ[key] = _messages(
-            path, imu_topic, pose_topic, with_pose)
-        while len(_READ) > BAGS_KEPT:
-            _READ.popitem(last=False)
-    gt_stamps = np.array(gt_t, dtype=np.int64)
-    gt_order = np.argsort(gt_stamps, kind='stable')
-    gt_stamps, gt_arr = gt_stamps[gt_order], np.array(gt, dtype=np.float64).reshape(-1, 7)[
-        gt_order]
+    files = files_key(path)
+    read = _READ.get(None if files is None else (files, imu_topic, pose_topic, with_pose),
+                     lambda: _messages(path, imu_topic, pose_topic, with_pose))
+    gt_order = np.argsort(read.gt_stamp_ns, kind='stable')  # copies: the kept arrays stay
+    gt_stamps, gt_arr = read.gt_stamp_ns[gt_order], read.gt[gt_order]
     dropped: dict[str, int] = {}
     gt_stamps, gt_arr = drop_rows(not_poses(gt_arr, gt_arr[:, :4], gt_arr[:, 4:],
                                             BAG_UNIT_TOLERANCE), dropped, gt_stamps, gt_arr)
     gt_stamps, gt_arr = drop_rows(out_of_order(gt_stamps), dropped, gt_stamps, gt_arr)
     if dropped:
         unset = dropped.get('duplicate stamps', 0) > len(gt_stamps)  # most share one stamp
-        warnings.warn(f'{path}: {pose_topic_read}: {len(gt_stamps)} poses kept; '
+        warnings.warn(f'{path}: {read.pose_topic}: {len(gt_stamps)} poses kept; '
                       f'{dropped_text(dropped)}' + (' (header stamps not set?)' if unset else ''),
                       DataWarning, stacklevel=2)
-    if with_pose and (not imu or len(gt_stamps) < 2):
-        raise DatasetError(f'{path}: {len(imu)} IMU messages and {len(gt_stamps)} '
+    if with_pose and (not len(read.imu) or len(gt_stamps) < 2):
+        raise DatasetError(f'{path}: {len(read.imu)} IMU messages and {len(gt_stamps)} '
                            f'{"usable " if dropped else ""}poses: need IMU messages and two '
                            'poses at least')
-    if not imu:
-        raise DatasetError(f'{path}: no IMU messages on {imu_topic_read}')
-    imu_order = np.argsort(np.array(imu_t, dtype=np.int64), kind='stable')
+    if not len(read.imu):
+        raise DatasetError(f'{path}: no IMU messages on {read.imu_topic}')
+    imu_order = np.argsort(read.imu_stamp_ns, kind='stable')
     name = path.stem if path.is_file() else path.name
-    rec = Recording(name=name, source=str(path),
-                    imu_stamp_ns=np.array(imu_t, dtype=np.int64)[imu_order],
-                    imu=np.array(imu, dtype=np.float64)[imu_order],
-                    gt_stamp_ns=gt_stamps, gt_quat=gt_arr[:, :4], gt_pos=gt_arr[:, 4:])
+    rec = Recording(name=name, source=str(path), imu_stamp_ns=read.imu_stamp_ns[imu_order],
+                    imu=read.imu[imu_order], gt_stamp_ns=gt_stamps, gt_quat=gt_arr[:, :4],
+                    gt_pos=gt_arr[:, 4:])
     check_recording(rec)
     return rec
 

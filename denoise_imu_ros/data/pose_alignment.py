@@ -22,18 +22,18 @@ are read so (:func:`other_convention`).
 
 from __future__ import annotations
 
-from collections import OrderedDict
 import copy
 import dataclasses
 import math
-from typing import Any, Callable, TypeVar
+from typing import Any
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.spatial.transform import Rotation, Slerp
 
-from .timebase import content_key, poses_at, spans
+from .timebase import poses_at, spans
 from ..core.errors import DatasetError
+from ..core.memo import content_key, Kept
 from ..core.metrics import integrate
 from ..core.records import Recording, Sequence
 from ..core.rotation import align, conjugate_arrays, multiply_arrays
@@ -59,11 +59,11 @@ NORM_GRID_S = 0.01         # grid of the rate norms' cross-correlation (a coarse
 NORM_DETREND_S = 2.0       # the norms less their moving mean over this: changes matched
 FAR_MARGIN = 0.5           # an offset beyond the search wins only below this times its residual
 OTHER_CLOCK_S = 10.0       # offsets said in s from this on (a clock since the poses' start)
-# The estimates of the last recordings read, by their content: crossval, eval and
-# check-data read a recording once per fold, seed or check, and an estimate is seconds
+# The estimates of the last recordings read, by their content (core.memo): an alignment
+# and a scale error each, of the poses as written and as check-data reads them otherwise
 ESTIMATES_KEPT = 32
-_ESTIMATES: OrderedDict[str, Any] = OrderedDict()
-T = TypeVar('T')
+_ALIGNMENTS: Kept[dict[str, Any]] = Kept(ESTIMATES_KEPT)
+_SCALE_ERRORS: Kept[list[float | None]] = Kept(ESTIMATES_KEPT)
 
 
 class Rates:
@@ -159,18 +159,6 @@ def _scale_error(imu: np.ndarray, pose: np.ndarray) -> list[float | None]:
     return [float(100 * (v - 1)) if ok else None for v, ok in zip(scale, observed)]
 
 
-def _remembered(kind: str, key: str, compute: Callable[[], T]) -> T:
-    """Return compute()'s value, computed once per key among the last ESTIMATES_KEPT (a copy)."""
-    key = f'{kind} {key}'
-    if key in _ESTIMATES:
-        _ESTIMATES.move_to_end(key)
-    else:
-        _ESTIMATES[key] = compute()
-        while len(_ESTIMATES) > ESTIMATES_KEPT:
-            _ESTIMATES.popitem(last=False)
-    return copy.deepcopy(_ESTIMATES[key])
-
-
 def interpolation_scale_error(rec: Recording) -> list[float | None]:
     """
     Return the scale error (%) per axis that interpolating between the pose stamps makes.
@@ -183,11 +171,12 @@ def interpolation_scale_error(rec: Recording) -> list[float | None]:
     them learns the difference as the gyro's scale. An axis that turns less than
     MIN_EXCITATION_DEG_S over those windows (vibration) has no scale to judge: None.
     """
-    return _remembered('scale', content_key(rec.imu_stamp_ns, rec.imu[:, :3], rec.gt_stamp_ns),
-                       lambda: _interpolation_scale_error(rec))
+    key = content_key(rec.imu_stamp_ns, rec.imu[:, :3], rec.gt_stamp_ns)
+    return list(_SCALE_ERRORS.get(key, lambda: _interpolation_scale_error(rec)))
 
 
 def _interpolation_scale_error(rec: Recording) -> list[float | None]:
+    """Return :func:`interpolation_scale_error`'s figures, computed."""
     t = rec.imu_stamp_ns
     stamps = rec.gt_stamp_ns[(rec.gt_stamp_ns >= t[0]) & (rec.gt_stamp_ns <= t[-1])]
     if len(stamps) < 3:
@@ -346,10 +335,12 @@ def estimate_pose_alignment(rec: Recording,
     """
     key = content_key(rec.imu_stamp_ns, rec.imu[:, :3], rec.gt_stamp_ns, rec.gt_quat,
                       rec.gt_pos, salt=repr(max_offset_s))
-    return _remembered('alignment', key, lambda: _estimate_pose_alignment(rec, max_offset_s))
+    found = _ALIGNMENTS.get(key, lambda: _estimate_pose_alignment(rec, max_offset_s))
+    return copy.deepcopy(found)  # a caller's changes stay its own
 
 
 def _estimate_pose_alignment(rec: Recording, max_offset_s: float) -> dict[str, Any]:
+    """Return :func:`estimate_pose_alignment`'s estimate, computed."""
     period = float(np.median(np.diff(rec.gt_stamp_ns))) * 1e-9
     rates = Rates(rec, max(RATE_WINDOW_S, 2 * period))
     offset, center = _best_offset(rates, max_offset_s), 0.0

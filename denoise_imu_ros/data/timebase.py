@@ -11,8 +11,6 @@ stamp and marked invalid inside its holes.
 
 from __future__ import annotations
 
-from collections import OrderedDict
-import hashlib
 import math
 
 import numpy as np
@@ -20,6 +18,7 @@ from scipy.spatial.transform import Rotation, RotationSpline, Slerp
 
 from ..core.errors import DatasetError
 from ..core.limits import imu_holes, stream_rate_hz
+from ..core.memo import content_key, Kept
 from ..core.records import Recording, Sequence
 
 # Ground truth at an IMU instant is trusted only if the ground-truth samples around it
@@ -32,8 +31,8 @@ MS_HINT_S = 10.0  # poses this far apart (median) are more likely stamped in ms 
 # The splines of the last few recordings' poses, by their content, one per hole-free
 # stretch: checking a recording interpolates the same poses at several sets of stamps, and
 # a spline over 10^5-10^6 poses costs far more to fit than its knots cost to hash
-_SPLINES: OrderedDict[str, dict[tuple[int, int], RotationSpline]] = OrderedDict()
 SPLINES_KEPT = 3  # recordings: check() interleaves its poses with two of its own
+_SPLINES: Kept[dict[tuple[int, int], RotationSpline]] = Kept(SPLINES_KEPT)
 # A long stretch is fitted in pieces of this many knots, each fitted SPLINE_OVERLAP knots
 # beyond its ends: a cubic spline's knots sway it less by 2 - sqrt(3) per knot away, so
 # the pieces equal one spline over the whole stretch to rounding, and the fit's memory
@@ -139,22 +138,9 @@ def _pieces(lo: int, hi: int) -> list[tuple[int, int]]:
     return [(a, b + 1) for a, b in zip(ends[:-1], ends[1:])]
 
 
-def content_key(*arrays: np.ndarray, salt: str = '') -> str:
-    """Return a digest of some arrays' values (as float64) and a salt: what a cache is keyed by."""
-    digest = hashlib.blake2b(salt.encode())
-    for a in arrays:
-        digest.update(np.ascontiguousarray(a, np.float64).tobytes())
-    return digest.hexdigest()
-
-
 def _splines(t: np.ndarray, quat: np.ndarray) -> dict[tuple[int, int], RotationSpline]:
     """Return the splines fitted so far to these poses' stretches (by their knots' indices)."""
-    key = content_key(t, quat)
-    fitted = _SPLINES.pop(key, {})
-    _SPLINES[key] = fitted  # the most recent last
-    while len(_SPLINES) > SPLINES_KEPT:
-        _SPLINES.popitem(last=False)
-    return fitted
+    return _SPLINES.get(content_key(t, quat), dict)
 
 
 def onto_imu_stamps(rec: Recording, max_gt_gap_s: float | None = None,

@@ -284,7 +284,7 @@ def test_a_pose_with_covariance_topic_is_taken_unnamed_only_where_it_is_the_only
 
 
 def test_a_bag_read_again_is_read_as_it_is_now(tmp_path):
-    """Reads are remembered by the bag's files: a bag written anew is read anew."""
+    """Reads are kept by the bag's files: a bag written anew is read anew, whatever its size."""
     from denoise_imu_ros.data.asl import read_asl
     from denoise_imu_ros.data.bags import read_bag, write_bag
     from helpers import write_asl
@@ -295,9 +295,27 @@ def test_a_bag_read_again_is_read_as_it_is_now(tmp_path):
     again = read_bag(tmp_path / 'bag')
     np.testing.assert_array_equal(again.imu, first.imu)
     np.testing.assert_array_equal(again.gt_quat, first.gt_quat)
-    second = read_asl(write_asl(tmp_path / 'b', n_imu=700, yaw_rate=0.5))
+    second = read_asl(write_asl(tmp_path / 'b', n_imu=600, yaw_rate=0.5))  # the same size
     for f in (tmp_path / 'bag').iterdir():
         f.unlink()
     (tmp_path / 'bag').rmdir()
     write_bag(second, tmp_path / 'bag')
     np.testing.assert_array_equal(read_bag(tmp_path / 'bag').imu, second.imu)
+
+
+def test_a_bag_read_again_says_again_what_it_drops_and_what_it_lacks(tmp_path):
+    from denoise_imu_ros.data.bags import IMU_TYPE, read_bag, TYPESTORE
+    from helpers import write_asl
+    rec_dir = write_asl(tmp_path / 'asl', n_imu=400, yaw_rate=0.3)
+    assert main(['convert', '--input', str(rec_dir), '--out', str(tmp_path / 'bag')]) == 0
+    stamps, rows = read_bag_poses(tmp_path / 'bag')
+    _write_poses(rec_dir, tmp_path / 'twice', np.insert(stamps, 31, stamps[30]),
+                 np.insert(rows, 31, rows[30], axis=0))
+    for _ in range(2):
+        with pytest.warns(DataWarning, match='dropped 1 duplicate stamps'):
+            read_bag(tmp_path / 'twice')
+    with Writer2(tmp_path / 'empty', version=9) as w:
+        w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
+    for _ in range(2):
+        with pytest.raises(DatasetError, match='no IMU messages on /imu0$'):
+            read_bag(tmp_path / 'empty', with_pose=False)

@@ -73,14 +73,19 @@ def test_the_rate_norms_lag_is_scipys_full_correlation(n):
     assert best_lag(a, b) == int(np.argmax(correlate(a, b, mode='full'))) - n + 1
 
 
-def test_an_estimate_remembered_is_the_one_computed_and_a_callers_change_stays_its_own(euroc):
+def test_an_estimate_kept_is_the_one_computed_and_a_callers_change_stays_its_own(euroc):
     from denoise_imu_ros.data.timebase import crop
     rec = crop(read_asl(euroc / 'MH_01_easy'), 0.0, 40.0)
     found = estimate_pose_alignment(rec)
     found['time_offset_quarters_s'].append(1.0)
-    assert estimate_pose_alignment(rec) != found  # the caller's copy, not the memory's
+    assert estimate_pose_alignment(rec) != found  # the caller's copy, not the one kept
     found['time_offset_quarters_s'].pop()
     assert estimate_pose_alignment(rec) == found
+    # other poses: estimated afresh
     moved = dataclasses.replace(rec, gt_stamp_ns=rec.gt_stamp_ns + 5_000_000)
-    assert estimate_pose_alignment(moved)['time_offset_s'] == pytest.approx(
-        found['time_offset_s'] - 5e-3, abs=2e-4)  # other poses: estimated afresh
+    wide = estimate_pose_alignment(moved)
+    assert wide['time_offset_s'] == pytest.approx(found['time_offset_s'] - 5e-3, abs=2e-4)
+    turn = Rotation.from_rotvec([0.0, 0.0, 0.1])
+    turned = dataclasses.replace(rec, gt_quat=(Rotation.from_quat(rec.gt_quat) * turn).as_quat())
+    assert estimate_pose_alignment(turned)['imu_from_pose_rotation_deg'] == pytest.approx(
+        math.degrees(0.1), abs=0.1)
