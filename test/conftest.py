@@ -3,7 +3,8 @@
 """
 Fixtures of every test: the real data (skipped cleanly when absent) and a model file.
 
-Torch-free: the core, data and runtime tests run without torch.
+Torch-free: the core, data and runtime tests run without torch. Under pytest-xdist each
+worker runs on a core of its own.
 """
 
 import os
