@@ -121,22 +121,26 @@ def main() -> None:
         bar = np.array([score(found[n]['seq'], found[n]['seq'].on_poses(
             found[n]['classical']))['aoe_deg'] for n in names])
         print(f'fold {fold}: tracker only {bar.mean():.2f} over ' + ', '.join(names))
+        turned = {}  # T's gravity drift per trial and network: the same for every setting
         for label, weight, margin in settings:
             aoe = []
             for n in names:
                 t = found[n]
                 row = []
-                for net, untrusted, held, steady in zip(t['nets'], t['untrusted'],
-                                                        t['sustained'], t['steady']):
+                for k, (net, untrusted, held, steady) in enumerate(zip(
+                        t['nets'], t['untrusted'], t['sustained'], t['steady'])):
                     flag = {'none': np.zeros(len(net), bool), 'sustained': held}.get(
                         args.fallback, held | untrusted)
                     classical = {'held': np.where(untrusted[:, None], steady, t['classical']),
                                  'held everywhere': steady}.get(args.fallback, t['classical'])
                     w = np.full(len(net), weight)
                     if margin is not None:
+                        if (n, k) not in turned:
+                            turned[n, k] = gravity_drift(classical, t['accel'], t['rate'],
+                                                         *args.gravity)
                         blend = classical + weight * (net - classical)
                         w *= gravity_drift(blend, t['accel'], t['rate'], *args.gravity) <= \
-                            gravity_drift(classical, t['accel'], t['rate'], *args.gravity) + margin
+                            turned[n, k] + margin
                     w = np.where(flag, 0.0, w)[:, None]
                     row.append(score(t['seq'], t['seq'].on_poses(
                         classical + w * (net - classical)))['aoe_deg'])
