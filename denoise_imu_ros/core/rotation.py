@@ -9,7 +9,7 @@ rotation per sample, on plain floats: ``scipy.spatial.transform`` costs more to 
 recording composes every step with the next (metrics.integrate): scipy's composition of
 two arrays of rotations costs about 15 times numpy's products here, and the clock-offset
 search fits a frame to a few thousand rate pairs some 1500 times a recording, where
-scipy's align_vectors costs several times the SVD it wraps (:func:`align`). Everything
+scipy's align_vectors costs several times the SVD it wraps (:func:`kabsch`). Everything
 else offline (rotation vectors, splines) uses scipy.
 """
 
@@ -88,16 +88,14 @@ def level_heading(q: Any) -> Quat:
     return 0.0, 0.0, math.sin(-0.5 * yaw), math.cos(-0.5 * yaw)
 
 
-def align(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, float]:
+def kabsch(h: np.ndarray) -> np.ndarray:
     """
-    Return the rotation matrix R minimising sum |a_i - R b_i|^2, and that sum's root.
+    Return the rotation R maximising trace(R h), h the 3x3 sum of b_i a_i^T.
 
-    Kabsch's solution, as ``Rotation.align_vectors(a, b)`` (unit weights) gives it: the
-    SVD of the 3x3 cross-covariance, its smallest singular direction flipped where the
-    best orthogonal matrix is a reflection.
+    The SVD of h, its smallest singular direction flipped where the best orthogonal
+    matrix is a reflection.
     """
-    u, _, vt = np.linalg.svd(b.T @ a)
+    u, _, vt = np.linalg.svd(h)
     flip = np.ones(3)
     flip[2] = np.sign(np.linalg.det(u @ vt))  # +-1: u and vt are orthogonal
-    r = (vt.T * flip) @ u.T
-    return r, float(np.sqrt(np.sum((a - b @ r.T) ** 2)))
+    return (vt.T * flip) @ u.T

@@ -45,6 +45,25 @@ def test_an_axis_that_only_vibrates_has_no_interpolation_scale_to_judge(tmp_path
     assert found[:2] == [None, None] and abs(found[2]) < 0.5
 
 
+@pytest.mark.parametrize('noise', [0.0, 0.01, 1.0])
+def test_the_frame_fit_is_scipys_on_the_centred_rates(noise):
+    """The fit from the rates' sums and products: scipy's rotation, the bias, the residual."""
+    from denoise_imu_ros.data.pose_alignment import fit_frame
+    rng = np.random.default_rng(7)
+    for seed in range(10):
+        frame = Rotation.random(random_state=seed)
+        pose = rng.normal(size=(1000, 3)) * [1.0, 0.3, 0.05] + [0.5, -1.0, 2.0]
+        imu = frame.apply(pose) + [0.01, -0.02, 0.03] + noise * rng.normal(size=pose.shape)
+        rot, bias, rms = fit_frame(imu, pose)
+        centred = imu - imu.mean(0), pose - pose.mean(0)
+        ref, rssd = Rotation.align_vectors(*centred)
+        assert (rot * ref.inv()).magnitude() < 1e-9
+        np.testing.assert_allclose(bias, imu.mean(0) - rot.apply(pose.mean(0)), atol=1e-12)
+        # scipy's cost comes from an expanded sum: near 0 it is off by ~sqrt(eps) of |a|
+        scale = np.sqrt(np.sum(centred[0] ** 2))
+        assert abs(rms * np.sqrt(imu.size) - rssd) <= 1e-9 * rssd + 1e-7 * scale
+
+
 def test_the_frame_fit_leaves_out_a_few_windows_it_cannot_explain_not_many():
     from denoise_imu_ros.data.pose_alignment import fit_frame, robust_fit
     rng = np.random.default_rng(8)
