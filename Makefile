@@ -22,9 +22,11 @@ venv: $(VENV)/.installed
 # Unit, integration and lint tests (tests needing ../shared/data skip without it), on
 # two processes (each its own DDS domain); prints the wall time of the tests alone.
 # Torch's OpenMP threads sleep when idle instead of spinning: two pytest processes share
-# the cores, and one's spinning threads took CPU the other's work needed.
+# the cores, and one's spinning threads took CPU the other's work needed. Bytecode is
+# written even where the environment turns it off (PYTHONDONTWRITEBYTECODE): each
+# interpreter a test starts then reads the package compiled instead of compiling it.
 test: venv
-	@start=$$(date +%s); $(ROS_ENV) OMP_WAIT_POLICY=PASSIVE $(BIN)/python -m pytest -n 2 --dist worksteal test; status=$$?; \
+	@start=$$(date +%s); $(ROS_ENV) OMP_WAIT_POLICY=PASSIVE PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest -n 2 --dist worksteal test; status=$$?; \
 	echo "make test: tests took $$(( $$(date +%s) - start )) s"; exit $$status
 
 # The bundled EuRoC test-sequence sample (90 s of V1_03): offline evaluation with the
