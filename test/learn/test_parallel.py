@@ -24,6 +24,16 @@ SEQUENCES = ['MH_01_easy', 'V1_02_medium', 'V2_01_easy']
 N = 2048
 
 
+@pytest.fixture(scope='module')
+def short_euroc(euroc, tmp_path_factory) -> Path:
+    """The sequences' first 15 s: N samples and a validation tail after them."""
+    from helpers import crop_asl
+    folder = tmp_path_factory.mktemp('euroc')
+    for name in SEQUENCES:
+        crop_asl(euroc / name, folder / name, 15.0)
+    return folder
+
+
 def _gradients(rank: int, world: int, store, data: Path, out: Path) -> None:
     """Loss, gradients and BatchNorm statistics of one step, as process rank of world."""
     if world > 1:
@@ -55,12 +65,12 @@ def _gradients(rank: int, world: int, store, data: Path, out: Path) -> None:
         dist.destroy_process_group()
 
 
-def test_two_processes_give_the_whole_batch_gradient_and_statistics(euroc, tmp_path):
+def test_two_processes_give_the_whole_batch_gradient_and_statistics(short_euroc, tmp_path):
     """With the fused layers and with PyTorch's, one spawn for both."""
-    _gradients(0, 1, None, euroc, tmp_path)
+    _gradients(0, 1, None, short_euroc, tmp_path)
     store = parallel.serve(2)
-    other = parallel.spawn(_gradients, (1, 2, store.port, euroc, tmp_path))
-    _gradients(0, 2, store, euroc, tmp_path)
+    other = parallel.spawn(_gradients, (1, 2, store.port, short_euroc, tmp_path))
+    _gradients(0, 2, store, short_euroc, tmp_path)
     other.join(timeout=60)
     assert other.exitcode == 0
     for fused in (True, False):
@@ -80,8 +90,8 @@ def test_two_processes_give_the_whole_batch_gradient_and_statistics(euroc, tmp_p
         assert any(np.abs(one[k]).max() > 0 for k in one.files if k.startswith('grad.net.0'))
 
 
-def test_a_two_process_run_trains_and_returns_a_plain_model(euroc, tmp_path):
-    cfg = load_config(CONFIG, data=str(euroc), sequences=SEQUENCES[:2], window=N,
+def test_a_two_process_run_trains_and_returns_a_plain_model(short_euroc):
+    cfg = load_config(CONFIG, data=str(short_euroc), sequences=SEQUENCES[:2], window=N,
                       steps=24, val_every=12, restart_period=24, swa_start=12, workers=2)
     result = train(cfg, progress=False)
     model, meta = result.model, result.meta
