@@ -26,7 +26,7 @@ N = 2048
 
 @pytest.fixture(scope='module')
 def short_euroc(euroc, tmp_path_factory) -> Path:
-    """The sequences' first 15 s: N samples and a validation tail after them."""
+    """Return the sequences' first 15 s: N samples and a validation tail after them."""
     from helpers import crop_asl
     folder = tmp_path_factory.mktemp('euroc')
     for name in SEQUENCES:
