@@ -21,8 +21,9 @@ from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
 
 __all__ = ['ACCEL_CHOICES', 'AS_IT_CAME', 'BiasTracking', 'Blend', 'Fusion', 'FusionSettings',
-           'InputEnvelope', 'JUDGED', 'judged_on', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'NO_MODEL',
-           'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'TRACKER_ONLY', 'Validation', 'Verdict']
+           'GyroVariance', 'InputEnvelope', 'JUDGED', 'judged_on', 'MAX_ACCEL_BIAS_M_S2',
+           'ModelMeta', 'NO_MODEL', 'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'TRACKER_ONLY',
+           'Validation', 'Verdict']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
 # the ``kind`` of a model file that runs the classical pipeline, no model: the turn-on bias
@@ -224,6 +225,42 @@ class Blend:
 
 
 @dataclass(frozen=True)
+class GyroVariance:
+    """
+    The corrected gyro's variance per sample, the same on each axis: exp(theta . phi).
+
+    phi: 1, then log1p(m / scale) of three causal means m over ``mean_s`` seconds: of the
+    rate's norm (rad/s), of the accelerometer norm's distance from gravity (m/s^2) and of
+    the rate's change per second (rad/s^2), each over its ``scales`` entry
+    (``pipeline/covariance.py``). ``tune-fusion`` fits theta by the likelihood of the
+    rotation increments' errors on the validation tails.
+    """
+
+    theta: tuple[float, float, float, float]
+    mean_s: float = 0.1
+    scales: tuple[float, float, float] = (0.1, 0.5, 1.0)
+
+    def __post_init__(self) -> None:
+        """Refuse what no variance model is (model files are user input)."""
+        theta = self.theta
+        if not (isinstance(theta, (list, tuple)) and len(theta) == 4
+                and all(_number(v) and abs(v) < 100 for v in theta)):
+            raise ValueError(f'theta must be four numbers, not {theta!r}')
+        if not (_number(self.mean_s) and 0 < self.mean_s <= 10):
+            raise ValueError(f'mean_s must be a number of seconds from 0 to 10, not '
+                             f'{self.mean_s!r}')
+        if not (_triple(self.scales) and min(self.scales) > 0):
+            raise ValueError(f'scales must be three positive numbers, not {self.scales!r}')
+        object.__setattr__(self, 'theta', tuple(map(float, theta)))
+        object.__setattr__(self, 'mean_s', float(self.mean_s))
+        object.__setattr__(self, 'scales', tuple(map(float, self.scales)))
+
+    def as_dict(self) -> dict[str, Any]:
+        """Return the variance model as stored in a model file."""
+        return {'theta': list(self.theta), 'mean_s': self.mean_s, 'scales': list(self.scales)}
+
+
+@dataclass(frozen=True)
 class FusionSettings:
     """The filter's choices; defaults are VQF's own time constant, no bias removed or estimated."""
 
@@ -309,6 +346,7 @@ class ModelMeta:
     bias_tracking: BiasTracking | None = None   # None: the model's output as it is
     input_envelope: InputEnvelope | None = None  # None: the correction applies everywhere
     blend: Blend | None = None                  # None: the network's output unblended
+    gyro_variance: GyroVariance | None = None   # None: one covariance for every message
     code_version: str | None = None
     members: int = 0                            # an ensemble's trainings; 0 for one
 
@@ -503,5 +541,8 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
             v.get('gyro_rad_s'), v.get('accel_offset_m_s2'),
             v.get('fallback_rad_s', (0.0, 0.0, 0.0)), v.get('sustained_accel_m_s2')),
             {f.name for f in fields(InputEnvelope)}),
+        gyro_variance=_settings(raw, 'gyro_variance', where, lambda v: GyroVariance(
+            v.get('theta'), v.get('mean_s', 0.1), v.get('scales', (0.1, 0.5, 1.0))),
+            {'theta', 'mean_s', 'scales', 'fitted_on', 'nees'}),
         code_version=_optional(raw, 'code_version', where, str, 'a version'),
         members=len(members))

@@ -9,9 +9,11 @@ drives that table (the node and process-bag); the offline tools run the same tab
 arrays. The stages themselves: ``rest_bias`` (the turn-on bias before the model, the bias
 tracked after it), ``streaming`` (the network, its step compiled from ``_step.c`` where
 built), ``envelope`` (the model not trusted beyond the motion it was trained on),
-``vertical`` (a heading-less model's correction about the vertical dropped) and
-``fusion`` (the gravity-aided orientation). Import the module you need: this package
-imports none of them.
+``blend`` (the classical mix), ``vertical`` (a heading-less model's correction about the
+vertical dropped),
+``covariance`` (each output's variance) and ``fusion`` (the gravity-aided orientation).
+Import the module you need: this package imports none of them.
 """
 
-__all__ = ['envelope', 'fusion', 'online', 'rest_bias', 'stages', 'streaming', 'vertical']
+__all__ = ['blend', 'covariance', 'envelope', 'fusion', 'online', 'rest_bias', 'stages',
+           'streaming', 'vertical']

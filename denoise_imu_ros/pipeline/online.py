@@ -82,6 +82,7 @@ class Output(NamedTuple):
     orientation: np.ndarray | None = None  # (4,) xyzw, gravity-aided (with a filter)
     rate_suspect: bool = False  # the stream is off the model's period (see rate_suspect)
     accel_cov: np.ndarray | None = None  # the input's, finite (from process_imu)
+    gyro_var: float | None = None  # the output rate's variance, (rad/s)^2, if the model has one
 
 
 @dataclass
@@ -281,4 +282,4 @@ class OnlineDenoiser:
         return Output(stamp_ns=stamp_ns, gyro=flow.out, accel=accel - self.corrected_accel_bias,
                       attitude=flow.attitude, event=event,
                       orientation=flow.orientation, rate_suspect=self.rate_suspect,
-                      accel_cov=accel_cov)
+                      accel_cov=accel_cov, gyro_var=flow.variance)

@@ -21,6 +21,7 @@ bias tracking   ``BiasTracker.update``     ``tracked_bias``           start, jum
 envelope apply  ``Guard.apply``            ``guard_batch``            (the check's)
 classical mix   ``Blender.apply``          ``blend_batch``            start, jump
 vertical drop   ``Vertical.apply``         ``drop_vertical``          start, jump
+gyro variance   ``Variance.update``        ``variances``              start, gap, jump
 attitude        :class:`Attitude`          the same step, in a loop   start, jump, request
 orientation     ``GravityFilter.update``   ``fuse``                   start, jump, request
 ==============  =========================  =========================  ===================
@@ -42,17 +43,19 @@ import numpy as np
 
 from . import envelope, rest_bias
 from .blend import blend_batch, Blender, resolve as resolve_blend
+from .covariance import Variance, variances
 from .fusion import fuse, FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
 from .vertical import drop_vertical, drops_vertical, Vertical
 from ..core import rotation
 from ..core.limits import MAX_GAP_FACTOR
 from ..core.modelfile import ModelFile, sample_rate
-from ..core.schema import BiasTracking, Blend, InputEnvelope, RestBiasSettings
+from ..core.schema import BiasTracking, Blend, GyroVariance, InputEnvelope, RestBiasSettings
 
 __all__ = ['Attitude', 'BiasTrackingStage', 'ClassicalMix', 'correction', 'corrected',
-           'EnvelopeApply', 'EnvelopeCheck', 'Event', 'finish', 'Flow', 'model_input', 'Network',
-           'Orientation', 'Pipeline', 'Stage', 'STAGES', 'TurnOnBias', 'VerticalDrop']
+           'EnvelopeApply', 'EnvelopeCheck', 'Event', 'finish', 'Flow', 'GyroVarianceStage',
+           'model_input', 'Network', 'Orientation', 'Pipeline', 'Stage', 'STAGES', 'TurnOnBias',
+           'VerticalDrop']
 
 
 class Event(str, Enum):
@@ -75,11 +78,12 @@ class Flow:
 
     ``fed`` is the model's input (the raw gyro less the turn-on bias, and the
     accelerometer), ``out`` the gyro so far; the rest are set by the stages that have
-    them (``bias`` the tracked bias removed, ``too_fast`` the envelope's hold).
+    them (``bias`` the tracked bias removed, ``too_fast`` the envelope's hold,
+    ``variance`` the output's).
     """
 
     __slots__ = ('fed', 'out', 'bias', 'too_fast', 'event', 'dt_s', 'periods', 'attitude',
-                 'orientation')
+                 'orientation', 'variance')
 
     def __init__(self, fed: np.ndarray, event: Event | None = None, dt_s: Any = 0.0,
                  periods: Any = 0.0, out: np.ndarray | None = None) -> None:
@@ -89,6 +93,7 @@ class Flow:
         self.too_fast: Any = False
         self.attitude: Any = None
         self.orientation: Any = None
+        self.variance: Any = None
 
     @classmethod
     def recording(cls, imu: np.ndarray, stamp_ns: np.ndarray | None = None,
@@ -276,6 +281,27 @@ class VerticalDrop(Stage):
         flow.out = drop_vertical(flow.out, flow.fed, self.rate_hz)
 
 
+class GyroVarianceStage(Stage):
+    """Each output rate's variance, from how fast and how hard the IMU moves."""
+
+    def __init__(self, spec: GyroVariance, rate_hz: float) -> None:
+        self.spec, self.rate_hz = spec, rate_hz
+        self.variance = Variance(spec, rate_hz)
+
+    def reset(self, events: frozenset[Event] = RUN) -> None:
+        """Start the motion's means again, with the network's history."""
+        self.variance.reset()
+
+    def step(self, flow: Flow) -> None:
+        """Give this output its variance."""
+        flow.variance = self.variance.update(flow.out, flow.fed[3:])
+
+    def run(self, flow: Flow) -> None:
+        """Give every output its variance; the means restart at each gap (periods 0)."""
+        restarts = (flow.periods == 0) if isinstance(flow.periods, np.ndarray) else None
+        flow.variance = variances(flow.out, flow.fed[:, 3:], self.rate_hz, self.spec, restarts)
+
+
 class Attitude(Stage):
     """
     The open-loop attitude (``imu/attitude``): the corrected gyro integrated, xyzw.
@@ -350,6 +376,7 @@ STAGES: tuple[tuple[type[Stage], frozenset[Event]], ...] = (
     (EnvelopeApply, frozenset()),  # its guard is the check's, reset there
     (ClassicalMix, RUN),
     (VerticalDrop, RUN),
+    (GyroVarianceStage, HISTORY),
     (Attitude, ATTITUDE),
     (Orientation, ATTITUDE),
 )
@@ -409,7 +436,8 @@ def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
     (``model``, ``off``: :func:`~denoise_imu_ros.pipeline.blend.resolve`), the
     classical pipeline's alone beyond the envelope's sustained bound only where the
     envelope guards. ``batch``: the network over arrays (torch's, for a model loaded with
-    torch) instead of the per-sample engine.
+    torch) instead of the per-sample engine. Last, where the file has one, each output's
+    variance (:mod:`~denoise_imu_ros.pipeline.covariance`).
     """
     rate = sample_rate(model)
     settings = rest_bias.resolve(model.meta, rest)
@@ -428,6 +456,8 @@ def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
         stages.append(ClassicalMix(Blender(blend, rate, bounds, model.config.receptive_field)))
     if drops_vertical(model.meta, rest):
         stages.append(VerticalDrop(rate))
+    if model.meta.gyro_variance is not None:
+        stages.append(GyroVarianceStage(model.meta.gyro_variance, rate))
     return stages
 
 

@@ -13,7 +13,8 @@ by construction. The policy (:func:`withheld`):
   (and the attitude embedded in ``imu/corrected``) is withheld, the corrected rate and the
   gravity-aided orientation are not.
 Headers are the raw message's, never re-stamped; covariances are the model's (or the
-node's overrides), fixed when the outputs are set up.
+node's overrides), fixed when the outputs are set up, except the gyro's where the model
+gives each sample a variance (``per_sample_gyro``).
 """
 
 from __future__ import annotations
@@ -71,17 +72,23 @@ class Outputs:
     fused_cov: np.ndarray               # imu/data's orientation_covariance
     embed_attitude: bool = False        # the attitude in imu/corrected too
     orientation_cov: np.ndarray = field(default_factory=lambda: np.diag([0.05 ** 2] * 3).ravel())
+    per_sample_gyro: bool = False       # each sample's own variance instead of gyro_cov
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         ('corrected_withheld', 'fused_withheld', 'attitude_withheld'), 0))
     _corrected: Any = None
     _attitude: Any = None
+    _sample_cov: np.ndarray = field(default_factory=lambda: np.zeros(9))
 
     def send(self, raw: Any, out: Output) -> Decision:
         """Send what the policy publishes of one sample (``raw``: its input message)."""
         decision = withheld(out)
         embed = out.attitude if self.embed_attitude and decision.attitude is None else None
+        gyro_cov = self.gyro_cov
+        if self.per_sample_gyro and out.gyro_var is not None:
+            gyro_cov = self._sample_cov
+            gyro_cov[0] = gyro_cov[4] = gyro_cov[8] = out.gyro_var
         self._corrected = msgs.corrected_imu(
-            self.types, raw, out.gyro, self.gyro_cov, embed, self.orientation_cov,
+            self.types, raw, out.gyro, gyro_cov, embed, self.orientation_cov,
             out.accel_cov, into=self._corrected, accel=out.accel)
         if decision.corrected is None:
             self.send_corrected(self._corrected)

@@ -141,7 +141,8 @@ class _BagOutputs:
             for name, msgtype, want in zip(names, (IMU_TYPE, IMU_TYPE, ATTITUDE_TYPE), wanted))
         gyro_cov, orientation_cov, fused_cov = settings.covariances(loaded)
         self.outputs = Outputs(BAG_TYPES, corrected, fused, attitude, settings.fixed_frame,
-                               gyro_cov, fused_cov, settings.embed_attitude, orientation_cov)
+                               gyro_cov, fused_cov, settings.embed_attitude, orientation_cov,
+                               settings.per_sample_gyro(loaded))
 
     def _sender(self, name: str, msgtype: str) -> Callable[[Any], None]:
         topic = self._wr.add_connection(name, msgtype, typestore=TYPESTORE)

@@ -77,7 +77,8 @@ class Settings:
         0.05, 'rad; orientation covariance diagonal when embed_attitude is on.',
         floats=(0.0, math.pi))
     angular_velocity_stddev: float = _p(
-        -1.0, 'rad/s; < 0 uses the per-axis residual std the model measured on its '
+        -1.0, "rad/s; < 0: the model's, each message's own variance where its file has "
+        'one (fit-variance --attach), else the per-axis residual std it measured on its '
         'validation data (zeros, "unknown" to ROS, for a file without it); 0: zeros.',
         floats=(-1.0, 10.0))
     max_gap_factor: float = _p(
@@ -263,6 +264,10 @@ class Settings:
         den.max_gap_factor = self.max_gap_factor
         den.time_jump_s = self.time_jump_threshold
         den.rate_tolerance = self.rate_tolerance
+
+    def per_sample_gyro(self, loaded: ModelFile) -> bool:
+        """Whether imu/corrected carries each sample's gyro variance (the model's, no override)."""
+        return loaded.meta.gyro_variance is not None and self.angular_velocity_stddev < 0
 
     def covariances(self, loaded: ModelFile) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return imu/corrected's gyro and embedded-attitude covariances, and imu/data's."""

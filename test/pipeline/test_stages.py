@@ -6,14 +6,14 @@ import dataclasses
 import re
 
 from denoise_imu_ros.core.modelfile import read_model_file
-from denoise_imu_ros.core.schema import Blend, RestBiasSettings
+from denoise_imu_ros.core.schema import Blend, GyroVariance, RestBiasSettings
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.pipeline import envelope, stages
 from denoise_imu_ros.pipeline.blend import Blender
 from denoise_imu_ros.pipeline.online import OnlineDenoiser
 from denoise_imu_ros.pipeline.stages import (Attitude, ClassicalMix, correction, Event, Flow,
-                                             Orientation, Pipeline, STAGES, TurnOnBias,
-                                             VerticalDrop)
+                                             GyroVarianceStage, Orientation, Pipeline, STAGES,
+                                             TurnOnBias, VerticalDrop)
 from helpers import DATA
 import numpy as np
 import pytest
@@ -32,10 +32,11 @@ def recording():
 
 def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
     """
-    broad_network has every stage (the vertical drop added): node and eval agree bit for bit.
+    broad_network has every stage (the vertical drop and a variance added): node and eval agree.
 
-    With the guard, and the blend's fallback to the classical pipeline (at a bound that
-    half the samples exceed), acting on part of it.
+    Bit for bit, the variance to rounding (running sums). With the guard, and the blend's
+    fallback to the classical pipeline (at a bound that half the samples exceed), acting on
+    part of it.
     """
     stamps, imu = recording
     model = read_model_file('broad_network')
@@ -47,6 +48,7 @@ def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
     def every_stage():
         mix = ClassicalMix(Blender(Blend(0.6, model.meta.bias_tracking), rate, bounds, field))
         return Pipeline([*correction(model, mix='off'), mix, VerticalDrop(rate),
+                         GyroVarianceStage(GyroVariance((-7.5, 1.5, 2.0, -1.5)), rate),
                          Attitude(fusion.accel_bias_m_s2), Orientation(rate, fusion)])
     online = OnlineDenoiser(every_stage(), rate)
     assert [type(s) for s in online.pipeline.stages] == [kind for kind, _ in STAGES]
@@ -57,6 +59,7 @@ def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
     np.testing.assert_array_equal(np.array([o.gyro for o in outs]), batch.out)
     np.testing.assert_array_equal(np.array([o.attitude for o in outs]), batch.attitude)
     np.testing.assert_array_equal(np.array([o.orientation for o in outs]), batch.orientation)
+    np.testing.assert_allclose([o.gyro_var for o in outs], batch.variance, rtol=1e-9)
 
 
 def test_the_batch_path_is_the_table_up_to_and_after_the_network(recording):

@@ -26,7 +26,7 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
 
     And the last two with an input envelope the bag's motion leaves: guarded (the fallback
     beyond it), and with the guard turned off, that model taught without its poses' heading
-    (its correction about the vertical dropped).
+    (its correction about the vertical dropped); both with a variance for each message.
     """
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core.modelfile import add_metadata
@@ -42,6 +42,7 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
                         'sustained_accel_m_s2': 0.025} if track else None,
         blend={'weight': 0.6, 'tracking': {'sigma_motion_deg_s': 0.1, 'forgetting_s': 100.0}}
         if track else None,
+        gyro_variance={'theta': [-7.5, 1.5, 2.0, -1.5]} if track else None,
         train_config={'heading_weight': heading})
     bag = crop_bag(SAMPLE, tmp_path / 'head', 3.5)  # every topic, 700 IMU messages
     assert cli(['process-bag', '--input', str(bag), '--out', str(tmp_path / 'out'), '--model',
@@ -67,6 +68,8 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     # the gravity-aided orientation, bit for bit, with its covariance
     assert np.array_equal(np.array([_fields(m) for m in h.fused]), np.array(bags['/imu/data']))
     assert bags['/imu/data'][0][-9] > 0  # orientation provided (REP-145)
+    variances = {row[3] for row in bags['/imu/corrected']}  # angular_velocity_covariance[0]
+    assert len(variances) > (600 if track else 0) and (len(variances) == 1) != track
     h.diagnostics.clear()
     h.spin_until(lambda: h.diagnostics, timeout=5.0)
     diagnostics = {v.key: v.value for v in h.diagnostics[-1].status[0].values}

@@ -1,0 +1,108 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""
+The corrected gyro's variance per sample: what a VIO back-end weighs ``imu/corrected`` by.
+
+A model file's :class:`~denoise_imu_ros.core.schema.GyroVariance` gives each sample's
+variance, the same on each axis, as exp(theta . phi): phi is 1 and three causal means over
+the last ``mean_s`` seconds (since the last reset) of the output rate's norm, of the
+accelerometer norm's distance from gravity and of the output rate's change per second,
+each log1p-scaled. The error of a corrected gyro grows with how fast and how hard the IMU
+moves; one constant would be too large at rest and too small in fast motion. The means
+restart with the network's history (a start, a gap, a clock jump).
+
+Every path computes it alike: :func:`variances` over a recording's arrays (``eval``,
+``tune-fusion``, the benches), :class:`Variance` one sample at a time (node,
+``process-bag``); equal to rounding (running sums against cumulative ones).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..core.limits import GRAVITY_M_S2
+from ..core.schema import GyroVariance
+
+__all__ = ['features', 'Variance', 'variances']
+
+
+def features(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: GyroVariance,
+             restarts: np.ndarray | None = None) -> np.ndarray:
+    """
+    Return phi (N, 4) of every sample of one or more runs.
+
+    ``gyro`` the output rate (N, 3), ``accel`` the accelerometer (N, 3); ``restarts``
+    (N,) True where a run starts again (the first sample always does).
+    """
+    n = len(gyro)
+    starts = np.zeros(n, bool) if restarts is None else np.asarray(restarts, bool).copy()
+    starts[:1] = True
+    change = np.zeros(n)
+    change[1:] = np.linalg.norm(np.diff(gyro, axis=0), axis=1) * rate_hz
+    change[starts] = 0.0  # no rate before a run's first sample
+    raw = np.stack([np.linalg.norm(gyro, axis=1),
+                    np.abs(np.linalg.norm(accel, axis=1) - GRAVITY_M_S2), change], axis=1)
+    width = _width(spec, rate_hz)
+    run_start = np.maximum.accumulate(np.where(starts, np.arange(n), 0))
+    first = np.maximum(np.arange(n) + 1 - width, run_start)  # the mean's first sample
+    total = np.vstack([np.zeros((1, 3)), np.cumsum(raw, axis=0)])
+    mean = (total[1:] - total[first]) / (np.arange(n) + 1 - first)[:, None]
+    return np.hstack([np.ones((n, 1)), np.log1p(mean / np.array(spec.scales))])
+
+
+def variances(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: GyroVariance,
+              restarts: np.ndarray | None = None) -> np.ndarray:
+    """Return each sample's variance (N,), (rad/s)^2, as :func:`features` sees the runs."""
+    return np.exp(features(gyro, accel, rate_hz, spec, restarts) @ np.array(spec.theta))
+
+
+def _width(spec: GyroVariance, rate_hz: float) -> int:
+    """Return the samples of the means' window."""
+    return max(1, int(round(spec.mean_s * rate_hz)))
+
+
+class Variance:
+    """
+    :func:`variances` one sample at a time: running sums over a ring of samples.
+
+    On plain floats: numpy's calls on three numbers cost several times this work.
+    """
+
+    def __init__(self, spec: GyroVariance, rate_hz: float) -> None:
+        self.spec, self.rate_hz = spec, rate_hz
+        self._width = _width(spec, rate_hz)
+        self._theta = tuple(spec.theta)
+        self._scales = tuple(spec.scales)
+        self.reset()
+
+    def reset(self) -> None:
+        """Start the means again: the next sample is a run's first."""
+        self._ring = [(0.0, 0.0, 0.0)] * self._width
+        self._sums = [0.0, 0.0, 0.0]
+        self._count = self._next = 0
+        self._last: tuple[float, float, float] | None = None
+
+    def update(self, gyro: np.ndarray, accel: np.ndarray) -> float:
+        """Take one output rate and its accelerometer; return the sample's variance."""
+        gx, gy, gz = (float(v) for v in gyro)
+        ax, ay, az = (float(v) for v in accel)
+        if self._last is None:
+            change = 0.0
+        else:
+            lx, ly, lz = self._last
+            change = math.sqrt((gx - lx) ** 2 + (gy - ly) ** 2 + (gz - lz) ** 2) * self.rate_hz
+        self._last = (gx, gy, gz)
+        raw = (math.sqrt(gx * gx + gy * gy + gz * gz),
+               abs(math.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2), change)
+        old = self._ring[self._next]
+        sums = self._sums
+        for i in range(3):
+            sums[i] += raw[i] - old[i]
+        self._ring[self._next] = raw
+        self._next = (self._next + 1) % self._width
+        self._count = min(self._count + 1, self._width)
+        theta, count = self._theta, self._count
+        return math.exp(theta[0] + sum(t * math.log1p(m / count / c)
+                                       for t, m, c in zip(theta[1:], sums, self._scales)))

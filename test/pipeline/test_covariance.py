@@ -1,0 +1,64 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""The output's variance per sample: per sample equals over arrays, reset with the network."""
+
+from denoise_imu_ros.core.limits import GRAVITY_M_S2
+from denoise_imu_ros.core.schema import GyroVariance
+from denoise_imu_ros.pipeline.covariance import features, variances
+from denoise_imu_ros.pipeline.stages import Event, Flow, GyroVarianceStage, Pipeline
+import numpy as np
+import pytest
+
+SPEC = GyroVariance((-7.5, 1.5, 2.0, -1.5), 0.1, (0.1, 0.5, 1.0))
+
+
+def _motion(n: int = 3000, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / 200.0
+    gyro = np.stack([np.sin(t), 2 * np.sin(3 * t), 0.1 * t], axis=1)
+    gyro += rng.normal(0, 0.01, (n, 3))
+    accel = np.array([0.0, 0.0, GRAVITY_M_S2]) + rng.normal(0, 1.0, (n, 3)) * (t > 5)[:, None]
+    return gyro, accel
+
+
+def test_the_pipeline_per_sample_equals_it_over_arrays_and_restarts_at_a_gap():
+    gyro, accel = _motion()
+    fed = np.hstack([gyro, accel])
+    periods = np.ones(len(fed))
+    periods[[0, 1700]] = 0.0  # the first sample, and one after a gap
+    batch = Pipeline([GyroVarianceStage(SPEC, 200.0)]).run(
+        Flow(fed, dt_s=periods / 200.0, periods=periods, out=gyro)).variance
+    online, stage = Pipeline([GyroVarianceStage(SPEC, 200.0)]), []
+    for k in range(len(fed)):
+        event = Event.START if k == 0 else Event.GAP if periods[k] == 0 else None
+        flow = Flow(fed[k].copy(), event, 0.0, periods[k], out=gyro[k])
+        online.step(flow, frozenset() if event is None else frozenset({event}))
+        stage.append(flow.variance)
+    np.testing.assert_allclose(stage, batch, rtol=1e-9)
+    # after the gap the means start again: as a recording of its own
+    np.testing.assert_allclose(batch[1700:], variances(gyro[1700:], accel[1700:], 200.0, SPEC),
+                               rtol=1e-12)
+    assert not np.allclose(batch[1700:1720], variances(gyro, accel, 200.0, SPEC)[1700:1720])
+
+
+def test_the_variance_is_its_intercept_at_rest_and_grows_with_the_motion_as_theta_says():
+    still = np.zeros((400, 3)), np.tile([0.0, 0.0, GRAVITY_M_S2], (400, 1))
+    np.testing.assert_allclose(variances(*still, 200.0, SPEC), np.exp(-7.5), rtol=1e-12)
+    phi = features(*_motion(), 200.0, SPEC)
+    assert phi.shape == (3000, 4) and (phi[:, 0] == 1).all() and (phi[:, 1:] >= 0).all()
+    spinning = np.tile([0.0, 0.0, 1.0], (400, 1)), still[1]  # 1 rad/s, steady
+    assert variances(*spinning, 200.0, SPEC)[-1] == pytest.approx(
+        np.exp(-7.5 + 1.5 * np.log1p(1.0 / 0.1)), rel=1e-12)
+
+
+@pytest.mark.parametrize('entry, said', [
+    ({'theta': [1.0, 2.0]}, 'theta must be four numbers'),
+    ({'theta': [1.0, 2.0, 3.0, float('nan')]}, 'theta must be four numbers'),
+    ({'theta': [0, 0, 0, 0], 'mean_s': 0}, 'mean_s must be a number of seconds'),
+    ({'theta': [0, 0, 0, 0], 'scales': [1, 0, 1]}, 'scales must be three positive numbers'),
+    ({'theta': [0, 0, 0, 0], 'sigma': 1}, "unknown entries \\['sigma'\\]")])
+def test_a_variance_model_that_is_none_is_refused_in_one_line(entry, said):
+    from denoise_imu_ros.core.errors import ModelFileError
+    from denoise_imu_ros.core.schema import parse_meta
+    with pytest.raises(ModelFileError, match=f'x: .*{said}'):
+        parse_meta({'gyro_variance': entry}, 'x')
