@@ -14,12 +14,15 @@ a VIO's evaluation takes it, else the derivative of its positions: EuRoC's posit
 up to 0.14 m in one sample, which a derivative turns into 28 m/s). Prints per row the RMS rotation
 (deg), velocity (m/s) and position (m) increment errors, the mean NEES of rotation and
 velocity with the covariance propagated from the per-sample covariance (the gyro's: what
-``imu/corrected`` publishes, the model's validation residual; the accelerometer's and the
-raw gyro's: EuRoC's sensor.yaml noise densities, as a VIO configuration takes them) and the
-fraction of windows inside the 2-sigma ellipsoid (73.9 % if the covariance is right), then
-the largest difference between GTSAM's increments and ours (GTSAM integrates in the tangent
-space of the rotation with its exact Jacobians, where ours takes one sample's right Jacobian as
-the identity: the two agree to the order of that term, not to rounding).
+``imu/corrected`` publishes, each message's own variance where the model file has one
+(``fit-variance``), beside its validation residual, one for every message; the
+accelerometer's and the raw gyro's: EuRoC's sensor.yaml noise densities, as a VIO
+configuration takes them) and the fraction of windows inside the 2-sigma ellipsoid (73.9 %
+if the covariance is right), then the largest difference between GTSAM's increments and
+ours (GTSAM integrates in the tangent space of the rotation with its exact Jacobians, where
+ours takes one sample's right Jacobian as the identity: the two agree to the order of that
+term, not to rounding; GTSAM's parameters hold one covariance, so the NEES are ours and
+its covariance is compared where it is one).
 Run: .venv/bin/python bench/preintegration.py [--data ../shared/data/euroc]
 [--sequences MH_02_easy ...] [--windows 0.2 1 2]
 """
@@ -27,14 +30,12 @@ Run: .venv/bin/python bench/preintegration.py [--data ../shared/data/euroc]
 import argparse
 from pathlib import Path
 
-from denoise_imu_ros.core.errors import DatasetError
 from denoise_imu_ros.core.modelfile import gyro_covariance, read_model_file
-from denoise_imu_ros.data.asl import read_csv
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation.correct import corrected_gyro
 from denoise_imu_ros.evaluation.preintegration import (
-    errors, GRAVITY, Increments, preintegrate, reference, velocity_from_positions,
-    window_starts)
+    errors, GRAVITY, ground_truth_velocity, Increments, preintegrate, reference, window_starts)
+from denoise_imu_ros.pipeline.covariance import variances
 import gtsam
 import numpy as np
 
@@ -42,17 +43,6 @@ DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'euroc'
 TEST = ['MH_02_easy', 'MH_04_difficult', 'V1_01_easy', 'V1_03_difficult', 'V2_02_medium']
 # EuRoC's imu0/sensor.yaml (ADIS16448): white noise densities, per sqrt(Hz)
 GYRO_DENSITY, ACCEL_DENSITY = 1.6968e-4, 2.0e-3
-
-
-def ground_truth_velocity(folder: Path, stamp_ns: np.ndarray, position: np.ndarray,
-                          stamp_s: np.ndarray) -> tuple[np.ndarray, str]:
-    """Return the velocity (N, 3) at the IMU stamps, and where it came from."""
-    try:  # t, p xyz, q wxyz, v xyz (EuRoC's has biases after them)
-        stamps, rows = read_csv(folder / 'mav0' / 'state_groundtruth_estimate0' / 'data.csv', 11)
-    except DatasetError:  # no such file, or poses without velocities
-        return velocity_from_positions(position, stamp_s), 'positions'
-    return np.stack([np.interp(stamp_ns, stamps, rows[:, c]) for c in (7, 8, 9)],
-                    axis=1), 'state estimate'
 
 
 def gtsam_increments(gyro: np.ndarray, accel: np.ndarray, stamp_s: np.ndarray,
@@ -105,9 +95,16 @@ def main() -> None:
         for label, mf in models.items():
             var = np.broadcast_to(np.diag(np.reshape(gyro_covariance(mf), (3, 3))), (n, 3))
             # from the recording's first sample, as the node and process-bag run it
-            gyro = corrected_gyro(mf, np.vstack([seq.lead_in, seq.imu]))[len(seq.lead_in):]
+            stream = np.vstack([seq.lead_in, seq.imu])
+            full = corrected_gyro(mf, stream)
+            gyro = full[len(seq.lead_in):]
             bias = np.array(mf.meta.fusion.chosen.accel_bias_m_s2)
             imus[f'{label}, accelerometer as it came'] = (gyro, seq.imu[:, 3:], var)
+            spec = mf.meta.gyro_variance
+            if spec is not None:
+                imus[f'{label}, its validation residual'] = (gyro, seq.imu[:, 3:] - bias, var)
+                var = np.repeat(variances(full, stream[:, 3:], rate, spec)[
+                    len(seq.lead_in):, None], 3, axis=1)
             imus[label] = (gyro, seq.imu[:, 3:] - bias, var)
         for window_s in args.windows:
             length = int(round(window_s * rate))
@@ -121,10 +118,11 @@ def main() -> None:
                     largest['increment'], *(float(np.abs(a - b).max()) for a, b in (
                         (ours.rotation, theirs.rotation), (ours.velocity, theirs.velocity),
                         (ours.position, theirs.position))))
-                rel = np.abs(ours.covariance - theirs.covariance) / (
-                    np.abs(theirs.covariance).max(axis=(1, 2), keepdims=True))
-                largest['covariance'] = max(largest['covariance'], float(rel.max()))
-                rows.setdefault((window_s, label), []).append(errors(theirs, ref))
+                if (gyro_var == gyro_var[0]).all():  # GTSAM's one covariance
+                    rel = np.abs(ours.covariance - theirs.covariance) / (
+                        np.abs(theirs.covariance).max(axis=(1, 2), keepdims=True))
+                    largest['covariance'] = max(largest['covariance'], float(rel.max()))
+                rows.setdefault((window_s, label), []).append(errors(ours, ref))
         print(f'{name}: {len(seq.imu)} samples, velocity from its {vel_source}', flush=True)
     print('\n| window | IMU | rotation (deg) | velocity (m/s) | position (m) | NEES rotation '
           '(in 2 sigma) | NEES velocity (in 2 sigma) | windows |')

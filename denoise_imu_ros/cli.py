@@ -204,6 +204,23 @@ def _tune_fusion(args: argparse.Namespace) -> None:
         print(f'stored the chosen settings in {args.model} and {args.baseline}')
 
 
+def _fit_variance(args: argparse.Namespace) -> None:
+    from .core.modelfile import add_metadata, check_attachable, read_model_file
+    from .evaluation.gyro_variance import fit_model
+    if args.attach:  # before the work, not after
+        check_attachable(args.model)
+    report = fit_model(args.model, args.data, progress=not args.quiet)['gyro_variance']
+    print(f"gyro variance exp(theta . phi), theta {[round(t, 3) for t in report['theta']]}, "
+          f"fitted on the {report['fitted_on']}")
+    print('| window | mean NEES (3 if right) | in 2 sigma (73.9 % if right) | windows |\n'
+          '|---|---|---|---|')
+    for window, row in report['nees'].items():
+        print(f"| {window} | {row['mean']:.2f} | {row['in_2_sigma']:.0%} | {row['windows']} |")
+    if args.attach:
+        add_metadata(read_model_file(args.model).path, gyro_variance=report)
+        print(f"stored it in {args.model}: imu/corrected carries each message's own variance")
+
+
 def _ensemble(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file
     from .learn.checkpoint import save_ensemble
@@ -515,6 +532,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help='store the chosen settings in both model files')
     p.add_argument('--quiet', action='store_true')
     p.set_defaults(func=_tune_fusion)
+
+    p = command('fit-variance', "fit the corrected gyro's variance per message to the "
+                "rotation increments' errors on the model's validation tails, and store it",
+                '--model model.safetensors --attach')
+    p.add_argument('--model', required=True, help='the network model (shipped name or file)')
+    p.add_argument('--data', help="folder of the training recordings (default: the model's)")
+    p.add_argument('--attach', action='store_true',
+                   help='store it in the model file (imu/corrected then carries it)')
+    p.add_argument('--quiet', action='store_true')
+    p.set_defaults(func=_fit_variance)
 
     p = command('eval', 'AOE/ROE of raw, calibrated and corrected gyro integration, and of '
                 'the classical pipeline',

@@ -37,7 +37,7 @@ from ..core.records import Sequence
 from ..core.rotation import from_gravity
 from ..core.schema import JUDGED, judged_on, MAX_ACCEL_BIAS_M_S2, ModelMeta
 from ..data.load import load_sequence
-from ..learn.checkpoint import load_model
+from ..learn.checkpoint import load_model, LoadedModel
 from ..pipeline.fusion import fuse, FusionSettings, interval_rates, step_periods
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
@@ -241,35 +241,54 @@ def tune(tails: list[Sequence], gyros: dict[str, list[np.ndarray]], rate_hz: flo
 KINDS = {'raw': ('vqf',), 'calibrated': ('vqf', 'imufusion', 'madgwick'), 'network': ('vqf',)}
 
 
-def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
-               progress: bool = True) -> dict[str, Any]:
+def training_recordings(net: LoadedModel, data: str | None, what: str
+                        ) -> tuple[list[str], int, list[Sequence]]:
     """
-    :func:`tune` on the validation tails of a model's training recordings.
+    Return a model's training recordings, read, with the sample their validation tail starts at.
 
     The recordings, their folder and the tail start come from the model file (its recipe
-    and run); ``data`` overrides the folder. ``baseline_spec`` is the calibrated model.
+    and run); ``data`` overrides the folder. ``what`` says in errors what the tails are for.
     """
-    net = load_model(model_spec)
-    calib = load_model(baseline_spec)
-    check_baseline(net, calib)
     meta = net.meta
     names, folder, start = meta.train_sequences, data or meta.data, meta.training_span
     if meta.recipe('whole_sequences'):
         raise DatasetError(f'{net.path}: trained on whole recordings (whole_sequences): it '
-                           'has no validation tail to choose filter settings on')
+                           f'has no validation tail to {what} on')
     if not names or start is None:
         raise DatasetError(f'{net.path}: the model file does not name its training '
-                           'recordings and its window: it has no validation tails to choose '
-                           'filter settings on')
+                           f'recordings and its window: it has no validation tails to {what} '
+                           'on')
     if folder is None:
         raise DatasetError(f'{net.path}: the model file does not name the folder of its '
                            'training recordings: pass --data')
-    tails, seqs, gyros = [], [], {source: [] for source in KINDS}
+    seqs = []
     for name in names:
         seq = load_sequence(f'{folder}/{name}', meta.recipe('imu_topic'),
                             meta.recipe('pose_topic'), meta.recipe('max_gt_gap_s'),
                             align_poses=meta.recipe('align', 'none'), poses=meta.recipe('poses'))
         check_rate(seq.stamp_ns, sample_rate(net), f'{folder}/{name}')  # --data: its own?
+        seqs.append(seq)
+    if all(len(seq) - start < 2 for seq in seqs):
+        raise DatasetError(f'{net.path}: no training recording has a validation tail')
+    return list(names), start, seqs
+
+
+def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
+               progress: bool = True) -> dict[str, Any]:
+    """
+    :func:`tune` on the validation tails of a model's training recordings.
+
+    The recordings, their folder and the tail start come from the model file
+    (:func:`training_recordings`); ``data`` overrides the folder. ``baseline_spec`` is
+    the calibrated model.
+    """
+    net = load_model(model_spec)
+    calib = load_model(baseline_spec)
+    check_baseline(net, calib)
+    meta = net.meta
+    names, start, read = training_recordings(net, data, 'choose filter settings')
+    tails, seqs, gyros = [], [], {source: [] for source in KINDS}
+    for name, seq in zip(names, read):
         if len(seq) - start < 2:
             continue
         whole = {'raw': seq.imu[:, :3], 'calibrated': seq.on_poses(calib.correct(seq.stream)),
@@ -280,8 +299,6 @@ def tune_model(model_spec: str, baseline_spec: str, data: str | None = None,
             gyros[source].append(gyro[start:])
         if progress:
             print(f'tail of {name}: {len(seq) - start} samples', flush=True)
-    if not tails:
-        raise DatasetError(f'{net.path}: no training recording has a validation tail')
     fitted = fit_accel_bias(seqs, start)
     bias = None if fitted is None else tuple(float(b) for b in fitted[0])
     if progress:

@@ -36,15 +36,18 @@ quadratic fit (Savitzky-Golay) over VELOCITY_SPAN_S.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from scipy.signal import savgol_filter
 from scipy.spatial.transform import Rotation
 
+from ..core.errors import DatasetError
 from ..core.limits import GRAVITY_M_S2
+from ..data.asl import read_csv
 
-__all__ = ['GRAVITY', 'VELOCITY_SPAN_S', 'Increments', 'errors', 'preintegrate', 'reference',
-           'velocity_from_positions', 'window_starts']
+__all__ = ['GRAVITY', 'VELOCITY_SPAN_S', 'Increments', 'errors', 'ground_truth_velocity',
+           'preintegrate', 'reference', 'velocity_from_positions', 'window_starts']
 
 GRAVITY = GRAVITY_M_S2   # m/s^2, standard gravity, the poses' world's
 VELOCITY_SPAN_S = 0.1    # s, the fit of the positions that gives a velocity
@@ -78,6 +81,22 @@ def velocity_from_positions(position: np.ndarray, stamp_s: np.ndarray,
     dt = float(np.median(np.diff(stamp_s)))
     window = max(5, int(round(span_s / dt)) | 1)  # odd, and more samples than the order
     return savgol_filter(position, window, 2, deriv=1, delta=dt, axis=0)
+
+
+def ground_truth_velocity(folder: Path, stamp_ns: np.ndarray, position: np.ndarray,
+                          stamp_s: np.ndarray) -> tuple[np.ndarray, str]:
+    """
+    Return the velocity (N, 3) at the IMU stamps, and where it came from.
+
+    An ASL folder's state estimate (EuRoC's) where it has one, else the positions'
+    derivative (:func:`velocity_from_positions`).
+    """
+    try:  # t, p xyz, q wxyz, v xyz (EuRoC's has biases after them)
+        stamps, rows = read_csv(folder / 'mav0' / 'state_groundtruth_estimate0' / 'data.csv', 11)
+    except DatasetError:  # no such file, or poses without velocities
+        return velocity_from_positions(position, stamp_s), 'positions'
+    return np.stack([np.interp(stamp_ns, stamps, rows[:, c]) for c in (7, 8, 9)],
+                    axis=1), 'state estimate'
 
 
 def _skew(v: np.ndarray) -> np.ndarray:

@@ -1,0 +1,65 @@
+# SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
+# SPDX-License-Identifier: Apache-2.0
+"""fit-variance: the likelihood's fit finds the variance a gyro's errors were drawn with."""
+
+from denoise_imu_ros.core.limits import GRAVITY_M_S2
+from denoise_imu_ros.core.metrics import integrate
+from denoise_imu_ros.core.records import Sequence
+from denoise_imu_ros.core.schema import GyroVariance
+from denoise_imu_ros.evaluation.gyro_variance import fit, nees, Windows
+from denoise_imu_ros.pipeline.covariance import features, variances
+import numpy as np
+
+TRUE = GyroVariance((-8.0, 1.2, 0.0, 0.0))
+RATE = 200.0
+
+
+def _recording(seed: int, n: int = 24000) -> tuple[Sequence, np.ndarray, np.ndarray]:
+    """Poses of a true motion; a gyro whose white errors have TRUE's variance at each sample."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / RATE
+    rate = np.stack([np.sin(0.3 * t), np.cos(0.7 * t), 2.0 * np.sin(0.05 * t) ** 2], axis=1)
+    accel = np.tile([0.0, 0.0, GRAVITY_M_S2], (n, 1))
+    sigma = np.sqrt(variances(rate, accel, RATE, TRUE))  # the true rate's motion
+    gyro = rate + sigma[:, None] * rng.normal(size=(n, 3))
+    stamps = (1e9 + t * 1e9).astype(np.int64)
+    quat = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rate[:-1], np.diff(t)).as_quat()
+    seq = Sequence('s', stamps, np.hstack([gyro, accel]), quat, np.zeros((n, 3)),
+                   np.ones(n, bool))
+    return seq, gyro, accel
+
+
+def test_the_fit_finds_the_variance_the_errors_were_drawn_with_and_its_nees_is_three():
+    train = []
+    for seed in range(3):
+        seq, gyro, accel = _recording(seed)
+        train.append(Windows.of(seq, gyro, features(gyro, accel, RATE, TRUE)))
+    found = fit(train)
+    assert abs(found.theta[0] - TRUE.theta[0]) < 0.3 and abs(found.theta[1] - TRUE.theta[1]) < 0.3
+    seq, gyro, accel = _recording(7)  # another recording
+    held = [Windows.of(seq, gyro, features(gyro, accel, RATE, found))]
+    for window, row in nees(found, held).items():
+        assert 2.7 < row['mean'] < 3.3, window
+        assert 0.68 < row['in_2_sigma'] < 0.80, window
+    one = GyroVariance((found.theta[0] + 2.0, *found.theta[1:]))  # 2.7 times too wide
+    assert all(row['mean'] < 1.5 for row in nees(one, held).values())
+
+
+def test_fit_variance_fits_on_the_tails_stores_it_and_refuses_a_shipped_file(tmp_path, capsys):
+    from denoise_imu_ros.cli import main
+    from denoise_imu_ros.learn.checkpoint import load_model, save_model
+    from helpers import SAMPLE, untrained_model
+    model = tmp_path / 'm.safetensors'
+    save_model(model, untrained_model(), {
+        'sample_rate_hz': 200.0, 'train_sequences': [SAMPLE.name],
+        'run': {'data': str(SAMPLE.parent)}, 'train_config': {'window': 16000}})
+    assert main(['fit-variance', '--model', str(model), '--attach', '--quiet']) == 0
+    out = capsys.readouterr().out
+    assert 'validation tails of euroc_V1_03_90s (from sample 16000 on)' in out
+    assert all(f'| {w} s |' in out for w in ('0.1', '0.2', '0.5', '1', '2'))
+    stored = load_model(str(model)).meta
+    assert stored.gyro_variance is not None
+    assert set(stored.raw['gyro_variance']['nees']) == {'0.1 s', '0.2 s', '0.5 s', '1 s', '2 s'}
+    assert main(['fit-variance', '--model', 'euroc', '--attach']) == 1  # before any work
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and 'shipped' in err
