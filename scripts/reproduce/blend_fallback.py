@@ -16,7 +16,10 @@ tracked as the fold's tracker-only row) are combined per sample:
   that T blended everywhere; ``none``);
 - ``gravity``: N or T, whichever kept the accelerometer's direction steadier in its own
   open-loop world frame over the last WIN s (low-passed over LP s), or the blend W unless
-  its turn exceeds T's by more than ``--margins``: a causal selector.
+  its turn exceeds T's by more than ``--margins``: a causal selector;
+- ``spread``: the blend W where the seeds' outputs agree, T where their spread (the RMS
+  over the axes of their standard deviation, its causal mean over SPREAD_S) exceeds a
+  bound (``--spreads``, deg/s): the ensemble's own doubt, beyond what its members saw.
 Prints, per fold and setting, the mean against tracker only, the mean per-trial ratio and
 the worst, for the ensemble and each seed. Run: .venv/bin/python
 scripts/reproduce/blend_fallback.py OUT ../shared/data/broad --weights 1 0.7 0.5 0.3
@@ -36,6 +39,8 @@ from denoise_imu_ros.pipeline import envelope, stages
 from denoise_imu_ros.pipeline.envelope import sustained, within_field
 from denoise_imu_ros.pipeline.rest_bias import track_bias, tracked_bias
 import numpy as np
+
+SPREAD_S = 1.0  # s, the causal mean of the seeds' spread
 
 
 def trials(out: Path, data: Path) -> dict[str, dict]:
@@ -79,6 +84,16 @@ def trials(out: Path, data: Path) -> dict[str, dict]:
     return found
 
 
+def seed_spread(nets: list[np.ndarray], rate: float) -> np.ndarray:
+    """Return the causal SPREAD_S mean of the seeds' outputs' spread (rad/s) per sample."""
+    spread = np.sqrt(np.mean(np.var(np.stack(nets), axis=0), axis=1))
+    n = max(1, int(SPREAD_S * rate))
+    total = np.concatenate([[0.0], np.cumsum(spread)])
+    k = np.arange(len(spread))
+    start = np.maximum(k + 1 - n, 0)
+    return (total[k + 1] - total[start]) / (k + 1 - start)
+
+
 def gravity_drift(gyro: np.ndarray, accel: np.ndarray, rate: float, lp_s: float,
                   win_s: float) -> np.ndarray:
     """Return the angle (rad) the low-passed world accelerometer turned over the last win_s."""
@@ -109,20 +124,26 @@ def main() -> None:
     parser.add_argument('--margins', type=float, nargs='+', default=[0.0], metavar='DEG',
                         help='the gravity selector keeps the blend unless its drift exceeds '
                              "T's by more than DEG (one setting per weight and margin)")
+    parser.add_argument('--spreads', type=float, nargs='+', default=[], metavar='DEG_S',
+                        help="also the blend where the seeds' spread stays within DEG_S deg/s "
+                             '(T beyond it), one setting per weight and bound')
     args = parser.parse_args()
     found = trials(args.out, args.data)
-    settings = [(f'blend {w:g}', w, None) for w in args.weights]
+    settings = [(f'blend {w:g}', w, None, None) for w in args.weights]
     if args.gravity:
         settings += [(f'gravity {args.gravity[0]:g} s / {args.gravity[1]:g} s, blend {w:g}, '
-                      f'margin {m:g} deg', w, np.radians(m))
+                      f'margin {m:g} deg', w, np.radians(m), None)
                      for w in args.weights for m in args.margins]
+    settings += [(f'spread within {b:g} deg/s, blend {w:g}', w, None, np.radians(b))
+                 for w in args.weights for b in args.spreads]
     for fold in sorted({t['fold'] for t in found.values()}):
         names = [n for n, t in found.items() if t['fold'] == fold]
         bar = np.array([score(found[n]['seq'], found[n]['seq'].on_poses(
             found[n]['classical']))['aoe_deg'] for n in names])
         print(f'fold {fold}: tracker only {bar.mean():.2f} over ' + ', '.join(names))
         turned = {}  # T's gravity drift per trial and network: the same for every setting
-        for label, weight, margin in settings:
+        spread = {n: seed_spread(found[n]['nets'][:-1], found[n]['rate']) for n in names}
+        for label, weight, margin, bound in settings:
             aoe = []
             for n in names:
                 t = found[n]
@@ -141,6 +162,8 @@ def main() -> None:
                         blend = classical + weight * (net - classical)
                         w *= gravity_drift(blend, t['accel'], t['rate'], *args.gravity) <= \
                             turned[n, k] + margin
+                    if bound is not None:
+                        w *= spread[n] <= bound
                     w = np.where(flag, 0.0, w)[:, None]
                     row.append(score(t['seq'], t['seq'].on_poses(
                         classical + w * (net - classical)))['aoe_deg'])

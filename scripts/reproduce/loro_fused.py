@@ -8,9 +8,10 @@ For each fold that ``denoise-imu crossval --out DIR`` wrote (``DIR/fold<i>/netwo
 written to ``DIR/ensemble/fold<i>/``, and the first seed's calibration), the filters'
 settings are chosen on that fold's own training
 recordings' validation tails (``tune-fusion --attach``, never on the held-out one), then
-``eval`` scores the held-out recordings. Prints one Markdown table: open loop (raw,
-calibrated, network) and fused (raw, calibrated and network + VQF, calibrated +
-imufusion and + Madgwick), AOE 3-D / tilt in degrees, per held-out recording and mean.
+``eval`` scores the held-out recordings. Prints one Markdown table: open loop (raw, the
+classical pipeline with no model, calibrated, network) and fused (raw + VQF at its defaults
+and as tuned, the classical pipeline, calibrated and network + VQF, calibrated + imufusion
+and + Madgwick), AOE 3-D / tilt in degrees, per held-out recording and mean.
 Run: .venv/bin/python scripts/reproduce/loro_fused.py CROSSVAL_DIR DATA_DIR
 """
 
@@ -22,9 +23,9 @@ import sys
 
 import numpy as np
 
-OPEN = ('raw', 'calibrated', 'network')
-FUSED = ('raw + VQF', 'calibrated + VQF', 'calibrated + imufusion', 'calibrated + Madgwick',
-         'network + VQF')
+OPEN = ('raw', 'tracker only', 'calibrated', 'network')
+FUSED = ('raw + VQF defaults', 'raw + VQF', 'tracker only + VQF', 'calibrated + VQF',
+         'calibrated + imufusion', 'calibrated + Madgwick', 'network + VQF')
 
 
 def main() -> None:
