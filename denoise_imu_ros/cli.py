@@ -281,7 +281,8 @@ def _noise(args: argparse.Namespace) -> None:
                    align_poses=args.align)
     sys.stdout.write(markdown(report))
     print(f'\nFor a VIO ({args.out}/noise.yaml; Allan plots and JSON beside it):\n')
-    sys.stdout.write(yaml_snippet(report['pooled'], ', '.join(report['recordings'])))
+    sys.stdout.write(yaml_snippet(report['pooled'], ', '.join(report['recordings']),
+                                  report.get('published_density')))
 
 
 def _start_up_warnings(model: str, rest: str = 'model', mix: str = 'model') -> None:

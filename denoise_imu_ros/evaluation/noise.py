@@ -141,12 +141,15 @@ def covariance_check(err: np.ndarray, std: np.ndarray,
     return out
 
 
-def yaml_snippet(pooled: dict[str, dict[str, Any]], where: str) -> str:
+def yaml_snippet(pooled: dict[str, dict[str, Any]], where: str,
+                 published: dict[str, float] | None = None) -> str:
     """
     Return the lines to paste into a Kalibr / OpenVINS / VINS-Fusion IMU configuration.
 
     One YAML document: the corrected gyro's figures (what ``imu/corrected`` publishes) as
-    the keys, the other gyros' as comments for comparison (a key twice is not YAML).
+    the keys, the other gyros' as comments for comparison (a key twice is not YAML), and
+    where the model gives each message its own variance, that as a density (``published``:
+    its median and 95th percentile over the recordings) in a comment.
     """
     def line(fig: dict[str, Any], comment: str = '') -> str:
         bound = (', an upper bound: the recordings are too short to resolve it'
@@ -157,6 +160,10 @@ def yaml_snippet(pooled: dict[str, dict[str, Any]], where: str) -> str:
                 f'  # rad/s^2/sqrt(Hz){bound}\n')
     text = (f'# corrected gyro (imu/corrected), measured against ground truth on {where} '
             f'(denoise-imu noise)\n' + line(pooled['corrected']))
+    if published is not None:
+        text += ("# imu/corrected's own variance per message (fit-variance) as a density: "
+                 f"median {published['median']:.3e}, 95th percentile {published['p95']:.3e}"
+                 ' rad/s/sqrt(Hz)\n')
     for name, fig in pooled.items():
         if name != 'corrected':
             text += f'# the {name} gyro, for comparison:\n' + line(fig, '# ')
@@ -191,7 +198,8 @@ def write(out: Path, report: dict[str, Any]) -> None:
     except OSError as err:
         raise OutputError(f'{out}: cannot create the output folder ({err.strerror})') from err
     write_text(out / 'noise.json', jsonio.dumps(report, indent=2))
-    write_text(out / 'noise.yaml', yaml_snippet(report['pooled'], ', '.join(report['recordings'])))
+    write_text(out / 'noise.yaml', yaml_snippet(report['pooled'], ', '.join(report['recordings']),
+                                                report.get('published_density')))
     for name, curves in report['recordings'].items():
         plot(out / f'allan_{name}.png', {g: c['figures'] for g, c in curves.items()})
 
@@ -282,6 +290,7 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     from ..data.load import load_sequence
     from ..core.compat import check_baseline
     from ..learn.checkpoint import load_model
+    from ..pipeline.covariance import variances
     from .evaluate import check_inputs, default_baseline, recording_names
     from .reports import fitting_note, scored_on_training_samples
     names = recording_names(sequences)  # before the slow part: a name twice is refused
@@ -295,6 +304,7 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     if note:
         print(f'warning: {note}', file=sys.stderr)
     seqs, gyros = [], {'raw': [], 'calibrated': [], 'corrected': []}
+    spec, published = net.meta.gyro_variance, []
     for name, short in zip(sequences, names):
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
                             min_samples=net.model.receptive_field, poses=poses,
@@ -304,10 +314,17 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
         gyros['raw'].append(seq.imu[:, :3])
         if calib is not None:
             gyros['calibrated'].append(seq.on_poses(calib.correct(seq.stream)))
-        gyros['corrected'].append(seq.on_poses(net.correct(seq.stream)))
+        stream = net.correct(seq.stream)
+        gyros['corrected'].append(seq.on_poses(stream))
+        if spec is not None:  # what imu/corrected publishes for these samples
+            published.append(variances(stream, seq.stream[:, 3:], sample_rate(net), spec))
     gyros = {g: v for g, v in gyros.items() if v}
     std = np.sqrt(np.diag(np.reshape(gyro_covariance(net), (3, 3))))
     report = noise_report(seqs, gyros, std if std.any() else None)
     report.update(model=str(net.path), baseline=baseline, training_fit_note=note)
+    if published:  # a density: a sample's variance times its period
+        density = np.sqrt(np.concatenate(published) / sample_rate(net))
+        report['published_density'] = {'median': float(np.median(density)),
+                                       'p95': float(np.percentile(density, 95))}
     write(Path(out), report)
     return report

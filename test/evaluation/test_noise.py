@@ -26,6 +26,10 @@ def test_the_fit_recovers_white_noise_and_random_walk_and_keeps_pose_noise_apart
     assert keys == ['gyroscope_noise_density', 'gyroscope_random_walk'] == list(pasted)
     assert abs(pasted['gyroscope_noise_density'] / density - 1) < 0.2
     assert '# gyroscope_noise_density: 5.000e-03' in snippet  # the raw one, a comment
+    own = yaml_snippet({'corrected': fig}, 'a test', {'median': 1.2e-3, 'p95': 3.4e-3})
+    assert yaml.safe_load(own) == yaml.safe_load(yaml_snippet({'corrected': fig}, 'a test'))
+    said = 'variance per message (fit-variance) as a density: median 1.200e-03, 95th percentile'
+    assert f'{said} 3.400e-03' in own  # a comment: the keys stay one density
 
 
 def test_a_random_walk_too_slow_to_resolve_is_an_upper_bound_not_zero():
@@ -73,9 +77,14 @@ def test_an_error_free_axis_has_zero_figures_not_a_traceback(tmp_path):
     f = figures(err, 200.0)
     assert f['per_axis'][1]['noise_density'] == 0.0 and f['per_axis'][0]['noise_density'] > 0
     write_asl(tmp_path / 'rec', n_imu=3000)
-    model = write_untrained_model(tmp_path / 'm.safetensors', {'sample_rate_hz': 200.0})
+    model = write_untrained_model(tmp_path / 'm.safetensors', {
+        'sample_rate_hz': 200.0, 'gyro_variance': {'theta': [-9.0, 0.0, 0.0, 0.0]}})
     assert main(['noise', '--model', str(model), '--data', str(tmp_path), '--sequences', 'rec',
                  '--out', str(tmp_path / 'noise')]) == 0
+    # the variance imu/corrected publishes per message, a constant here: its density
+    density = f'{np.sqrt(np.exp(-9.0) / 200.0):.3e}'
+    assert f'median {density}, 95th percentile {density}' in (
+        tmp_path / 'noise' / 'noise.yaml').read_text()
 
 
 def test_the_block_check_sees_white_noise_of_the_published_sigma_as_gaussian():
