@@ -232,7 +232,7 @@ class GyroVariance:
     phi: 1, then log1p(m / scale) of three causal means m over ``mean_s`` seconds: of the
     rate's norm (rad/s), of the accelerometer norm's distance from gravity (m/s^2) and of
     the rate's change per second (rad/s^2), each over its ``scales`` entry
-    (``pipeline/covariance.py``). ``tune-fusion`` fits theta by the likelihood of the
+    (``pipeline/covariance.py``). ``fit-variance`` fits theta by the likelihood of the
     rotation increments' errors on the validation tails.
     """
 
