@@ -23,7 +23,7 @@ ours (GTSAM integrates in the tangent space of the rotation with its exact Jacob
 ours takes one sample's right Jacobian as the identity: the two agree to the order of that
 term, not to rounding).
 Run: .venv/bin/python bench/preintegration.py [--data ../shared/data/euroc]
-[--sequences MH_02_easy ...] [--windows 0.2 1 2]
+[--sequences MH_02_easy ...] [--windows 0.2 1 2] [--models euroc_calibrated euroc]
 """
 
 import argparse
@@ -83,10 +83,12 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument('--data', default=str(DATA))
     parser.add_argument('--sequences', nargs='+', default=TEST)
+    parser.add_argument('--models', nargs='+', default=['euroc_calibrated', 'euroc'],
+                        help='shipped names or model files, each a row (its file name)')
     parser.add_argument('--windows', nargs='+', type=float, default=[0.2, 1.0, 2.0],
                         help='window lengths (s)')
     args = parser.parse_args()
-    models = {name: read_model_file(name) for name in ('euroc_calibrated', 'euroc')}
+    models = {Path(name).stem: read_model_file(name) for name in args.models}
     rows: dict[tuple[float, str], list[dict[str, np.ndarray]]] = {}
     largest = {'increment': 0.0, 'covariance': 0.0}
     for name in args.sequences:
