@@ -92,9 +92,14 @@ def increments(gt_valid: np.ndarray, length: int,
     return starts[ok], ends[ok]
 
 
-def _block_errors(gt_quat: np.ndarray, starts: np.ndarray, ends: np.ndarray,
-                  est: Rotation) -> np.ndarray:
-    """Return the errors (rotation vectors) of the given increments of a trajectory."""
+def block_errors(gt_quat: np.ndarray, starts: np.ndarray, ends: np.ndarray,
+                 est: Rotation) -> np.ndarray:
+    """
+    Return the errors (rotation vectors) of the given increments of a trajectory.
+
+    R_gt_inc^T R_est_inc of each increment from ``starts`` to ``ends``, ``est`` the
+    integrated gyro at every stamp.
+    """
     gt = Rotation.from_quat(gt_quat[np.concatenate([starts, ends])])
     m = len(starts)
     gyro = est[starts].inv() * est[ends]
@@ -117,7 +122,7 @@ def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndar
     if len(i) == 0:
         return np.zeros((0, 3)), np.zeros(0)
     est = integrate(gt_quat[0], gyro[:len(dt)], dt) if est is None else est
-    res = _block_errors(gt_quat, i, e, est)
+    res = block_errors(gt_quat, i, e, est)
     t = np.concatenate([[0.0], np.cumsum(dt)])
     return res, t[e] - t[i]
 
@@ -138,7 +143,7 @@ def fit_constant_bias(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarra
     if len(i) == 0:
         return None
     est = integrate(gt_quat[0], gyro[:len(dt)], dt) if est is None else est
-    res = _block_errors(gt_quat, i, e, est)
+    res = block_errors(gt_quat, i, e, est)
     # sum_k Q_k^T dt_k = R_e^T sum_k R_{k+1} dt_k: one cumulative sum serves every increment
     rot = est.as_matrix()
     after = np.concatenate([np.zeros((1, 3, 3)),

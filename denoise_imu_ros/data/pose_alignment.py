@@ -101,14 +101,9 @@ class Rates:
         self.pose_ok &= np.linalg.norm(self.pose, axis=1) <= JUMP_RATE_FACTOR * fastest + \
             JUMP_RATE_MARGIN_RAD_S
 
-    def matched(self, offset_s: float, part: slice = slice(None)) -> tuple[np.ndarray, ...]:
-        """Gyro and pose rates of the IMU windows that trusted poses cover, at an offset."""
-        pairs = self.pairs(offset_s, part)
-        return pairs[:3].T, pairs[3:].T
-
     def pairs(self, offset_s: float, part: slice = slice(None)) -> np.ndarray:
         """
-        Return :meth:`matched`'s rates as rows, (6, n): the offset search's form.
+        Return the gyro's and the poses' rates (6, n) where trusted poses cover, at an offset.
 
         Each axis a contiguous row: numpy's products and sums over 3 columns of n rows
         cost several times those over 3 rows of n columns.
@@ -384,12 +379,13 @@ def _estimate_pose_alignment(rec: Recording, max_offset_s: float) -> dict[str, A
         far = _best_offset(rates, max_offset_s, center=lag)
         if _residual(rates, far) < FAR_MARGIN * _residual(rates, offset):
             offset, center = far, lag
-    imu, pose = rates.matched(offset)
-    if len(imu) < 3:
+    pairs = rates.pairs(offset)
+    if pairs.shape[1] < 3:
         raise DatasetError(f'{rec.source}: no pose rate to compare with the gyro: the poses '
                            'turn faster than the gyro ever does, or overlap it nowhere')
-    rot, bias, rms, out = robust_fit(imu, pose)
-    imu, pose = imu[~out], pose[~out]
+    r, bias, rms, out = _robust_fit(pairs)
+    rot = Rotation.from_matrix(r)
+    imu, pose = pairs[:3, ~out].T, pairs[3:, ~out].T
     aligned = rot.apply(pose)
     # what the poses can see turn: the gyro over the windows compared, less its bias
     excitation = np.sqrt(np.mean((imu - bias) ** 2, axis=0))
@@ -399,9 +395,10 @@ def _estimate_pose_alignment(rec: Recording, max_offset_s: float) -> dict[str, A
     for q in range(QUARTERS):
         part = slice(q * n // QUARTERS, (q + 1) * n // QUARTERS)
         offsets.append(_best_offset(rates, 4e-3, part, center=offset))
-        qi, qp = rates.matched(offset, part)
-        if len(qi) > 100:
-            angles.append(math.degrees((robust_fit(qi, qp)[0] * rot.inv()).magnitude()))
+        quarter = rates.pairs(offset, part)
+        if quarter.shape[1] > 100:
+            turn = Rotation.from_matrix(_robust_fit(quarter)[0]) * rot.inv()
+            angles.append(math.degrees(turn.magnitude()))
     return {
         'time_offset_s': offset,
         # the standard error of their mean: the sample std (ddof 1; of four, ddof 0 is 13 % low)

@@ -20,11 +20,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.optimize import minimize
-from scipy.spatial.transform import Rotation
 
 from .filters import training_recordings
 from .preintegration import window_starts
-from ..core.metrics import integrate
+from ..core.metrics import block_errors, integrate
 from ..core.modelfile import sample_rate
 from ..core.records import Sequence
 from ..core.schema import GyroVariance
@@ -49,7 +48,6 @@ class Windows(NamedTuple):
         """Return the windows of ``seq`` from sample ``start`` on whose poses are trusted."""
         dt = np.diff((seq.stamp_ns - seq.stamp_ns[0]) * 1e-9)
         attitude = integrate(np.array([0.0, 0.0, 0.0, 1.0]), gyro[:-1], dt)
-        poses = Rotation.from_quat(seq.gt_quat)
         valid = seq.gt_valid.copy()
         valid[:start] = False
         found = []
@@ -58,10 +56,8 @@ class Windows(NamedTuple):
             starts = window_starts(valid, length, max(1, length // 2))
             if not len(starts):
                 continue
-            ends = starts + length
-            error = ((poses[starts].inv() * poses[ends]).inv()
-                     * (attitude[starts].inv() * attitude[ends])).magnitude()
-            found.append((window_s, starts, length, error ** 2))
+            error = block_errors(seq.gt_quat, starts, starts + length, attitude)
+            found.append((window_s, starts, length, np.sum(error ** 2, axis=1)))
         return cls(phi, np.r_[dt, 0.0] ** 2, found)
 
 

@@ -469,8 +469,13 @@ def _guarded(bounds: InputEnvelope, field: int) -> list[Stage]:
 def corrected(model: ModelFile, imu: np.ndarray, rest: str = 'model', guard: str = 'model',
               batch: Callable[[np.ndarray], np.ndarray] | None = None, mix: str = 'model'
               ) -> np.ndarray:
-    """Return the corrected gyro (N, 3) of a recording's raw samples (N, 6), one run."""
-    return Pipeline(correction(model, rest, guard, batch, mix)).run(Flow.recording(imu)).out
+    """
+    Return the corrected gyro (N, 3) of a recording's raw samples (N, 6), one run.
+
+    The stages up to the gyro's own variance, which is not the gyro (:func:`variances`).
+    """
+    return Pipeline(correction(model, rest, guard, batch, mix)).run(
+        Flow.recording(imu), before=GyroVarianceStage).out
 
 
 def model_input(model: Any, imu: np.ndarray, rest: str = 'model') -> np.ndarray:

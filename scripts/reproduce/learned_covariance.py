@@ -37,7 +37,7 @@ TEST = ['MH_02_easy', 'MH_04_difficult', 'V1_01_easy', 'V1_03_difficult', 'V2_02
 SHAPE = GyroVariance((0.0, 0.0, 0.0, 0.0))  # the features' means and scales
 
 
-class Recording:
+class Scored:
     """One recording's corrected IMU, features and ground truth, and its windows' errors."""
 
     def __init__(self, folder: Path, mf, start: int) -> None:
@@ -79,7 +79,7 @@ def main() -> None:
     args = parser.parse_args()
     mf = read_model_file(args.model)
     start = mf.meta.training_span
-    recs = {part: [Recording(Path(args.data) / name, mf, start if part == 'train' else 0)
+    recs = {part: [Scored(Path(args.data) / name, mf, start if part == 'train' else 0)
                    for name in names] for part, names in (('train', TRAIN), ('test', TEST))}
     published = np.diag(np.reshape(gyro_covariance(mf), (3, 3)))
     fitted = {}

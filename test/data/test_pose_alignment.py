@@ -45,6 +45,13 @@ def test_an_axis_that_only_vibrates_has_no_interpolation_scale_to_judge(tmp_path
     assert found[:2] == [None, None] and abs(found[2]) < 0.5
 
 
+@pytest.mark.parametrize('n', [1, 2, 5, 100, 1001])
+def test_the_offset_searchs_median_is_numpys(n):
+    from denoise_imu_ros.data.pose_alignment import _median
+    values = np.random.default_rng(n).exponential(size=n)
+    assert _median(values) == float(np.median(values))
+
+
 @pytest.mark.parametrize('noise', [0.0, 0.01, 1.0])
 def test_the_frame_fit_is_scipys_on_the_centred_rates(noise):
     """The fit from the rates' sums and products: scipy's rotation, the bias, the residual."""
