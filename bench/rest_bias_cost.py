@@ -75,7 +75,8 @@ def main() -> None:
             times['tracker alone'].append(
                 per_sample_s(lambda t, g, a: track.update(g, a), stamps, imu))
         if model.meta.input_envelope is not None:
-            guard = Guard(model.meta.input_envelope, model.config.receptive_field)
+            guard = Guard(model.meta.input_envelope, model.config.receptive_field,
+                          sample_rate(model))
 
             def guarded(t: int, g: np.ndarray, a: np.ndarray) -> np.ndarray:
                 fed = np.concatenate([g, a])  # fed as the pipeline feeds it
@@ -84,8 +85,7 @@ def main() -> None:
 
             times['envelope guard alone'].append(per_sample_s(guarded, stamps, imu))
         if blended:
-            blender = Blender(model.meta.blend, sample_rate(model), model.meta.input_envelope,
-                              model.config.receptive_field)
+            blender = Blender(model.meta.blend, sample_rate(model))
 
             def mixed(t: int, g: np.ndarray, a: np.ndarray) -> np.ndarray:
                 return blender.apply(g, np.concatenate([g, a]))

@@ -18,15 +18,21 @@ bias removed through a stretch where the receptive field turned faster than the
 envelope is the one from before it, and after it the tracker's estimate and covariance
 are restored to those from before it: a network's output beyond the rates it was trained
 on is off by more than a bias, and a tracker that kept what it learnt there carried the
-error on (BROAD's fast trials 07 and 29); accelerometer excursions alone (tapping) do
-not hold it. Measured worse (docs/experiments.md): holding the last correction (a
+error on (BROAD's fast trials 07 and 29). Where the classical pipeline's output is given
+beyond the sustained bound (the blend's fallback, ``hold_beyond``), the same hold there:
+where a sample of the receptive field has a mean | |accel| - g | over SUSTAINED_S above
+the model file's bound (:func:`beyond`: acceleration longer and harder than any training
+recording's), the network's tracker otherwise learns a bias that the stretches between
+the bursts carry (another session's fast translation, run 36); where the output there is
+the model's own, its tracker follows it. Accelerometer excursions alone (tapping) do not
+hold it. Measured worse (docs/experiments.md): holding the last correction (a
 correction taken in motion carries that motion's scale terms into faster motion),
 guarding before the tracking (its estimate then follows the fallback through fast
 motion), holding the estimate wherever the guard is (what it learns through tapping is
 then discarded), and feeding the tracker the fallback through the held stretches.
-Every path uses it identically (:func:`too_fast` and :func:`guard_batch` over arrays for
-``eval``, ``correct`` and ``crossval``; :class:`Guard` per sample for the node and
-``process-bag``; equal bit for bit), in the order of
+Every path uses it identically (:func:`too_fast`, :func:`beyond` and :func:`guard_batch`
+over arrays for ``eval``, ``correct`` and ``crossval``; :class:`Guard` per sample for the
+node and ``process-bag``; equal bit for bit), in the order of
 :data:`~denoise_imu_ros.pipeline.stages.STAGES`. The node's ``envelope_guard``
 parameter (``correct``'s and ``process-bag``'s option) turns it off, and the hold with
 it: the model's output everywhere, tracked throughout (:func:`resolve`).
@@ -42,9 +48,9 @@ import numpy as np
 from ..core.limits import GRAVITY_M_S2
 from ..core.schema import InputEnvelope
 
-__all__ = ['CHOICES', 'combine', 'excursion', 'Guard', 'guard_batch', 'measure', 'outside',
-           'resolve', 'sustained', 'sustained_bound', 'SUSTAINED_S', 'too_fast', 'untrusted',
-           'within_field']
+__all__ = ['beyond', 'CHOICES', 'combine', 'excursion', 'Guard', 'guard_batch', 'measure',
+           'outside', 'resolve', 'Sustained', 'sustained', 'sustained_bound', 'SUSTAINED_S',
+           'too_fast', 'untrusted', 'within_field']
 
 CHOICES = ('model', 'off')  # the node's envelope_guard parameter, the offline tools' option
 SUSTAINED_S = 1.0  # the accelerometer's excursion from gravity averaged over this long
@@ -74,6 +80,33 @@ def sustained(imu: np.ndarray, window: int) -> np.ndarray:
     return (total[n + 1] - total[start]) / (n + 1 - start)
 
 
+def _window(rate_hz: float) -> int:
+    """Return SUSTAINED_S in samples at ``rate_hz``."""
+    return max(1, round(SUSTAINED_S * rate_hz))
+
+
+class Sustained:
+    """:func:`sustained` one sample at a time."""
+
+    def __init__(self, window: int) -> None:
+        self.window = window
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the past: another run."""
+        self._totals = [0.0] * self.window  # the running sum at the last window samples
+        self._total, self._n = 0.0, 0
+
+    def update(self, accel: np.ndarray) -> float:
+        """Take one accelerometer sample (3,); return the mean excursion up to it."""
+        ax, ay, az = accel.tolist()
+        before = self._totals[self._n % self.window] if self._n >= self.window else 0.0
+        self._total += abs(math.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2)
+        self._totals[self._n % self.window] = self._total
+        self._n += 1
+        return (self._total - before) / min(self._n, self.window)
+
+
 def sustained_bound(imus: Iterable[np.ndarray], rate_hz: float) -> float:
     """
     Return the largest :func:`sustained` excursion (over SUSTAINED_S) of whole recordings.
@@ -82,8 +115,7 @@ def sustained_bound(imus: Iterable[np.ndarray], rate_hz: float) -> float:
     another session's fast translation), where a network's output lost to the classical
     pipeline's (docs/experiments.md, runs 24 and 26).
     """
-    window = max(1, round(SUSTAINED_S * rate_hz))
-    return float(max(sustained(imu, window).max() for imu in imus))
+    return float(max(sustained(imu, _window(rate_hz)).max() for imu in imus))
 
 
 def measure(imus: Iterable[np.ndarray], corrections: Iterable[np.ndarray] | None = None,
@@ -141,6 +173,18 @@ def too_fast(fed: np.ndarray, envelope: InputEnvelope, field: int) -> np.ndarray
     return within_field(excursion(fed)[0] > envelope.gyro_rad_s, field)
 
 
+def beyond(fed: np.ndarray, envelope: InputEnvelope, field: int, rate_hz: float
+           ) -> np.ndarray:
+    """
+    Whether a sample of n - field + 1 ... n of (N, 6) accelerates beyond the sustained bound.
+
+    All False where the envelope has none.
+    """
+    if envelope.sustained_accel_m_s2 is None:
+        return np.zeros(len(fed), bool)
+    return within_field(sustained(fed, _window(rate_hz)) > envelope.sustained_accel_m_s2, field)
+
+
 def guard_batch(output: np.ndarray, fed: np.ndarray, envelope: InputEnvelope | None,
                 field: int, bias: np.ndarray | None = None) -> np.ndarray:
     """
@@ -168,25 +212,34 @@ def resolve(meta: Any, choice: str) -> InputEnvelope | None:
 
 class Guard:
     """
-    :func:`guard_batch` and :func:`too_fast` one sample at a time (node, process-bag).
+    :func:`guard_batch`, :func:`too_fast`, :func:`beyond` per sample (node, process-bag).
 
-    :meth:`check` each input first (the tracker reads :attr:`too_fast` before the output
-    is guarded), then :meth:`apply` to the output.
+    :meth:`check` each input first (the tracker reads :attr:`hold` before the output is
+    guarded), then :meth:`apply` to the output.
     """
 
-    def __init__(self, envelope: InputEnvelope, field: int) -> None:
-        self.envelope, self.field = envelope, field
+    def __init__(self, envelope: InputEnvelope, field: int, rate_hz: float,
+                 hold_beyond: bool = False) -> None:
+        self.envelope, self.field, self.hold_beyond = envelope, field, hold_beyond
         self._fallback = np.array(envelope.fallback_rad_s)
+        self._bound = envelope.sustained_accel_m_s2
+        self.sustained = Sustained(_window(rate_hz))
         self.reset()
         self.guarded = 0  # samples guarded since start, for diagnostics
 
     def reset(self) -> None:
         """Forget the past: a new stream, or the network's history restarted."""
-        self._since_outside = self._since_fast = self.field  # none within the field
-        self.trusted, self.too_fast = True, False
+        self._since_outside = self._since_fast = self._since_beyond = self.field
+        self.trusted, self.too_fast, self.beyond = True, False, False
+        self.sustained.reset()
+
+    @property
+    def hold(self) -> bool:
+        """Whether the output's tracker holds here: too fast, or beyond where that holds it."""
+        return self.too_fast or (self.hold_beyond and self.beyond)
 
     def check(self, fed: np.ndarray) -> None:
-        """Take the model's input ``fed`` (6,): set :attr:`trusted` and :attr:`too_fast`."""
+        """Take the model's input ``fed`` (6,): set :attr:`trusted`, ``too_fast``, ``beyond``."""
         x, y, z, ax, ay, az = fed.tolist()
         fast = math.sqrt(x * x + y * y + z * z) > self.envelope.gyro_rad_s
         self._since_fast = 0 if fast else self._since_fast + 1
@@ -197,6 +250,10 @@ class Guard:
             self._since_outside += 1
         self.trusted = self._since_outside >= self.field
         self.too_fast = self._since_fast < self.field
+        if self._bound is not None:
+            over = self.sustained.update(fed[3:]) > self._bound
+            self._since_beyond = 0 if over else self._since_beyond + 1
+            self.beyond = self._since_beyond < self.field
 
     def apply(self, output: np.ndarray, fed: np.ndarray,
               bias: np.ndarray | None = None) -> np.ndarray:

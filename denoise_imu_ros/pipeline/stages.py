@@ -15,7 +15,7 @@ compiled step). :class:`Pipeline` runs the stages a model file has in the order 
 stage           per sample                 over a recording           reset by
 ==============  =========================  =========================  ===================
 turn-on bias    ``RestBias.update``        ``remove_rest_bias``       start, jump (kept)
-envelope check  ``Guard.check``            ``too_fast``               start, gap, jump
+envelope check  ``Guard.check``            ``too_fast``, ``beyond``   start, gap, jump
 network         ``StreamingCorrector``     torch's ``GyroNet``        start, gap, jump
 bias tracking   ``BiasTracker.update``     ``tracked_bias``           start, jump
 envelope apply  ``Guard.apply``            ``guard_batch``            (the check's)
@@ -78,19 +78,20 @@ class Flow:
 
     ``fed`` is the model's input (the raw gyro less the turn-on bias, and the
     accelerometer), ``out`` the gyro so far; the rest are set by the stages that have
-    them (``bias`` the tracked bias removed, ``too_fast`` the envelope's hold,
-    ``variance`` the output's).
+    them (``bias`` the tracked bias removed, ``hold`` the envelope's hold of the tracker,
+    ``beyond`` its samples beyond the sustained bound, ``variance`` the output's).
     """
 
-    __slots__ = ('fed', 'out', 'bias', 'too_fast', 'event', 'dt_s', 'periods', 'attitude',
-                 'orientation', 'variance')
+    __slots__ = ('fed', 'out', 'bias', 'hold', 'beyond', 'event', 'dt_s', 'periods',
+                 'attitude', 'orientation', 'variance')
 
     def __init__(self, fed: np.ndarray, event: Event | None = None, dt_s: Any = 0.0,
                  periods: Any = 0.0, out: np.ndarray | None = None) -> None:
         self.fed, self.event, self.dt_s, self.periods = fed, event, dt_s, periods
         self.out: Any = out
         self.bias: Any = None
-        self.too_fast: Any = False
+        self.hold: Any = False
+        self.beyond: Any = False
         self.attitude: Any = None
         self.orientation: Any = None
         self.variance: Any = None
@@ -160,21 +161,26 @@ class TurnOnBias(Stage):
 class EnvelopeCheck(Stage):
     """Whether the receptive field holds motion the model was not trained on."""
 
-    def __init__(self, guard: envelope.Guard) -> None:
-        self.guard = guard
+    def __init__(self, guard: envelope.Guard, rate_hz: float) -> None:
+        self.guard, self.rate_hz = guard, rate_hz
 
     def reset(self, events: frozenset[Event] = RUN) -> None:
         """Forget the inputs seen: the network's history restarted."""
         self.guard.reset()
 
     def step(self, flow: Flow) -> None:
-        """Take the model's input; the tracker holds while it turns too fast."""
-        self.guard.check(flow.fed)
-        flow.too_fast = self.guard.too_fast
+        """Take the model's input; the tracker holds while too fast (or beyond, if blended)."""
+        guard = self.guard
+        guard.check(flow.fed)
+        flow.hold, flow.beyond = guard.hold, guard.beyond
 
     def run(self, flow: Flow) -> None:
-        """Mark the samples whose receptive field turns faster than the envelope."""
-        flow.too_fast = envelope.too_fast(flow.fed, self.guard.envelope, self.guard.field)
+        """Mark the samples whose receptive field turns faster or accelerates beyond; the hold."""
+        guard = self.guard
+        flow.beyond = envelope.beyond(flow.fed, guard.envelope, guard.field, self.rate_hz)
+        flow.hold = envelope.too_fast(flow.fed, guard.envelope, guard.field)
+        if guard.hold_beyond:
+            flow.hold = flow.hold | flow.beyond
 
 
 class Network(Stage):
@@ -214,12 +220,12 @@ class BiasTrackingStage(Stage):
 
     def step(self, flow: Flow) -> None:
         """Remove the bias tracked up to this sample (held while the envelope says)."""
-        flow.bias = self.tracker.update(flow.out, flow.fed[3:], flow.too_fast)
+        flow.bias = self.tracker.update(flow.out, flow.fed[3:], flow.hold)
         flow.out = flow.out - flow.bias
 
     def run(self, flow: Flow) -> None:
         """Remove the bias tracked at each sample."""
-        hold = flow.too_fast if isinstance(flow.too_fast, np.ndarray) else None
+        hold = flow.hold if isinstance(flow.hold, np.ndarray) else None
         flow.bias = rest_bias.tracked_bias(flow.out, flow.fed[:, 3:], self.rate_hz,
                                            self.settings, hold)
         flow.out = flow.out - flow.bias
@@ -253,12 +259,13 @@ class ClassicalMix(Stage):
 
     def step(self, flow: Flow) -> None:
         """Blend one output."""
-        flow.out = self.blender.apply(flow.out, flow.fed)
+        flow.out = self.blender.apply(flow.out, flow.fed, flow.beyond)
 
     def run(self, flow: Flow) -> None:
         """Blend every output."""
         b = self.blender
-        flow.out = blend_batch(flow.out, flow.fed, b.rate_hz, b.blend, b.bounds, b.field)
+        beyond = flow.beyond if isinstance(flow.beyond, np.ndarray) else None
+        flow.out = blend_batch(flow.out, flow.fed, b.rate_hz, b.blend, beyond)
 
 
 class VerticalDrop(Stage):
@@ -451,9 +458,9 @@ def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
     if tracking is not None:
         stages.append(BiasTrackingStage(tracking, rate))
     if bounds is not None:
-        stages += _guarded(bounds, model.config.receptive_field)
+        stages += _guarded(bounds, model.config.receptive_field, rate, blend is not None)
     if blend is not None:
-        stages.append(ClassicalMix(Blender(blend, rate, bounds, model.config.receptive_field)))
+        stages.append(ClassicalMix(Blender(blend, rate)))
     if drops_vertical(model.meta, rest):
         stages.append(VerticalDrop(rate))
     if model.meta.gyro_variance is not None:
@@ -461,9 +468,11 @@ def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
     return stages
 
 
-def _guarded(bounds: InputEnvelope, field: int) -> list[Stage]:
-    guard = envelope.Guard(bounds, field)
-    return [EnvelopeCheck(guard), EnvelopeApply(guard)]
+def _guarded(bounds: InputEnvelope, field: int, rate_hz: float, blended: bool
+             ) -> list[Stage]:
+    """Return the envelope's check and apply (the tracker held beyond the bound if blended)."""
+    guard = envelope.Guard(bounds, field, rate_hz, hold_beyond=blended)
+    return [EnvelopeCheck(guard, rate_hz), EnvelopeApply(guard)]
 
 
 def corrected(model: ModelFile, imu: np.ndarray, rest: str = 'model', guard: str = 'model',
@@ -496,9 +505,9 @@ def finish(output: np.ndarray, fed: np.ndarray, rate_hz: float,
     """
     stages: list[Stage] = [] if tracking is None else [BiasTrackingStage(tracking, rate_hz)]
     if bounds is not None:
-        stages += _guarded(bounds, field)
+        stages += _guarded(bounds, field, rate_hz, blend is not None)
     if blend is not None:
-        stages.append(ClassicalMix(Blender(blend, rate_hz, bounds, field)))
+        stages.append(ClassicalMix(Blender(blend, rate_hz)))
     if vertical:
         stages.append(VerticalDrop(rate_hz))
     return Pipeline(stages).run(Flow(fed, out=output)).out

@@ -5,21 +5,26 @@ The network's output blended with the classical pipeline's, on a session crossva
 
 For each held-out trial of ``crossval --sessions ... [--motions ...] --seeds ...`` (its
 models in OUT), each seed's and the ensemble's guarded, tracked output N (as the product
-computes it) and the classical pipeline's gyro T (the gyro less its turn-on bias, its bias
-tracked as the fold's tracker-only row) are combined per sample:
+computes it where it blends: its tracker held where too fast or beyond the sustained bound)
+and the classical pipeline's gyro T (the gyro less its turn-on bias, its bias tracked as the
+fold's tracker-only row) are combined per sample:
 - ``blend W``: T + W (N - T), with T alone where the fallback rule flags the sample
   (``sustained``: a sample of the receptive field whose causal 1 s mean of ||a| - g| is
   above the largest any training trial reached, the model file's; ``envelope``: that or
   the model's own envelope, as the product's classical mix; ``held``: as ``envelope``,
   but there T's tracker held through the stretches faster than the envelope as the
   network's is (its estimate from before each restored after it); ``held everywhere``:
-  that T blended everywhere; ``none``);
+  that T blended everywhere; ``none``); ``--release S`` keeps the sustained flag S s
+  after its last;
 - ``gravity``: N or T, whichever kept the accelerometer's direction steadier in its own
   open-loop world frame over the last WIN s (low-passed over LP s), or the blend W unless
   its turn exceeds T's by more than ``--margins``: a causal selector;
 - ``spread``: the blend W where the seeds' outputs agree, T where their spread (the RMS
   over the axes of their standard deviation, its causal mean over SPREAD_S) exceeds a
-  bound (``--spreads``, deg/s): the ensemble's own doubt, beyond what its members saw.
+  bound (``--spreads``, deg/s): the ensemble's own doubt, beyond what its members saw;
+- ``highpass``: T + W HP(N - T), the difference's causal first-order high-pass at TAU s
+  (``--highpass``): the network gives what changes within seconds, the classical tracker
+  the slow rest (the bias a new power-on moves).
 Prints, per fold and setting, the mean against tracker only, the mean per-trial ratio and
 the worst, for the ensemble and each seed. Run: .venv/bin/python
 scripts/reproduce/blend_fallback.py OUT ../shared/data/broad --weights 1 0.7 0.5 0.3
@@ -36,18 +41,22 @@ from denoise_imu_ros.evaluation.crossval import CANDIDATES
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
 from denoise_imu_ros.pipeline import envelope, stages
-from denoise_imu_ros.pipeline.envelope import sustained, within_field
-from denoise_imu_ros.pipeline.rest_bias import track_bias, tracked_bias
+from denoise_imu_ros.pipeline.rest_bias import track_bias
 import numpy as np
+from scipy.signal import lfilter
 
 SPREAD_S = 1.0  # s, the causal mean of the seeds' spread
 
 
-def trials(out: Path, data: Path) -> dict[str, dict]:
-    """Return, per held-out trial: its fold, sequence, T, each N and their flags."""
+def trials(out: Path, data: Path, release_s: float = 0.0) -> dict[str, dict]:
+    """
+    Return, per held-out trial: its fold, sequence, T, each N and their flags.
+
+    ``release_s``: the sustained flag kept that long after the receptive field's last.
+    """
     report = json.loads((out / 'crossval.json').read_text())
     found = {}
-    for i, held in enumerate(report['folds']):
+    for i, held_out in enumerate(report['folds']):
         chosen = report['tracking']['per_fold'][str(i)]
         nets = [load_model(out / f'seed{s}' / f'fold{i}' / 'network.safetensors')
                 for s in report['seeds']]
@@ -55,31 +64,28 @@ def trials(out: Path, data: Path) -> dict[str, dict]:
         bounds.append(envelope.combine(bounds))  # the ensemble's
         field, rate = nets[0].model.receptive_field, nets[0].meta.sample_rate_hz
         tracking = CANDIDATES[chosen['network']]
-        for name in held:
+        classical_tracking = CANDIDATES[chosen['tracker only']]
+        for name in held_out:
             seq = load_sequence(data / name, min_samples=field, align_poses='auto')
             fed = stages.model_input(nets[0], seq.stream)
             gyros = [correct_gyro(m.model, fed) for m in nets]
             gyros.append(np.mean(gyros, axis=0))
-            outputs, untrusted, held, steady = [], [], [], []
-            classical_tracking = CANDIDATES[chosen['tracker only']]
-            mean_off = sustained(fed, max(1, round(envelope.SUSTAINED_S * rate)))
+            outputs, untrusted, flags, steady = [], [], [], []
             for g, env in zip(gyros, bounds):
-                hold = envelope.too_fast(fed, env, field)
-                bias = (np.zeros_like(g) if tracking is None
-                        else tracked_bias(g, fed[:, 3:], rate, tracking, hold))
-                base = envelope.untrusted(fed, env, field)
-                own = fed[:, :3] + np.array(env.fallback_rad_s) - bias
-                outputs.append(np.where(base[:, None], own, g - bias))
-                untrusted.append(base)
+                guard = envelope.Guard(env, field, rate, hold_beyond=True)  # as blended
+                outputs.append(stages.Pipeline(
+                    ([] if tracking is None else [stages.BiasTrackingStage(tracking, rate)])
+                    + [stages.EnvelopeCheck(guard, rate), stages.EnvelopeApply(guard)]
+                ).run(stages.Flow(fed, out=g)).out)
+                untrusted.append(envelope.untrusted(fed, env, field))
+                hold = envelope.too_fast(fed, env, field) | envelope.beyond(fed, env, field, rate)
                 steady.append(track_bias(fed[:, :3], fed[:, 3:], rate, classical_tracking,
                                          hold))
-                held.append(np.zeros(len(g), bool) if env.sustained_accel_m_s2 is None else
-                            within_field(mean_off > env.sustained_accel_m_s2, field))
+                flags.append(envelope.beyond(fed, env, field + round(release_s * rate), rate))
             found[name] = {
                 'fold': i, 'seq': seq, 'accel': fed[:, 3:], 'rate': rate,
-                'classical': track_bias(fed[:, :3], fed[:, 3:], rate,
-                                        CANDIDATES[chosen['tracker only']]),
-                'nets': outputs, 'untrusted': untrusted, 'sustained': held,
+                'classical': track_bias(fed[:, :3], fed[:, 3:], rate, classical_tracking),
+                'nets': outputs, 'untrusted': untrusted, 'sustained': flags,
                 'steady': steady}
     return found
 
@@ -92,6 +98,12 @@ def seed_spread(nets: list[np.ndarray], rate: float) -> np.ndarray:
     k = np.arange(len(spread))
     start = np.maximum(k + 1 - n, 0)
     return (total[k + 1] - total[start]) / (k + 1 - start)
+
+
+def high_pass(diff: np.ndarray, rate: float, tau_s: float) -> np.ndarray:
+    """Return diff less its causal exponential mean over tau_s (started at zero)."""
+    alpha = 1.0 / max(1.0, tau_s * rate)
+    return diff - lfilter([alpha], [1.0, alpha - 1.0], diff, axis=0)
 
 
 def gravity_drift(gyro: np.ndarray, accel: np.ndarray, rate: float, lp_s: float,
@@ -127,15 +139,22 @@ def main() -> None:
     parser.add_argument('--spreads', type=float, nargs='+', default=[], metavar='DEG_S',
                         help="also the blend where the seeds' spread stays within DEG_S deg/s "
                              '(T beyond it), one setting per weight and bound')
+    parser.add_argument('--highpass', type=float, nargs='+', default=[], metavar='TAU',
+                        help="also the blend of the difference's high-pass at TAU s (one "
+                             'setting per weight and TAU)')
+    parser.add_argument('--release', type=float, default=0.0, metavar='S',
+                        help='the sustained flag kept S s after its last sample')
     args = parser.parse_args()
-    found = trials(args.out, args.data)
-    settings = [(f'blend {w:g}', w, None, None) for w in args.weights]
+    found = trials(args.out, args.data, args.release)
+    settings = [(f'blend {w:g}', w, None, None, None) for w in args.weights]
     if args.gravity:
         settings += [(f'gravity {args.gravity[0]:g} s / {args.gravity[1]:g} s, blend {w:g}, '
-                      f'margin {m:g} deg', w, np.radians(m), None)
+                      f'margin {m:g} deg', w, np.radians(m), None, None)
                      for w in args.weights for m in args.margins]
-    settings += [(f'spread within {b:g} deg/s, blend {w:g}', w, None, np.radians(b))
+    settings += [(f'spread within {b:g} deg/s, blend {w:g}', w, None, np.radians(b), None)
                  for w in args.weights for b in args.spreads]
+    settings += [(f'high-pass {tau:g} s, blend {w:g}', w, None, None, tau)
+                 for w in args.weights for tau in args.highpass]
     for fold in sorted({t['fold'] for t in found.values()}):
         names = [n for n, t in found.items() if t['fold'] == fold]
         bar = np.array([score(found[n]['seq'], found[n]['seq'].on_poses(
@@ -143,7 +162,7 @@ def main() -> None:
         print(f'fold {fold}: tracker only {bar.mean():.2f} over ' + ', '.join(names))
         turned = {}  # T's gravity drift per trial and network: the same for every setting
         spread = {n: seed_spread(found[n]['nets'][:-1], found[n]['rate']) for n in names}
-        for label, weight, margin, bound in settings:
+        for label, weight, margin, bound, tau in settings:
             aoe = []
             for n in names:
                 t = found[n]
@@ -165,8 +184,11 @@ def main() -> None:
                     if bound is not None:
                         w *= spread[n] <= bound
                     w = np.where(flag, 0.0, w)[:, None]
+                    diff = net - classical
+                    if tau is not None:
+                        diff = high_pass(diff, t['rate'], tau)
                     row.append(score(t['seq'], t['seq'].on_poses(
-                        classical + w * (net - classical)))['aoe_deg'])
+                        classical + w * diff))['aoe_deg'])
                 aoe.append(row)
             aoe = np.array(aoe)  # trials x (seeds..., ensemble)
             ratio = aoe / bar[:, None]

@@ -5,8 +5,9 @@
 from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.schema import InputEnvelope, parse_meta
-from denoise_imu_ros.pipeline.envelope import (combine, Guard, guard_batch, measure, resolve,
-                                               sustained, sustained_bound, too_fast, untrusted)
+from denoise_imu_ros.pipeline.envelope import (beyond, combine, Guard, guard_batch, measure,
+                                               resolve, Sustained, sustained, sustained_bound,
+                                               too_fast, untrusted)
 import numpy as np
 import pytest
 
@@ -81,31 +82,46 @@ def test_untrusted_the_output_falls_back_to_what_the_tracker_gives():
     np.testing.assert_array_equal(done[~bad], (output - bias)[~bad])
 
 
-def _online(guard: Guard, output: np.ndarray, fed: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return the guarded outputs and the per-sample too-fast flags."""
-    rows, fast = [], []
+def _online(guard: Guard, output: np.ndarray, fed: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the guarded outputs and the per-sample too-fast and beyond flags."""
+    rows, fast, over = [], [], []
     for o, f in zip(output, fed):
         guard.check(f)
         fast.append(guard.too_fast)
+        over.append(guard.beyond)
         rows.append(guard.apply(o, f))
-    return np.array(rows), np.array(fast)
+    return np.array(rows), np.array(fast), np.array(over)
 
 
 def test_per_sample_equals_the_arrays_bit_for_bit_and_restarts_on_reset():
     fed = _imu(2000, 2)
     fed[300:320, 3:] *= 3.0     # a shock on the accelerometer
     fed[1000:1400, :3] *= 6.0   # fast rotation
+    fed[1600:1800, 3:] *= 1.5   # a second of sustained acceleration
     output = fed[:, :3] + np.random.default_rng(3).normal(0, 0.01, (2000, 3))
-    bounds = InputEnvelope(2.5, 8.0)
+    bounds = InputEnvelope(2.5, 8.0, sustained_accel_m_s2=3.0)
     batch = guard_batch(output, fed, bounds, 51)
-    guard = Guard(bounds, 51)
-    online, fast = _online(guard, output, fed)
+    guard = Guard(bounds, 51, 200.0)
+    online, fast, over = _online(guard, output, fed)
     assert np.array_equal(online, batch)
     assert np.array_equal(fast, too_fast(fed, bounds, 51))
+    assert np.array_equal(over, beyond(fed, bounds, 51, 200.0))
     assert 0 < guard.guarded == int((batch != output).any(axis=1).sum()) < 2000
+    assert over[1760:1900].all() and not over[:1600].any()  # not the shock: a mean over 1 s
     guard.reset()
-    again, _ = _online(guard, output[1000:], fed[1000:])
+    again, _, over_again = _online(guard, output[1000:], fed[1000:])
     assert np.array_equal(again, guard_batch(output[1000:], fed[1000:], bounds, 51))
+    assert np.array_equal(over_again, beyond(fed[1000:], bounds, 51, 200.0))
+
+
+def test_beyond_needs_a_sustained_bound_and_the_sustained_mean_streams():
+    fed = _imu(600, 5)
+    fed[200:, 3:] *= 2.0
+    assert not beyond(fed, InputEnvelope(2.5, 50.0), FIELD, 100.0).any()
+    assert Guard(InputEnvelope(2.5, 50.0), FIELD, 100.0).hold is False
+    mean = Sustained(100)
+    np.testing.assert_array_equal([mean.update(a) for a in fed[:, 3:]], sustained(fed, 100))
 
 
 def test_too_fast_is_the_gyro_alone_over_the_receptive_field():

@@ -420,9 +420,9 @@ def test_a_dropped_non_finite_output_still_counts_its_input_for_the_guard():
             gyro = fed[:3].copy()
             return gyro * np.nan if np.linalg.norm(gyro) > 1.0 else gyro + 0.5
 
-    guard = Guard(InputEnvelope(1.0, 50.0, (0.01, 0.0, 0.0)), 5)
-    den = OnlineDenoiser(Pipeline([Network(Broken()), EnvelopeCheck(guard), EnvelopeApply(guard),
-                                   Attitude()]), 200.0)
+    guard = Guard(InputEnvelope(1.0, 50.0, (0.01, 0.0, 0.0)), 5, 200.0)
+    den = OnlineDenoiser(Pipeline([Network(Broken()), EnvelopeCheck(guard, 200.0),
+                                   EnvelopeApply(guard), Attitude()]), 200.0)
     gyro = np.full((12, 3), 0.1)
     gyro[3] = [2.0, 0.0, 0.0]
     accel = np.array([0.0, 0.0, 9.81])

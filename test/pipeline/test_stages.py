@@ -11,9 +11,10 @@ from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.pipeline import envelope, stages
 from denoise_imu_ros.pipeline.blend import Blender
 from denoise_imu_ros.pipeline.online import OnlineDenoiser
-from denoise_imu_ros.pipeline.stages import (Attitude, ClassicalMix, correction, Event, Flow,
-                                             GyroVarianceStage, Orientation, Pipeline, STAGES,
-                                             TurnOnBias, VerticalDrop)
+from denoise_imu_ros.pipeline.stages import (Attitude, ClassicalMix, correction, EnvelopeApply,
+                                             EnvelopeCheck, Event, Flow, GyroVarianceStage,
+                                             Orientation, Pipeline, STAGES, TurnOnBias,
+                                             VerticalDrop)
 from helpers import DATA
 import numpy as np
 import pytest
@@ -46,8 +47,10 @@ def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
     bounds = dataclasses.replace(model.meta.input_envelope, sustained_accel_m_s2=held)
 
     def every_stage():
-        mix = ClassicalMix(Blender(Blend(0.6, model.meta.bias_tracking), rate, bounds, field))
-        return Pipeline([*correction(model, mix='off'), mix, VerticalDrop(rate),
+        guard = envelope.Guard(bounds, field, rate, hold_beyond=True)
+        mix = ClassicalMix(Blender(Blend(0.6, model.meta.bias_tracking), rate))
+        return Pipeline([*correction(model, guard='off', mix='off'), EnvelopeCheck(guard, rate),
+                         EnvelopeApply(guard), mix, VerticalDrop(rate),
                          GyroVarianceStage(GyroVariance((-7.5, 1.5, 2.0, -1.5)), rate),
                          Attitude(fusion.accel_bias_m_s2), Orientation(rate, fusion)])
     online = OnlineDenoiser(every_stage(), rate)
@@ -103,3 +106,12 @@ def test_the_table_in_the_docstring_is_the_table_the_code_runs():
         named = {words[w] for w in re.findall(r'\b(start|gap|jump|request)\b',
                                               row.split('  ')[-1])}
         assert named == set(resets), (row, kind.__name__)
+
+
+def test_the_envelope_holds_the_tracker_beyond_the_sustained_bound_only_where_blended():
+    """Blended, the classical output is given there; unblended, the tracker follows the model's."""
+    model = read_model_file('broad_network')
+
+    def guard(**options):
+        return Pipeline(correction(model, **options)).get(EnvelopeCheck).guard
+    assert guard().hold_beyond and not guard(mix='off').hold_beyond
