@@ -4,8 +4,9 @@
 What a VIO back-end gets from imu/corrected: its increments pre-integrated by GTSAM, beside ours.
 
 For each recording and window length, the IMU as ``imu/corrected`` carries it (each model's
-corrected gyro and its accelerometer less the bias the model fitted, ``fusion_accel_bias``;
-beside it the raw IMU and the accelerometer as it came, ``fusion_accel_bias:=off``) is
+corrected gyro and its accelerometer less the bias the model fitted, ``fusion_accel_bias``,
+unless its cross-validation found that bias does not carry to unseen recordings; beside it
+the raw IMU and the accelerometer as it came, ``fusion_accel_bias:=off``) is
 pre-integrated over back-to-back windows by
 GTSAM's PreintegratedImuMeasurements (what GTSAM-based smoothers use; ``pip install
 gtsam``) and by denoise_imu_ros.evaluation.preintegration, and compared with the ground
@@ -26,6 +27,7 @@ term, not to rounding, on EuRoC; on TUM-VI's handheld motion the increments diff
 term does not explain: GTSAM's NEES are the ones printed).
 Run: .venv/bin/python bench/preintegration.py [--data ../shared/data/euroc]
 [--sequences MH_02_easy ...] [--windows 0.2 1 2] [--models euroc_calibrated euroc]
+[--align auto] (poses moved onto the IMU's clock and frame first, as ``eval --align auto``)
 """
 
 import argparse
@@ -37,6 +39,7 @@ from denoise_imu_ros.evaluation.correct import corrected_gyro
 from denoise_imu_ros.evaluation.preintegration import (
     errors, GRAVITY, ground_truth_velocity, Increments, preintegrate, reference, window_starts)
 from denoise_imu_ros.pipeline.covariance import variances
+from denoise_imu_ros.runtime.settings import Settings
 import gtsam
 import numpy as np
 
@@ -89,12 +92,14 @@ def main() -> None:
                         help='shipped names or model files, each a row (its file name)')
     parser.add_argument('--windows', nargs='+', type=float, default=[0.2, 1.0, 2.0],
                         help='window lengths (s)')
+    parser.add_argument('--align', choices=('none', 'auto'), default='none',
+                        help="auto: the poses moved onto the IMU's clock and frame first")
     args = parser.parse_args()
     models = {Path(name).stem: read_model_file(name) for name in args.models}
     rows: dict[tuple[float, str], list[dict[str, np.ndarray]]] = {}
     largest = {'increment': 0.0, 'covariance': 0.0}
     for name in args.sequences:
-        seq = load_sequence(Path(args.data) / name)
+        seq = load_sequence(Path(args.data) / name, align_poses=args.align)
         stamp_s = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
         rate = seq.rate_hz
         n = len(stamp_s)
@@ -109,7 +114,7 @@ def main() -> None:
             stream = np.vstack([seq.lead_in, seq.imu])
             full = corrected_gyro(mf, stream)
             gyro = full[len(seq.lead_in):]
-            bias = np.array(mf.meta.fusion.chosen.accel_bias_m_s2)
+            bias = np.array(Settings().corrected_accel_bias(mf))  # the node's, at defaults
             imus[f'{label}, accelerometer as it came'] = (gyro, seq.imu[:, 3:], var)
             spec = mf.meta.gyro_variance
             if spec is not None:

@@ -139,6 +139,7 @@ def _check_writable(folder: str | Path | None) -> None:
 
 def _crossval(args: argparse.Namespace) -> None:
     from .core.modelfile import add_metadata, check_attachable, read_model_file
+    from .core.schema import fusion_metadata
     from .evaluation.crossval import attach_mismatches, crossval
     from .evaluation.reports import crossval_table
     from .learn.config import load_config
@@ -168,18 +169,30 @@ def _crossval(args: argparse.Namespace) -> None:
         return
     sys.stdout.write(crossval_table(report))
     for path in args.attach or []:
+        model = read_model_file(path)
         row = {'network': 'network', 'calibration': 'calibrated', 'tracker only': 'tracker only'
-               }.get(model_kind(read_model_file(path)))  # a rest-only model tracks nothing
+               }.get(model_kind(model))  # a rest-only model tracks nothing
         tracking = None if row is None else report['tracking']['chosen'][row]
         blend = report['blend']['chosen'] if row == 'network' and 'blend' in report else None
+        fusion = None if row is None else fusion_metadata(
+            report, row, model.meta.raw.get('fusion') or {},
+            model.meta.fusion.chosen.accel_bias_m_s2)
         add_metadata(path, crossval=report, bias_tracking=tracking and dict(
             tracking, chosen_on=f'crossval: {report["tracking"]["chosen_on"]}'),
             **({} if blend is None else {'blend': dict(
-                blend, chosen_on=f'crossval: {report["blend"]["chosen_on"]}')}))
+                blend, chosen_on=f'crossval: {report["blend"]["chosen_on"]}')}),
+            **({} if fusion is None else {'fusion': fusion}))
         print(f'stored the cross-recording figures in {path}' + (
             f', and its output bias tracking ({tracking["label"]})' if tracking else '') + (
             f', and its blend with the classical pipeline (weight {blend["weight"]:g})'
-            if blend else ''))
+            if blend else '') + (
+            f", and imu/data's filter ({report['fusion']['chosen'][row]['label']})"
+            if fusion else ''))
+        if fusion and report['fusion']['chosen'][row]['accel_bias_removed'] and not any(
+                model.meta.fusion.chosen.accel_bias_m_s2):
+            print(f'warning: {path}: the folds chose the accelerometer less its training '
+                  'bias, but the file holds none (tune-fusion --attach fits it): imu/data '
+                  'takes the accelerometer as it came', file=sys.stderr)
 
 
 def _init_recipe(args: argparse.Namespace) -> None:
@@ -192,7 +205,7 @@ def _init_recipe(args: argparse.Namespace) -> None:
 
 
 def _tune_fusion(args: argparse.Namespace) -> None:
-    from .core.modelfile import check_attachable
+    from .core.modelfile import check_attachable, read_model_file
     from .evaluation.filters import attach, table, tune_model
     if args.attach:  # before the work, not after
         for spec in (args.model, args.baseline):
@@ -200,8 +213,15 @@ def _tune_fusion(args: argparse.Namespace) -> None:
     report = tune_model(args.model, args.baseline, args.data, progress=not args.quiet)
     sys.stdout.write(table(report))
     if args.attach:
+        replaced = [spec for spec in (args.model, args.baseline) if str(
+            (read_model_file(spec).meta.raw.get('fusion') or {}).get('chosen_on', '')
+        ).startswith('crossval:')]
         attach(args.model, args.baseline, report)
         print(f'stored the chosen settings in {args.model} and {args.baseline}')
+        for spec in replaced:
+            print(f'warning: {spec}: this replaces the filter crossval chose on another '
+                  'power-on; crossval --attach after tune-fusion chooses it again',
+                  file=sys.stderr)
 
 
 def _fit_variance(args: argparse.Namespace) -> None:
@@ -238,11 +258,15 @@ def _ensemble(args: argparse.Namespace) -> None:
 
 def _rest_model(args: argparse.Namespace) -> None:
     from .core.modelfile import read_model_file, sample_rate
+    from .core.schema import fusion_metadata, TRACKER_ONLY
     from .pipeline.rest_bias import classical_tracking, write_rest_only_model
     like = read_model_file(args.like)
     _guard_output(args.out, [like.path], args.overwrite)
     tracking = classical_tracking(like.meta) if args.tracker_only else None
-    write_rest_only_model(like, args.out, tracking)
+    fusion = None if tracking is None or like.meta.crossval is None else fusion_metadata(
+        like.meta.crossval.report, TRACKER_ONLY, like.meta.raw.get('fusion') or {},
+        like.meta.fusion.chosen.accel_bias_m_s2)  # the classical rows' filter, as crossval chose
+    write_rest_only_model(like, args.out, tracking, fusion)
     tracked = '' if tracking is None else (
         f', its bias tracked (sigma {tracking.sigma_motion_deg_s:g} deg/s, forgetting '
         f'{tracking.forgetting_s:g} s)')

@@ -311,6 +311,34 @@ class Fusion:
         return self.settings or FusionSettings()
 
 
+def fusion_metadata(report: dict[str, Any], row: str, fusion: dict[str, Any],
+                    accel_bias: tuple[float, float, float]) -> dict[str, Any] | None:
+    """
+    Return the ``fusion`` entry of a model file of ``row`` with a report's filter (None: none).
+
+    Only where the folds leave a power-on out (``--sessions``): there the validation tails
+    ``tune-fusion`` chooses on cannot see what a new power-on changes; elsewhere its choice
+    stands. The file's own entry (``fusion``, as ``tune-fusion`` stored it: the other
+    filters' settings) with the filter the folds chose for ``row``; where they chose the
+    accelerometer less its training bias, ``accel_bias`` is that bias (the file's, fitted on
+    its training poses).
+    """
+    try:
+        chosen = (report.get('fusion') or {}).get('chosen', {}).get(row)
+        if chosen is None or 'session' not in str(report.get('fold_kind', '')):
+            return None
+        settings = FusionSettings(chosen['tau_acc_s'], chosen['bias_estimation'],
+                                  accel_bias if chosen['accel_bias_removed'] else (0.0,) * 3)
+        std = chosen['orientation_std_rad']
+        if not _triple(std, 0.0):
+            raise ValueError(f'orientation_std_rad {std!r}')
+        return dict(fusion, settings=settings.as_dict(), orientation_std_rad=list(std),
+                    chosen_on=f'crossval: {report["fusion"]["chosen_on"]}',
+                    scored='held-out recordings whole; yaw aligned once 1.5 s in, tilt never')
+    except (AttributeError, KeyError, TypeError, ValueError) as err:
+        raise ModelFileError(f'inconsistent crossval.fusion.chosen.{row} ({err})') from err
+
+
 @dataclass(frozen=True)
 class Verdict:
     """The cross-recording report (``crossval --attach``): what to deploy and why."""

@@ -19,7 +19,10 @@ here too, on recordings no model saw: the shipped model's, for the network, for 
 calibration and for the tracker only, is the candidate of lowest mean AOE over every
 held-out recording
 (none among them); the figures of a fold's recordings use the candidate the other folds'
-recordings choose, so that no figure was picked on itself.
+recordings choose, so that no figure was picked on itself. ``imu/data``'s filter is chosen
+the same way (:func:`_fusion`): its settings are a guess about new recordings too (another
+power-on may bring another accelerometer bias), and ``tune-fusion``'s validation tails share
+the training's power-on.
 
 The accelerometer is judged apart (:func:`accel_verdict`): each fold fits its bias on its
 training recordings' poses (as ``tune-fusion`` does) and scores the held-out recordings'
@@ -43,14 +46,15 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .filters import fit_accel_bias
+from .filters import (Filter, fit_accel_bias, FUSED, run, score as fused_score,
+                      TAU_ACC_GRID_S, VQF_DEFAULTS)
 from .preintegration import (errors as increment_errors, preintegrate, reference,
                              velocity_from_positions, window_starts)
 from .reports import CROSSVAL_METHODS
 from ..core import jsonio
 from ..core.atomic import write_text
 from ..core.errors import TrainingError
-from ..core.metrics import score
+from ..core.metrics import FusedErrors, score
 from ..core.modelfile import sample_rate
 from ..core.records import Sequence
 from ..core.schema import (ACCEL_CHOICES, AS_IT_CAME, BiasTracking, Blend, InputEnvelope,
@@ -81,6 +85,20 @@ BIAS_REMOVED = ACCEL_CHOICES[0]
 # teaches it a bias an open-loop attitude never forgets (docs/method.md)
 TRACKING_GRID = tuple(BiasTracking(sigma, forget, sigma)
                       for sigma in (0.03, 0.05, 0.07, 0.1, 0.2) for forget in (30.0, 100.0, 300.0))
+
+
+# imu/data's filter, chosen as the tracking is: VQF's accelerometer time constant and its own
+# bias estimation, each with the accelerometer as it came and less the bias fitted on the
+# fold's training poses (a new power-on may bring another bias: the folds say whether it carries)
+FUSION_GRID = tuple((Filter('vqf', tau, est), removed) for removed in (False, True)
+                    for est in (False, True) for tau in TAU_ACC_GRID_S)
+FUSED_ROWS = {m: f'{m} + VQF' for m in TRACKED}
+NO_MODEL_FUSED = 'raw + VQF defaults'  # what a user runs with no model
+
+
+def fusion_label(flt: Filter, removed: bool) -> str:
+    """Name a filter candidate in reports (the fold's accelerometer bias is not a setting)."""
+    return flt.label + (", the training poses' accelerometer bias removed" if removed else '')
 
 
 def tracking_label(settings: BiasTracking | None) -> str:
@@ -202,6 +220,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     tracked: dict[str, Any] = {}      # recording -> candidate -> row -> figures
     tracked_seed: dict[str, Any] = {}  # the same for each seed alone
     networks: dict[str, Networks] = {}  # recording -> the network's outputs, to blend
+    held: dict[str, Held] = {}  # recording -> every row's ensemble output, for imu/data
     fold_of: dict[str, int] = {}
     accel: dict[str, dict[str, float]] = {}  # recording -> velocity increment error per choice
     if sessions is not None and k is not None:
@@ -256,6 +275,8 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                 seq, fed, rate, fields['network'], drop,
                 [ensemble['network']] + ([g['network'] for g in gyros] if seeds else []),
                 [ensemble_bounds['network']] + ([b['network'] for b in bounds] if seeds else []))
+            held[name] = Held(ensemble, ensemble_bounds, fields,
+                              None if fitted is None else fitted[0])
             fold_of[name] = i
             accel[name] = accel_rows(seq, ensemble['network'],
                                      None if fitted is None else fitted[0])
@@ -263,6 +284,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     per_recording, per_seed, tracking = _nested(raw_rows, tracked, tracked_seed, fold_of,
                                                 seeds or [], key)
     blend = _blend(networks, tracking, per_recording, per_seed, fold_of, seeds or [], key)
+    fusion = _fusion(networks, held, tracking, blend, fold_of, key)
     report = summarize(per_recording, key)
     sizes = sorted({len(train) for _, train in pairs})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
@@ -273,7 +295,7 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                  f"recipe's {len(recipe.sequences)} recordings; a model of "
                                  'the whole recipe trains on all of them, so these figures '
                                  'judge networks trained on less data than it'),
-                  tracking=tracking, blend=blend, judged_on=key,
+                  tracking=tracking, blend=blend, fusion=fusion, judged_on=key,
                   accelerometer=accel_verdict(accel),
                   **({} if why is None else {'judged_on_why': why}),
                   **({'seed': recipe.seed} if seeds is None else {
@@ -507,6 +529,84 @@ def _blend(networks: dict[str, Networks], tracking: dict[str, Any],
             'candidates': {str(w): ratio(list(figures), w) for w in BLEND_WEIGHTS},
             'recordings': {n: {str(w): rows[0][w][key] for w in BLEND_WEIGHTS}
                            for n, rows in figures.items()}}
+
+
+class Held(NamedTuple):
+    """A held-out recording's untracked outputs of every tracked row (the ensemble's)."""
+
+    gyros: dict[str, np.ndarray]
+    bounds: dict[str, InputEnvelope | None]
+    fields: dict[str, int]
+    accel_bias: np.ndarray | None  # fitted on its fold's training poses (None: none usable)
+
+
+def _fusion(networks: dict[str, Networks], held: dict[str, Held], tracking: dict[str, Any],
+            blend: dict[str, Any], fold_of: dict[str, int], key: str) -> dict[str, Any]:
+    """
+    Choose ``imu/data``'s filter of each row on the held-out recordings; the report's ``fusion``.
+
+    Each recording's outputs as its fold's open-loop figures have them (tracked, the
+    network blended) are fed to every filter of FUSION_GRID; a fold's recordings take the
+    filter of lowest mean ``key`` figure over the other folds' recordings, the shipped
+    models that of all of them (the validation tails ``tune-fusion`` chooses on share the
+    training's power-on and motions). VQF's defaults on the raw gyro are scored beside.
+    """
+    figures: dict[str, dict[str, dict[str, FusedErrors]]] = {}  # recording -> row -> filter
+    for name, h in held.items():
+        n, fold = networks[name], str(fold_of[name])
+        chosen = tracking['per_fold'][fold]
+        mix = Blend(blend['per_fold'][fold], CANDIDATES[chosen[TRACKER_ONLY]])
+        accel, stamps = n.seq.stream[:, 3:], n.seq.stream_stamp_ns
+
+        def fused(flt: Filter, gyro: np.ndarray) -> FusedErrors:
+            return fused_score(n.seq, n.seq.on_poses(run(flt, gyro, accel, n.rate_hz, stamps)))
+        candidates = {fusion_label(flt, removed): dataclasses.replace(
+            flt, accel_bias_m_s2=tuple(float(b) for b in h.accel_bias)) if removed else flt
+            for flt, removed in FUSION_GRID if h.accel_bias is not None or not removed}
+        no_model = fused(VQF_DEFAULTS, n.seq.stream[:, :3])
+        figures[name] = {NO_MODEL_FUSED: {NO_MODEL_FUSED: no_model}}
+        for m in TRACKED:
+            out = stages.finish(h.gyros[m], n.fed, n.rate_hz, CANDIDATES[chosen[m]], h.bounds[m],
+                                h.fields[m], n.drop and m != TRACKER_ONLY,
+                                mix if m == 'network' else None)
+            figures[name][m] = {label: fused(flt, out) for label, flt in candidates.items()}
+
+    def mean(names: list[str], m: str, label: str, k: str) -> float:
+        return float(np.mean([getattr(figures[n][m][label], FUSED[k]) for n in names]))
+
+    def best(names: list[str], m: str) -> str:  # among the filters every recording has
+        labels = [c for c in figures[names[0]][m] if all(c in figures[n][m] for n in names)]
+        return min(labels, key=lambda c: mean(names, m, c, key))
+    every = list(figures)
+    choice = {f: {m: best([n for n in every if fold_of[n] != f], m) for m in TRACKED}
+              for f in sorted(set(fold_of.values()))}
+    shipped = {m: best(every, m) for m in TRACKED}
+
+    def cell(e: FusedErrors, label: str) -> dict[str, Any]:
+        return {'aoe_deg': e.aoe, 'tilt_deg': e.tilt, 'aoe_yaw_deg': e.aoe_yaw, 'filter': label}
+    recordings = {n: {NO_MODEL_FUSED: cell(figures[n][NO_MODEL_FUSED][NO_MODEL_FUSED],
+                                           VQF_DEFAULTS.label),
+                      **{FUSED_ROWS[m]: cell(figures[n][m][choice[fold_of[n]][m]],
+                                             choice[fold_of[n]][m]) for m in TRACKED}}
+                  for n in every}
+    grid = {fusion_label(flt, removed): (flt, removed) for flt, removed in FUSION_GRID}
+
+    def stored(m: str) -> dict[str, Any]:
+        flt, removed = grid[shipped[m]]
+        std = np.sqrt(np.mean([figures[n][m][shipped[m]].std_rad ** 2 for n in every], axis=0))
+        return {'label': shipped[m], 'tau_acc_s': flt.tau_acc_s,
+                'bias_estimation': flt.bias_estimation, 'accel_bias_removed': removed,
+                'orientation_std_rad': std.tolist()}
+    return {'chosen': {m: stored(m) for m in TRACKED},
+            'chosen_on': f"the mean {JUDGED[key]} over every held-out recording; each fold's "
+                         "figures use the other folds' choice",
+            'per_fold': {str(f): c for f, c in choice.items()},
+            'candidates': {m: {c: mean(every, m, c, key) for c in figures[every[0]][m]}
+                           for m in TRACKED},
+            'recordings': recordings,
+            'mean': {row: {k: float(np.mean([recordings[n][row][k] for n in every]))
+                           for k in ('aoe_deg', 'tilt_deg', 'aoe_yaw_deg')}
+                     for row in recordings[every[0]]}}
 
 
 def _labelled(label: str) -> dict[str, Any] | None:

@@ -108,6 +108,27 @@ def crossval_table(report: dict[str, Any]) -> str:
     if 'accelerometer' in report:
         lines.append("\nThe accelerometer (imu/corrected's): the bias fitted on each fold's "
                      f"training poses against none, {report['accelerometer']['verdict']}.\n")
+    if 'fusion' in report:
+        lines.append(fusion_table(report['fusion'], names))
+    return ''.join(lines)
+
+
+def fusion_table(fusion: dict[str, Any], names: list[str]) -> str:
+    """``crossval``'s imu/data: AOE 3-D / tilt (deg) per held-out recording, the filters chosen."""
+    rows = list(fusion['mean'])
+    lines = ['\n`imu/data` on the unseen recordings, AOE 3-D / tilt in degrees:\n\n| method | '
+             + ' | '.join(names) + ' | mean |\n', '|---' * (len(names) + 2) + '|\n']
+    for row in rows:
+        cells = [f'{fusion["recordings"][n][row]["aoe_deg"]:.2f}/'
+                 f'{fusion["recordings"][n][row]["tilt_deg"]:.2f}' for n in names]
+        mean = fusion['mean'][row]
+        lines.append(f'| {row} | ' + ' | '.join(cells)
+                     + f' | **{mean["aoe_deg"]:.2f}/{mean["tilt_deg"]:.2f}** |\n')
+    said = '; '.join(f'{m}: {c["label"]}' for m, c in fusion['chosen'].items())
+    folds = '; '.join(f'fold {f}: ' + ', '.join(f'{m} {c}' for m, c in chosen.items())
+                      for f, chosen in fusion['per_fold'].items())
+    lines.append(f"\nThe filters (VQF), chosen on {fusion['chosen_on']}: {said} (for the "
+                 f'models this verdict is attached to); the figures above: {folds}.\n')
     return ''.join(lines)
 
 

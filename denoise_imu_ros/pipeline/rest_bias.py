@@ -35,7 +35,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from typing import Iterable, NamedTuple
+from typing import Any, Iterable, NamedTuple
 
 import numpy as np
 from vqf import VQF
@@ -348,7 +348,8 @@ def nominal_bias(imus: Iterable[np.ndarray], rate_hz: float,
 
 
 def write_rest_only_model(like: ModelFile, path: str | Path,
-                          tracking: BiasTracking | None = None) -> None:
+                          tracking: BiasTracking | None = None,
+                          fusion: dict[str, Any] | None = None) -> None:
     """
     Write a model file that removes the turn-on bias and corrects nothing else.
 
@@ -357,7 +358,8 @@ def write_rest_only_model(like: ModelFile, path: str | Path,
     bias) fed the gyro less the estimate, with ``like``'s rate, estimator settings and
     prior, recordings, recipe and cross-recording report, so that every tool runs it as
     any model (the node, ``process-bag``, ``eval``, ``tune-fusion``). With ``tracking``,
-    the classical pipeline (``deploy: tracker only``): the bias left tracked after it.
+    the classical pipeline (``deploy: tracker only``): the bias left tracked after it;
+    ``fusion``, its ``imu/data`` filter (a model file's ``fusion`` entry).
     """
     settings = like.meta.rest_bias
     if settings is None:
@@ -374,4 +376,6 @@ def write_rest_only_model(like: ModelFile, path: str | Path,
                 code_version=code_version())
     if tracking is not None:
         meta['bias_tracking'] = tracking.as_dict()
+    if fusion is not None:
+        meta['fusion'] = fusion
     write_model_file(path, config, arrays, meta)

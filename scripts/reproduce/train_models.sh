@@ -76,15 +76,14 @@ done
 run broad_calibrated --recipe config/train_broad.yaml --calibration-only
 [ -f "$out/broad_network.safetensors" ] || "$bin/denoise-imu" ensemble "${broad[@]}" \
   --out "$out/broad_network.safetensors"
+[ -f "$out/tune_broad.log" ] || "$bin/denoise-imu" tune-fusion \
+  --model "$out/broad_network.safetensors" --baseline "$out/broad_calibrated.safetensors" \
+  --data "${DATA:-../shared/data}/broad" --attach --quiet > "$out/tune_broad.log" 2>&1
+# after tune-fusion (the accelerometer bias and the other filters): the session folds
+# choose imu/data's filter of each file, the tails sharing the training's power-on
 [ -f "$out/crossval_broad/crossval.json" ] || "$bin/denoise-imu" crossval \
   --recipe config/train_broad.yaml --sessions "$broad_b" "$broad_c" --seeds 0 1 2 \
   --out "$out/crossval_broad" --quiet --attach "$out/broad_network.safetensors" \
   "$out/broad_calibrated.safetensors" > "$out/crossval_broad.log" 2>&1
-[ -f "$out/tune_broad.log" ] || "$bin/denoise-imu" tune-fusion \
-  --model "$out/broad_network.safetensors" --baseline "$out/broad_calibrated.safetensors" \
-  --data "${DATA:-../shared/data}/broad" --attach --quiet > "$out/tune_broad.log" 2>&1
-[ -f "$out/broad.safetensors" ] || { "$bin/denoise-imu" rest-model \
+[ -f "$out/broad.safetensors" ] || "$bin/denoise-imu" rest-model \
   --like "$out/broad_network.safetensors" --tracker-only --out "$out/broad.safetensors"
-  "$bin/denoise-imu" tune-fusion --model "$out/broad.safetensors" \
-    --baseline "$out/broad_calibrated.safetensors" --data "${DATA:-../shared/data}/broad" \
-    --attach --quiet > "$out/tune_broad_rest.log" 2>&1; }

@@ -265,6 +265,20 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     assert (blend.tracking is None) == (report['tracking']['chosen']['tracker only'] is None)
     attached = read_model_file(model_file)
     assert ClassicalMix in {type(s) for s in correction(attached)}
+    # and imu/data's filter, chosen on the held-out recordings as the tracking is: each
+    # fold's figures at the other folds' choice, VQF's defaults on the raw gyro beside
+    fusion = report['fusion']
+    assert set(fusion['per_fold']) == {'0', '1', '2'}
+    for i, name in enumerate(('rec0', 'rec1', 'rec2')):
+        rows = fusion['recordings'][name]
+        assert rows['network + VQF']['filter'] == fusion['per_fold'][str(i)]['network']
+        assert rows['raw + VQF defaults']['filter'] == 'vqf tau_acc 3 s, bias estimation on'
+    chosen = fusion['chosen']['network']
+    assert fusion['candidates']['network'][chosen['label']] == min(
+        fusion['candidates']['network'].values())
+    assert '`imu/data` on the unseen recordings' in printed
+    # folds of one power-on: the filter the validation tails chose stands
+    assert 'chosen_on' not in (attached.meta.raw.get('fusion') or {})
     assert ClassicalMix not in {type(s) for s in correction(attached, mix='off')}
     assert main(['eval', '--model', str(model_file), '--data', str(data), '--sequences',
                  'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0

@@ -210,6 +210,25 @@ def test_tune_fusion_judges_as_the_recipe_trusts_the_heading(tmp_path, monkeypat
         'the lowest mean AOE' if key == 'aoe_deg' else 'the heading is not judged)')
 
 
+def test_tune_fusion_says_when_it_replaces_the_filter_crossval_chose(
+        tmp_path, monkeypatch, capsys):
+    from denoise_imu_ros.cli import main
+    from denoise_imu_ros.learn.checkpoint import save_model
+    from helpers import untrained_model
+    calib, model = tmp_path / 'calib.safetensors', tmp_path / 'm.safetensors'
+    save_model(calib, untrained_model(calibration_only=True), {'sample_rate_hz': 200.0})
+    save_model(model, untrained_model(), {'sample_rate_hz': 200.0, 'fusion': {
+        'settings': {'tau_acc_s': 5.0}, 'chosen_on': 'crossval: the folds'}})
+    monkeypatch.setattr(filters, 'tune_model', lambda *args, **kw: {})
+    monkeypatch.setattr(filters, 'table', lambda report: '')
+    monkeypatch.setattr(filters, 'attach', lambda *args: None)
+    args = ['tune-fusion', '--model', str(model), '--baseline', str(calib), '--attach']
+    assert main(args) == 0
+    assert 'replaces the filter crossval chose' in capsys.readouterr().err
+    assert main(args[:2] + [str(calib)] + args[3:]) == 0  # a tuned file: nothing to say
+    assert 'replaces' not in capsys.readouterr().err
+
+
 def test_tune_fusion_feeds_each_tail_its_gyro_with_the_stream_before_as_context(
         tmp_path, monkeypatch):
     from denoise_imu_ros.learn.checkpoint import load_model, save_model

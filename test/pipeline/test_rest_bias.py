@@ -4,7 +4,7 @@
 
 import math
 
-from denoise_imu_ros.core.schema import parse_meta
+from denoise_imu_ros.core.schema import FusionSettings, parse_meta
 from denoise_imu_ros.pipeline import rest_bias
 from denoise_imu_ros.pipeline.rest_bias import RestBias, RestBiasSettings
 import numpy as np
@@ -180,17 +180,27 @@ def test_a_tracker_only_model_runs_the_classical_pipeline_as_eval_scores_it(tmp_
     settings = RestBiasSettings(prior_rad_s=(0.001, 0.002, 0.003))
     chosen = {'sigma_motion_deg_s': 0.1, 'forgetting_s': 100.0, 'sigma_init_deg_s': 0.1,
               'label': 'sigma 0.1 deg/s, forgetting 100 s'}
+    fused = {'label': 'vqf tau_acc 5 s, bias estimation on', 'tau_acc_s': 5.0,
+             'bias_estimation': True, 'accel_bias_removed': True,
+             'orientation_std_rad': [0.01, 0.02, 0.03]}
     report = {'deploy': 'tracker only', 'verdict': 'deploy no learnt correction',
               'mean': {'network': {'aoe_deg': 2.0}, 'tracker only': {'aoe_deg': 1.0}},
-              'tracking': {'chosen': {'tracker only': chosen, 'network': None}}}
+              'tracking': {'chosen': {'tracker only': chosen, 'network': None}},
+              'fusion': {'chosen': {'tracker only': fused}, 'chosen_on': 'the folds'},
+              'fold_kind': 'leave one power-on session out'}
     net = write_untrained_model(tmp_path / 'net.safetensors', {
         'sample_rate_hz': RATE, 'rest_bias': settings.to_dict(), 'crossval': report,
-        'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0}})
+        'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0},
+        'fusion': {'settings': {'tau_acc_s': 2.0, 'bias_estimation': False,
+                                'accel_bias_m_s2': [0.01, -0.02, 0.03]}}})
     assert main(['rest-model', '--like', str(net), '--tracker-only',
                  '--out', str(tmp_path / 'tracker')]) == 0
     tracker = read_model_file(tmp_path / 'tracker')
     assert model_kind(tracker) == 'tracker only' and tracker.config.calibration_only
     assert tracker.meta.bias_tracking.sigma_motion_deg_s == 0.1  # crossval's, not the model's
+    # imu/data's filter too: the classical rows' choice, with the model's accelerometer bias
+    assert tracker.meta.fusion.chosen == FusionSettings(5.0, True, (0.01, -0.02, 0.03))
+    assert tracker.meta.fusion.orientation_std_rad == (0.01, 0.02, 0.03)
     assert deployment_warning(tracker) is None
     assert '(network 2.00° against tracker only 1.00°' in deployment_warning(
         read_model_file(net))

@@ -154,11 +154,18 @@ def test_shipped_broad_is_what_its_session_folds_say_the_classical_pipeline():
     assert settings == network.meta.rest_bias
     for axis, (b, c) in enumerate(((3.6e-3, 8.6e-3), (2.1e-3, -3.3e-3), (-4.0e-3, -4.4e-3))):
         assert min(b, c) - 3e-4 < settings.prior_rad_s[axis] < max(b, c) + 3e-4
-    for name in ('broad', 'broad_network', 'broad_calibrated'):  # imu/data's settings
-        assert read_model_file(name).meta.raw['fusion']['chosen_on'].startswith(
-            'validation tails of 02_undisturbed_slow_rotation_B')
+    # imu/data's filter: what the session folds chose for each file's row (validation
+    # tails share the training's power-on), the fitted accelerometer bias where they kept it
+    for name, row in (('broad', 'tracker only'), ('broad_calibrated', 'calibrated'),
+                      ('broad_network', 'network')):
+        loaded, chosen = read_model_file(name), report['fusion']['chosen'][row]
+        settings = loaded.meta.fusion.chosen
+        assert (settings.tau_acc_s, settings.bias_estimation) == (
+            chosen['tau_acc_s'], chosen['bias_estimation'])
+        assert any(settings.accel_bias_m_s2) == chosen['accel_bias_removed']
+        assert loaded.meta.raw['fusion']['chosen_on'].startswith('crossval: ')
     # one power-on's accelerometer bias worsens the other's velocity increments: the
-    # published accelerometer stays as it came, while the filter removes the fitted bias
+    # published accelerometer stays as it came
     from denoise_imu_ros.runtime.settings import Settings
     accel = report['accelerometer']
     assert accel['deploy'] == 'as it came' and len(accel['recordings']) == 12
@@ -166,4 +173,3 @@ def test_shipped_broad_is_what_its_session_folds_say_the_classical_pipeline():
     for name in ('broad', 'broad_network', 'broad_calibrated'):
         loaded = read_model_file(name)
         assert Settings(model=name).corrected_accel_bias(loaded) == (0.0, 0.0, 0.0)
-        assert any(loaded.meta.fusion.chosen.accel_bias_m_s2)
