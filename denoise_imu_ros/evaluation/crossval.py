@@ -19,10 +19,9 @@ here too, on recordings no model saw: the shipped model's, for the network, for 
 calibration and for the tracker only, is the candidate of lowest mean AOE over every
 held-out recording
 (none among them); the figures of a fold's recordings use the candidate the other folds'
-recordings choose, so that no figure was picked on itself. ``imu/data``'s filter is chosen
-the same way (:func:`_fusion`): its settings are a guess about new recordings too (another
-power-on may bring another accelerometer bias), and ``tune-fusion``'s validation tails share
-the training's power-on.
+recordings choose, so that no figure was picked on itself. Where the folds leave a power-on
+out, ``imu/data``'s filter is chosen the same way (:func:`_fusion`): another power-on may bring
+another accelerometer bias, and ``tune-fusion``'s validation tails share the training's.
 
 The accelerometer is judged apart (:func:`accel_verdict`): each fold fits its bias on its
 training recordings' poses (as ``tune-fusion`` does) and scores the held-out recordings'
@@ -284,7 +283,8 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
     per_recording, per_seed, tracking = _nested(raw_rows, tracked, tracked_seed, fold_of,
                                                 seeds or [], key)
     blend = _blend(networks, tracking, per_recording, per_seed, fold_of, seeds or [], key)
-    fusion = _fusion(networks, held, tracking, blend, fold_of, key)
+    # imu/data's filter where the validation tails cannot choose it: on another power-on
+    fusion = None if sessions is None else _fusion(networks, held, tracking, blend, fold_of, key)
     report = summarize(per_recording, key)
     sizes = sorted({len(train) for _, train in pairs})
     report.update(recipe=str(config), folds=fold_list, steps=recipe.steps,
@@ -295,7 +295,8 @@ def crossval(config: str | Path, k: int | None = None, out: Path | None = None,
                                  f"recipe's {len(recipe.sequences)} recordings; a model of "
                                  'the whole recipe trains on all of them, so these figures '
                                  'judge networks trained on less data than it'),
-                  tracking=tracking, blend=blend, fusion=fusion, judged_on=key,
+                  tracking=tracking, blend=blend, judged_on=key,
+                  **({} if fusion is None else {'fusion': fusion}),
                   accelerometer=accel_verdict(accel),
                   **({} if why is None else {'judged_on_why': why}),
                   **({'seed': recipe.seed} if seeds is None else {

@@ -265,20 +265,8 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     assert (blend.tracking is None) == (report['tracking']['chosen']['tracker only'] is None)
     attached = read_model_file(model_file)
     assert ClassicalMix in {type(s) for s in correction(attached)}
-    # and imu/data's filter, chosen on the held-out recordings as the tracking is: each
-    # fold's figures at the other folds' choice, VQF's defaults on the raw gyro beside
-    fusion = report['fusion']
-    assert set(fusion['per_fold']) == {'0', '1', '2'}
-    for i, name in enumerate(('rec0', 'rec1', 'rec2')):
-        rows = fusion['recordings'][name]
-        assert rows['network + VQF']['filter'] == fusion['per_fold'][str(i)]['network']
-        assert rows['raw + VQF defaults']['filter'] == 'vqf tau_acc 3 s, bias estimation on'
-    chosen = fusion['chosen']['network']
-    assert fusion['candidates']['network'][chosen['label']] == min(
-        fusion['candidates']['network'].values())
-    assert '`imu/data` on the unseen recordings' in printed
-    # folds of one power-on: the filter the validation tails chose stands
-    assert 'chosen_on' not in (attached.meta.raw.get('fusion') or {})
+    # folds of one power-on: imu/data's filter is the validation tails' to choose
+    assert 'fusion' not in report and 'chosen_on' not in (attached.meta.raw.get('fusion') or {})
     assert ClassicalMix not in {type(s) for s in correction(attached, mix='off')}
     assert main(['eval', '--model', str(model_file), '--data', str(data), '--sequences',
                  'rec0', '--out', str(tmp_path / 'ev'), '--no-plots']) == 0
@@ -352,7 +340,8 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
               'window': 1024, 'steps': 10, 'val_every': 10, 'restart_period': 10,
               'gyro_std_deg': [1.0, 1.0, 1.0], 'workers': 1}
     (tmp_path / 'r.yaml').write_text(yaml.safe_dump(recipe))
-    out, args = tmp_path / 'cv', ['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--quiet']
+    out, args = tmp_path / 'cv', ['crossval', '--recipe', str(tmp_path / 'r.yaml'), '--quiet',
+                                  '--sessions', 'rec0', 'rec1']  # two power-ons
     # one process per fold trains that fold for every seed listed
     assert main(args + ['--out', str(out), '--fold', '1', '--seeds', '3', '5']) == 0
     assert {p.parent.parent.name for p in out.glob('seed*/fold1/network.safetensors')} == {
@@ -397,6 +386,17 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
             str(blend['per_fold'][fold])]
     assert set(blend['candidates']) == {str(w) for w in BLEND_WEIGHTS}
     assert 'The network rows blend' in printed.out
+    # and, the folds leaving a power-on out, imu/data's filter: each fold's figures at the
+    # filter the other fold's recording chose, VQF's defaults on the raw gyro beside
+    fusion = report['fusion']
+    for fold, name in (('0', 'rec0'), ('1', 'rec1')):
+        rows = fusion['recordings'][name]
+        assert rows['network + VQF']['filter'] == fusion['per_fold'][fold]['network']
+        assert rows['raw + VQF defaults']['filter'] == 'vqf tau_acc 3 s, bias estimation on'
+    chosen = fusion['chosen']['network']
+    assert fusion['candidates']['network'][chosen['label']] == min(
+        fusion['candidates']['network'].values())
+    assert '`imu/data` on the unseen recordings' in printed.out
     assert main(args + ['--seeds', '3', '3']) == 1
     assert '--seeds must list distinct seeds' in capsys.readouterr().err
 
