@@ -16,7 +16,8 @@ up to 0.14 m in one sample, which a derivative turns into 28 m/s). Prints per ro
 (deg), velocity (m/s) and position (m) increment errors, the mean NEES of rotation and
 velocity with the covariance propagated from the per-sample covariance (the gyro's: what
 ``imu/corrected`` publishes, each message's own variance where the model file has one
-(``fit-variance``), beside its validation residual, one for every message; the
+(``fit-variance``), beside its validation residual, one for every message (the datasheet's where
+the file has none); the
 accelerometer's and the raw gyro's: EuRoC's sensor.yaml noise densities, as a VIO
 configuration takes them) and the fraction of windows inside the 2-sigma ellipsoid (73.9 %
 if the covariance is right), then the largest difference between GTSAM's increments and
@@ -110,6 +111,8 @@ def main() -> None:
                         np.full((n, 3), GYRO_DENSITY ** 2 * rate))}
         for label, mf in models.items():
             var = np.broadcast_to(np.diag(np.reshape(gyro_covariance(mf), (3, 3))), (n, 3))
+            if not var.any():  # none in the file (zeros): the datasheet's, as for the raw gyro
+                var = imus['raw'][2]
             # from the recording's first sample, as the node and process-bag run it
             stream = np.vstack([seq.lead_in, seq.imu])
             full = corrected_gyro(mf, stream)
