@@ -139,7 +139,7 @@ def _check_writable(folder: str | Path | None) -> None:
 
 def _crossval(args: argparse.Namespace) -> None:
     from .core.modelfile import add_metadata, check_attachable, read_model_file
-    from .core.schema import fusion_metadata
+    from .core.schema import CROSSVAL_CHOICE, fusion_metadata
     from .evaluation.crossval import attach_mismatches, crossval
     from .evaluation.reports import crossval_table
     from .learn.config import load_config
@@ -174,13 +174,11 @@ def _crossval(args: argparse.Namespace) -> None:
                }.get(model_kind(model))  # a rest-only model tracks nothing
         tracking = None if row is None else report['tracking']['chosen'][row]
         blend = report['blend']['chosen'] if row == 'network' and 'blend' in report else None
-        fusion = None if row is None else fusion_metadata(
-            report, row, model.meta.raw.get('fusion') or {},
-            model.meta.fusion.chosen.accel_bias_m_s2)
+        fusion = None if row is None else fusion_metadata(report, row, model.meta)
         add_metadata(path, crossval=report, bias_tracking=tracking and dict(
-            tracking, chosen_on=f'crossval: {report["tracking"]["chosen_on"]}'),
+            tracking, chosen_on=CROSSVAL_CHOICE + report['tracking']['chosen_on']),
             **({} if blend is None else {'blend': dict(
-                blend, chosen_on=f'crossval: {report["blend"]["chosen_on"]}')}),
+                blend, chosen_on=CROSSVAL_CHOICE + report['blend']['chosen_on'])}),
             **({} if fusion is None else {'fusion': fusion}))
         print(f'stored the cross-recording figures in {path}' + (
             f', and its output bias tracking ({tracking["label"]})' if tracking else '') + (
@@ -213,9 +211,8 @@ def _tune_fusion(args: argparse.Namespace) -> None:
     report = tune_model(args.model, args.baseline, args.data, progress=not args.quiet)
     sys.stdout.write(table(report))
     if args.attach:
-        replaced = [spec for spec in (args.model, args.baseline) if str(
-            (read_model_file(spec).meta.raw.get('fusion') or {}).get('chosen_on', '')
-        ).startswith('crossval:')]
+        replaced = [spec for spec in (args.model, args.baseline)
+                    if read_model_file(spec).meta.fusion.by_crossval]
         attach(args.model, args.baseline, report)
         print(f'stored the chosen settings in {args.model} and {args.baseline}')
         for spec in replaced:
@@ -264,8 +261,7 @@ def _rest_model(args: argparse.Namespace) -> None:
     _guard_output(args.out, [like.path], args.overwrite)
     tracking = classical_tracking(like.meta) if args.tracker_only else None
     fusion = None if tracking is None or like.meta.crossval is None else fusion_metadata(
-        like.meta.crossval.report, TRACKER_ONLY, like.meta.raw.get('fusion') or {},
-        like.meta.fusion.chosen.accel_bias_m_s2)  # the classical rows' filter, as crossval chose
+        like.meta.crossval.report, TRACKER_ONLY, like.meta)  # the classical row's, as chosen
     write_rest_only_model(like, args.out, tracking, fusion)
     tracked = '' if tracking is None else (
         f', its bias tracked (sigma {tracking.sigma_motion_deg_s:g} deg/s, forgetting '

@@ -15,7 +15,7 @@ from typing import NamedTuple, TYPE_CHECKING
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .rotation import multiply_arrays
+from .rotation import conjugate_arrays, multiply_arrays
 
 if TYPE_CHECKING:
     from .records import Sequence
@@ -25,6 +25,11 @@ SCAN_BLOCK = 16  # steps composed per block by integrate (4x faster than one sca
 RESIDUAL_BLOCK = 16  # samples per increment of the gyro residual estimate (training, noise)
 ALIGN_AT_S = 1.5  # a fused orientation's arbitrary yaw is aligned to the ground truth here
 MAX_STRETCH = 2  # an increment between poses spans at most this many times its length
+
+
+def _between(q: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Return the rotations q_i^-1 q_j of (N, 4) xyzw unit quaternions, numpy's products."""
+    return multiply_arrays(conjugate_arrays(q[i]), q[j])
 
 
 def _prefix_products(q: np.ndarray) -> np.ndarray:
@@ -100,10 +105,10 @@ def block_errors(gt_quat: np.ndarray, starts: np.ndarray, ends: np.ndarray,
     R_gt_inc^T R_est_inc of each increment from ``starts`` to ``ends``, ``est`` the
     integrated gyro at every stamp.
     """
-    gt = Rotation.from_quat(gt_quat[np.concatenate([starts, ends])])
-    m = len(starts)
-    gyro = est[starts].inv() * est[ends]
-    return ((gt[:m].inv() * gt[m:]).inv() * gyro).as_rotvec().reshape(-1, 3)
+    gt = Rotation.from_quat(gt_quat).as_quat()  # normalised
+    err = multiply_arrays(conjugate_arrays(_between(gt, starts, ends)),
+                          _between(est.as_quat(), starts, ends))
+    return Rotation.from_quat(err).as_rotvec().reshape(-1, 3)
 
 
 def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
@@ -176,7 +181,7 @@ def error_components(est: Rotation, gt: Rotation) -> tuple[np.ndarray, ...]:
     correct); the yaw is the first angle of E's intrinsic Z-Y-X decomposition, its
     rotation about the world z axis, in [-180, 180).
     """
-    err = est * gt.inv()
+    err = Rotation.from_quat(multiply_arrays(est.as_quat(), conjugate_arrays(gt.as_quat())))
     tilt = np.degrees(np.arccos(np.clip(err.as_matrix()[:, 2, 2], -1.0, 1.0)))
     return np.degrees(err.magnitude()), tilt, np.degrees(err.as_euler('ZYX')[:, 0])
 
@@ -190,6 +195,7 @@ def attitude_errors(est: Rotation, gt: Rotation, gt_pos: np.ndarray, valid: np.n
     error R_est R_gt^T, i.e. its rotation about the world z axis.
     """
     angle, tilt, yaw = error_components(est, gt)
+    est_q, gt_q = est.as_quat(), gt.as_quat()
     roe = {}
     travelled = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(gt_pos, axis=0),
                                                                 axis=1))])
@@ -203,9 +209,8 @@ def attitude_errors(est: Rotation, gt: Rotation, gt_pos: np.ndarray, valid: np.n
         if len(i) == 0:
             roe[d] = np.zeros(0)
             continue
-        rel_gt = gt[i].inv() * gt[j]
-        rel_est = est[i].inv() * est[j]
-        roe[d] = np.degrees((rel_gt.inv() * rel_est).magnitude())
+        rel = multiply_arrays(conjugate_arrays(_between(gt_q, i, j)), _between(est_q, i, j))
+        roe[d] = np.degrees(Rotation.from_quat(rel).magnitude())
     return AttitudeErrors(
         aoe=float(np.sqrt(np.mean(angle[valid] ** 2))),
         aoe_yaw=float(np.sqrt(np.mean(yaw[valid] ** 2))),
@@ -264,7 +269,8 @@ class FusedErrors(NamedTuple):
 def align_yaw(est: Rotation, gt: Rotation, k: int) -> Rotation:
     """Return ``est`` with its world-frame yaw error at stamp k removed (tilt untouched)."""
     yaw = error_components(est[k:k + 1], gt[k:k + 1])[2][0]
-    return Rotation.from_rotvec([0.0, 0.0, -np.radians(yaw)]) * est
+    turn = Rotation.from_rotvec([0.0, 0.0, -np.radians(yaw)]).as_quat()
+    return Rotation.from_quat(multiply_arrays(turn, est.as_quat()))
 
 
 def fused_errors(est: Rotation, gt: Rotation, valid: np.ndarray, t_s: np.ndarray,
@@ -289,7 +295,8 @@ def fused_errors(est: Rotation, gt: Rotation, valid: np.ndarray, t_s: np.ndarray
     def rms(e: np.ndarray) -> float:
         return float(np.sqrt(np.mean(e[ok] ** 2)))
 
-    vec = (aligned * gt[k:].inv()).as_rotvec()[ok]
+    vec = Rotation.from_quat(multiply_arrays(aligned.as_quat(), conjugate_arrays(
+        gt[k:].as_quat()))).as_rotvec()[ok]
     return FusedErrors(rms(angle), rms(tilt), rms(yaw),
                        tilt_growth_deg_min(t_s[k:] - t_s[k], tilt, ok),
                        np.sqrt(np.mean(vec ** 2, axis=0)), k)

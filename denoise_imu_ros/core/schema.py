@@ -37,6 +37,7 @@ DEPLOY_CHOICES = ('network', 'calibration', TRACKER_ONLY, REST_ONLY, 'none')
 AS_IT_CAME = 'as it came'
 ACCEL_CHOICES = ('bias removed', AS_IT_CAME)
 JUDGED = {'aoe_deg': 'AOE', 'tilt_deg': 'tilt error'}  # figures a verdict compares, named
+CROSSVAL_CHOICE = 'crossval: '  # how a choice's ``chosen_on`` starts where crossval made it
 
 
 def judged_on(heading_weight: float, who: str = 'the verdict') -> tuple[str, str | None]:
@@ -304,6 +305,7 @@ class Fusion:
     settings: FusionSettings | None = None                    # None: the filter's defaults
     orientation_std_rad: tuple[float, float, float] | None = None  # the fused error, per axis
     filters: dict[str, dict[str, Any]] = field(default_factory=dict)  # "<gyro> <filter>"
+    by_crossval: bool = False  # chosen on another power-on's trials, not the validation tails
 
     @property
     def chosen(self) -> FusionSettings:
@@ -311,29 +313,30 @@ class Fusion:
         return self.settings or FusionSettings()
 
 
-def fusion_metadata(report: dict[str, Any], row: str, fusion: dict[str, Any],
-                    accel_bias: tuple[float, float, float]) -> dict[str, Any] | None:
+def fusion_metadata(report: dict[str, Any], row: str, meta: ModelMeta
+                    ) -> dict[str, Any] | None:
     """
-    Return the ``fusion`` entry of a model file of ``row`` with a report's filter (None: none).
+    Return the ``fusion`` entry of ``meta``'s file for ``row`` with a report's filter (None: none).
 
     Only where the folds leave a power-on out (``--sessions``): there the validation tails
     ``tune-fusion`` chooses on cannot see what a new power-on changes; elsewhere its choice
-    stands. The file's own entry (``fusion``, as ``tune-fusion`` stored it: the other
-    filters' settings) with the filter the folds chose for ``row``; where they chose the
-    accelerometer less its training bias, ``accel_bias`` is that bias (the file's, fitted on
-    its training poses).
+    stands. The file's own entry (as ``tune-fusion`` stored it: the other filters' settings)
+    with the filter the folds chose for ``row``; where they chose the accelerometer less its
+    training bias, that bias is the file's (fitted on its training poses).
     """
     try:
         chosen = (report.get('fusion') or {}).get('chosen', {}).get(row)
         if chosen is None or 'session' not in str(report.get('fold_kind', '')):
             return None
+        bias = meta.fusion.chosen.accel_bias_m_s2
         settings = FusionSettings(chosen['tau_acc_s'], chosen['bias_estimation'],
-                                  accel_bias if chosen['accel_bias_removed'] else (0.0,) * 3)
+                                  bias if chosen['accel_bias_removed'] else (0.0,) * 3)
         std = chosen['orientation_std_rad']
         if not _triple(std, 0.0):
             raise ValueError(f'orientation_std_rad {std!r}')
-        return dict(fusion, settings=settings.as_dict(), orientation_std_rad=list(std),
-                    chosen_on=f'crossval: {report["fusion"]["chosen_on"]}',
+        return dict(meta.raw.get('fusion') or {}, settings=settings.as_dict(),
+                    orientation_std_rad=list(std),
+                    chosen_on=CROSSVAL_CHOICE + report['fusion']['chosen_on'],
                     scored='held-out recordings whole; yaw aligned once 1.5 s in, tilt never')
     except (AttributeError, KeyError, TypeError, ValueError) as err:
         raise ModelFileError(f'inconsistent crossval.fusion.chosen.{row} ({err})') from err
@@ -454,7 +457,8 @@ def _fusion(raw: dict[str, Any], where: str) -> Fusion:
     filters = value.get('filters') or {}
     if not (isinstance(filters, dict) and all(isinstance(v, dict) for v in filters.values())):
         raise _fail(where, 'fusion.filters', filters, 'a mapping of filter settings')
-    return Fusion(settings, None if std is None else tuple(float(v) for v in std), filters)
+    return Fusion(settings, None if std is None else tuple(float(v) for v in std), filters,
+                  str(value.get('chosen_on', '')).startswith(CROSSVAL_CHOICE))
 
 
 def _verdict(raw: dict[str, Any], where: str) -> Verdict | None:

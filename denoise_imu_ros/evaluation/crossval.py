@@ -730,7 +730,8 @@ def verdict(per_recording: dict[str, dict[str, dict[str, float]]],
                      'deployed; ' for m in losing)
     n = len(per_recording)
     wins = sum(r['network'][key] < r[base][key] for r in per_recording.values())
-    gain = 100 * (1 - mean['network'][key] / mean[base][key])
+    gain = (100 * (1 - mean['network'][key] / mean[base][key]) if mean[base][key] > 0
+            else -math.inf if mean['network'][key] > 0 else 0.0)  # nothing beats no error
     if 'network' not in off + losing and wins > n / 2 and gain > 0:
         return 'network', (f'{guard}the network beats {label[base]} on {wins} of {n} unseen '
                            f'recordings, by {gain:.0f} % in mean {JUDGED[key]}: deploy the '

@@ -294,8 +294,8 @@ def classical_tracking(meta: ModelMeta) -> BiasTracking | None:
     Return the tracking of the "tracker only" rows: the classical pipeline, no model.
 
     What ``crossval`` chose for that row (stored with its verdict; None: none), else the
-    model's own output tracking (the same tracker, no model before it), else
-    CLASSICAL_TRACKING.
+    classical pipeline the network is blended with, else the model's own output tracking
+    (the same tracker, no model before it), else CLASSICAL_TRACKING.
     """
     chosen = ((meta.crossval.report.get('tracking') or {}).get('chosen') or {}
               if meta.crossval is not None else {})
@@ -308,6 +308,8 @@ def classical_tracking(meta: ModelMeta) -> BiasTracking | None:
         except (AttributeError, ValueError) as err:
             raise ModelFileError(f'inconsistent crossval.tracking.chosen.{TRACKER_ONLY} '
                                  f'({err})') from err
+    if meta.blend is not None:
+        return meta.blend.tracking
     return meta.bias_tracking or CLASSICAL_TRACKING
 
 

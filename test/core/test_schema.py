@@ -4,8 +4,8 @@
 
 from denoise_imu_ros.core.errors import ModelFileError
 from denoise_imu_ros.core.modelfile import read_model_file, shipped_models
-from denoise_imu_ros.core.schema import (FusionSettings, parse_meta, RestBiasSettings,
-                                         Validation)
+from denoise_imu_ros.core.schema import (fusion_metadata, FusionSettings, parse_meta,
+                                         RestBiasSettings, Validation)
 import pytest
 
 
@@ -96,29 +96,32 @@ def test_every_shipped_model_parses(name):
 
 def test_folds_that_leave_a_power_on_out_set_the_filter_of_the_row_a_model_file_runs():
     """The folds' filter for that row, the file's accelerometer bias where they remove one."""
-    from denoise_imu_ros.core.schema import fusion_metadata
     chosen = {'tracker only': {'tau_acc_s': 5.0, 'bias_estimation': True,
                                'accel_bias_removed': True, 'orientation_std_rad': [1, 2, 3]},
               'network': {'tau_acc_s': 3.0, 'bias_estimation': False,
                           'accel_bias_removed': False, 'orientation_std_rad': [4, 5, 6]}}
     report = {'fold_kind': 'leave one power-on session out',
               'fusion': {'chosen': chosen, 'chosen_on': 'the folds'}}
-    own = {'settings': {'tau_acc_s': 2.0}, 'filters': {'raw vqf': {'filter': 'vqf'}}}
-    bias = (0.01, -0.02, 0.03)
-    got = fusion_metadata(report, 'tracker only', own, bias)
+    bias = [0.01, -0.02, 0.03]
+    own = {'settings': {'tau_acc_s': 2.0, 'accel_bias_m_s2': bias},
+           'filters': {'raw vqf': {'filter': 'vqf'}}, 'chosen_on': 'validation tails'}
+    meta = parse_meta({'sample_rate_hz': 200.0, 'fusion': own}, 'test')
+    assert not meta.fusion.by_crossval
+    got = fusion_metadata(report, 'tracker only', meta)
     assert got['settings'] == {'tau_acc_s': 5.0, 'bias_estimation': True,
-                               'accel_bias_m_s2': list(bias)}
+                               'accel_bias_m_s2': bias}
     assert got['filters'] == own['filters'] and got['orientation_std_rad'] == [1, 2, 3]
     assert got['chosen_on'] == 'crossval: the folds'
-    assert fusion_metadata(report, 'network', own, bias)['settings']['accel_bias_m_s2'] == [
+    assert parse_meta({'sample_rate_hz': 200.0, 'fusion': got}, 'test').fusion.by_crossval
+    assert fusion_metadata(report, 'network', meta)['settings']['accel_bias_m_s2'] == [
         0.0, 0.0, 0.0]
-    assert fusion_metadata(report, 'calibrated', own, bias) is None  # no choice for it
-    assert fusion_metadata(dict(report, fold_kind='leave recordings out'), 'network', own,
-                           bias) is None  # the tails share the power-on: their choice stands
-    assert fusion_metadata({'fold_kind': report['fold_kind']}, 'network', own, bias) is None
+    assert fusion_metadata(report, 'calibrated', meta) is None  # no choice for it
+    assert fusion_metadata(dict(report, fold_kind='leave recordings out'), 'network',
+                           meta) is None  # the tails share the power-on: their choice stands
+    assert fusion_metadata({'fold_kind': report['fold_kind']}, 'network', meta) is None
     # a report from a file (user input) that does not hold together is one clear error
     for bad in ({'tau_acc_s': -1.0}, {'orientation_std_rad': 'small'}, {'bias_estimation': 1}):
         broken = dict(report, fusion={'chosen': {'network': dict(chosen['network'], **bad)},
                                       'chosen_on': 'the folds'})
         with pytest.raises(ModelFileError, match='crossval.fusion.chosen.network'):
-            fusion_metadata(broken, 'network', own, bias)
+            fusion_metadata(broken, 'network', meta)

@@ -215,6 +215,26 @@ def test_a_tracker_only_model_runs_the_classical_pipeline_as_eval_scores_it(tmp_
                                rtol=0, atol=1e-7)
 
 
+def test_the_classical_rows_tracking_is_the_folds_choice_then_the_blends_then_the_models():
+    """The tracker-only row runs what the file says the classical pipeline is, in that order."""
+    own = {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0}
+    classical = {'sigma_motion_deg_s': 0.03, 'forgetting_s': 300.0}
+    folds = {'sigma_motion_deg_s': 0.1, 'forgetting_s': 10.0, 'sigma_init_deg_s': 0.05}
+    report = {'deploy': 'tracker only', 'verdict': 'v', 'mean': {},
+              'tracking': {'chosen': {'tracker only': folds}}}
+
+    def tracking(**meta):
+        got = rest_bias.classical_tracking(parse_meta(dict(meta, sample_rate_hz=RATE), 't'))
+        return None if got is None else (got.sigma_motion_deg_s, got.forgetting_s)
+    blend = {'weight': 0.5, 'tracking': classical}
+    assert tracking(bias_tracking=own, blend=blend, crossval=report) == (0.1, 10.0)
+    assert tracking(bias_tracking=own, blend=blend) == (0.03, 300.0)
+    assert tracking(bias_tracking=own, blend=dict(blend, tracking=None)) is None
+    assert tracking(bias_tracking=own) == (0.05, 30.0)
+    assert tracking() == (rest_bias.CLASSICAL_TRACKING.sigma_motion_deg_s,
+                          rest_bias.CLASSICAL_TRACKING.forgetting_s)
+
+
 def _tilted_turns(seconds: float, bias: np.ndarray, seed: int = 0) -> np.ndarray:
     """Return a gyro biased by ``bias`` turning about tilted axes, with true gravity."""
     from scipy.spatial.transform import Rotation
