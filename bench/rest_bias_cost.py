@@ -12,14 +12,17 @@ guard alone where the file has one (``Guard.check`` and ``Guard.apply``, which b
 settings run), and the vertical's projection alone (``Vertical.apply``, which both run for
 a model taught without its poses' heading). Where the file blends its output with the
 classical pipeline's (its ``blend``), also rounds with ``rest_bias`` on and
-``classical_blend`` off, and the blend alone (``Blender.apply``). Prints the median
-per-sample time of each, and the ratios on/off and blend/no blend.
+``classical_blend`` off, and the blend alone (``Blender.apply``). And rounds with
+``imu/data``'s filter (the file's settings), with and without the classical tilt (a
+second VQF on the raw IMU). Prints the median per-sample time of each, and the ratios
+on/off, blend/no blend and classical tilt/own tilt.
 Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
      [--data ../shared/data/broad] [--recording 03_undisturbed_slow_rotation_C]
      [--samples 20000] [--rounds 5]
 """
 
 import argparse
+import dataclasses
 from pathlib import Path
 import time
 
@@ -57,7 +60,11 @@ def main() -> None:
     rec = load_imu(args.data / args.recording)
     stamps, imu = rec.imu_stamp_ns[:args.samples], rec.imu[:args.samples]
     blended = model.meta.blend is not None
-    times = {'off': [], 'on': [], 'on, no blend': [], 'estimator alone': [],
+    own = model.meta.fusion.chosen
+    filters = {'on, imu/data': dataclasses.replace(own, classical_tilt=False),
+               'on, imu/data, classical tilt': dataclasses.replace(own, classical_tilt=True)}
+    times = {'off': [], 'on': [], 'on, no blend': [], **{name: [] for name in filters},
+             'estimator alone': [],
              'tracker alone': [], 'envelope guard alone': [], 'blend alone': [],
              'vertical alone': []}
     for _ in range(args.rounds):
@@ -66,6 +73,9 @@ def main() -> None:
             if mix == 'off' and not blended:
                 continue
             den = OnlineDenoiser.from_model_file(model, rest_choice=choice, blend_choice=mix)
+            times[name].append(per_sample_s(den.process, stamps, imu))
+        for name, fusion in filters.items():
+            den = OnlineDenoiser.from_model_file(model, fusion, rest_choice='on')
             times[name].append(per_sample_s(den.process, stamps, imu))
         rest = RestBias(resolve(model.meta, 'on'), sample_rate(model))
         times['estimator alone'].append(
@@ -106,6 +116,9 @@ def main() -> None:
     print(f'  on / off: {median["on"] / median["off"]:.3f}')
     if blended:
         print(f'  blend / no blend (rest_bias on): {median["on"] / median["on, no blend"]:.3f}')
+    print(f'  imu/data / none (rest_bias on): {median["on, imu/data"] / median["on"]:.3f}')
+    print('  classical tilt / own tilt (rest_bias on, imu/data): '
+          f'{median["on, imu/data, classical tilt"] / median["on, imu/data"]:.3f}')
 
 
 if __name__ == '__main__':

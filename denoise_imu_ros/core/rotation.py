@@ -57,6 +57,31 @@ def multiply(p: Quat, q: Quat) -> Quat:
     return x / n, y / n, z / n, w / n
 
 
+def yaw_turn(q: Quat) -> Quat:
+    """
+    Return the turn about z by ``q``'s yaw (the first angle of its Z-Y-X decomposition).
+
+    From the rotation matrix's first column by square roots alone, no trigonometry: the
+    same floats online and in a batch. A yaw of 180 deg is the half turn; an undefined one
+    (the x axis vertical) none.
+    """
+    x, y, z, w = q
+    a = 1.0 - 2.0 * (y * y + z * z)  # cos(yaw) and sin(yaw), times the same length
+    b = 2.0 * (w * z + x * y)
+    c = math.sqrt(a * a + b * b) + a  # (b, c) is along (sin, cos) of half the yaw
+    n = math.sqrt(b * b + c * c)
+    if n < _SMALL_ANGLE:
+        return (0.0, 0.0, 1.0, 0.0) if abs(b) + abs(a) >= _SMALL_ANGLE else (0.0, 0.0, 0.0, 1.0)
+    return 0.0, 0.0, b / n, c / n
+
+
+def with_tilt_of(heading: Quat, tilt: Quat) -> Quat:
+    """Return the orientation with ``heading``'s yaw and ``tilt``'s roll and pitch (xyzw)."""
+    _, _, hz, hw = yaw_turn(heading)
+    _, _, tz, tw = yaw_turn(tilt)
+    return multiply((0.0, 0.0, hz * tw - hw * tz, hw * tw + hz * tz), tilt)  # Rz(h) Rz(t)^-1
+
+
 def conjugate_arrays(q: np.ndarray) -> np.ndarray:
     """Inverses of (..., 4) xyzw unit quaternions."""
     return q * [-1.0, -1.0, -1.0, 1.0]

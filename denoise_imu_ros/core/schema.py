@@ -268,15 +268,16 @@ class FusionSettings:
     tau_acc_s: float = 3.0         # accelerometer time constant: longer trusts the gyro more
     bias_estimation: bool = False  # VQF's rest and motion gyro-bias estimators
     accel_bias_m_s2: tuple[float, float, float] = (0.0, 0.0, 0.0)  # removed before the filter
+    classical_tilt: bool = False   # the tilt of VQF's defaults on the raw IMU, this one's heading
 
     def __post_init__(self) -> None:
         """Refuse settings the filter cannot run with (model files are user input)."""
         if not (_number(self.tau_acc_s) and 0 < self.tau_acc_s < 1e6):
             raise ValueError(f'tau_acc_s must be a positive number of seconds, '
                              f'not {self.tau_acc_s!r}')
-        if not isinstance(self.bias_estimation, bool):
-            raise ValueError(f'bias_estimation must be true or false, not '
-                             f'{self.bias_estimation!r}')
+        for name in ('bias_estimation', 'classical_tilt'):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f'{name} must be true or false, not {getattr(self, name)!r}')
         bias = self.accel_bias_m_s2
         if not (_triple(bias) and all(abs(b) <= MAX_ACCEL_BIAS_M_S2 for b in bias)):
             raise ValueError(f'accel_bias_m_s2 must be three numbers within '
@@ -330,7 +331,8 @@ def fusion_metadata(report: dict[str, Any], row: str, meta: ModelMeta
             return None
         bias = meta.fusion.chosen.accel_bias_m_s2
         settings = FusionSettings(chosen['tau_acc_s'], chosen['bias_estimation'],
-                                  bias if chosen['accel_bias_removed'] else (0.0,) * 3)
+                                  bias if chosen['accel_bias_removed'] else (0.0,) * 3,
+                                  chosen.get('classical_tilt', False))
         std = chosen['orientation_std_rad']
         if not _triple(std, 0.0):
             raise ValueError(f'orientation_std_rad {std!r}')

@@ -46,7 +46,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .filters import (Filter, fit_accel_bias, FUSED, run, score as fused_score,
-                      TAU_ACC_GRID_S, VQF_DEFAULTS)
+                      TAU_ACC_GRID_S, TILT_LABEL, VQF_DEFAULTS)
 from .preintegration import (errors as increment_errors, preintegrate, reference,
                              velocity_from_positions, window_starts)
 from .reports import CROSSVAL_METHODS
@@ -550,64 +550,95 @@ def _fusion(networks: dict[str, Networks], held: dict[str, Held], tracking: dict
     network blended) are fed to every filter of FUSION_GRID; a fold's recordings take the
     filter of lowest mean ``key`` figure over the other folds' recordings, the shipped
     models that of all of them (the validation tails ``tune-fusion`` chooses on share the
-    training's power-on and motions). VQF's defaults on the raw gyro are scored beside.
+    training's power-on and motions). Then, on the same recordings, the tilt: that
+    filter's own, or VQF's defaults' on the raw IMU with that filter's heading
+    (``classical_tilt``), whichever is lower. VQF's defaults on the raw gyro are scored
+    beside.
     """
     figures: dict[str, dict[str, dict[str, FusedErrors]]] = {}  # recording -> row -> filter
+    outs: dict[str, dict[str, np.ndarray]] = {}  # recording -> row -> output, as fed
+    filters: dict[str, dict[str, Filter]] = {}   # recording -> label -> filter
     for name, h in held.items():
         n, fold = networks[name], str(fold_of[name])
         chosen = tracking['per_fold'][fold]
         mix = Blend(blend['per_fold'][fold], CANDIDATES[chosen[TRACKER_ONLY]])
-        accel, stamps = n.seq.stream[:, 3:], n.seq.stream_stamp_ns
-
-        def fused(flt: Filter, gyro: np.ndarray) -> FusedErrors:
-            return fused_score(n.seq, n.seq.on_poses(run(flt, gyro, accel, n.rate_hz, stamps)))
-        candidates = {fusion_label(flt, removed): dataclasses.replace(
+        filters[name] = {fusion_label(flt, removed): dataclasses.replace(
             flt, accel_bias_m_s2=tuple(float(b) for b in h.accel_bias)) if removed else flt
             for flt, removed in FUSION_GRID if h.accel_bias is not None or not removed}
-        no_model = fused(VQF_DEFAULTS, n.seq.stream[:, :3])
+        no_model = _fused(n, VQF_DEFAULTS, n.seq.stream[:, :3])
         figures[name] = {NO_MODEL_FUSED: {NO_MODEL_FUSED: no_model}}
+        outs[name] = {m: stages.finish(h.gyros[m], n.fed, n.rate_hz, CANDIDATES[chosen[m]],
+                                       h.bounds[m], h.fields[m], n.drop and m != TRACKER_ONLY,
+                                       mix if m == 'network' else None) for m in TRACKED}
         for m in TRACKED:
-            out = stages.finish(h.gyros[m], n.fed, n.rate_hz, CANDIDATES[chosen[m]], h.bounds[m],
-                                h.fields[m], n.drop and m != TRACKER_ONLY,
-                                mix if m == 'network' else None)
-            figures[name][m] = {label: fused(flt, out) for label, flt in candidates.items()}
+            figures[name][m] = {label: _fused(n, flt, outs[name][m])
+                                for label, flt in filters[name].items()}
+    split: dict[tuple[str, str, str], FusedErrors] = {}
 
-    def mean(names: list[str], m: str, label: str, k: str) -> float:
-        return float(np.mean([getattr(figures[n][m][label], FUSED[k]) for n in names]))
+    def classical(name: str, m: str, label: str) -> FusedErrors:  # that filter's heading
+        if (name, m, label) not in split:
+            flt = dataclasses.replace(filters[name][label], classical_tilt=True)
+            split[name, m, label] = _fused(networks[name], flt, outs[name][m])
+        return split[name, m, label]
 
-    def best(names: list[str], m: str) -> str:  # among the filters every recording has
+    def mean(names: list[str], m: str, label: str, k: str, tilt: bool = False) -> float:
+        return float(np.mean([getattr(classical(n, m, label) if tilt else figures[n][m][label],
+                                      FUSED[k]) for n in names]))
+
+    def best(names: list[str], m: str) -> tuple[str, bool]:  # among the filters every one has
         labels = [c for c in figures[names[0]][m] if all(c in figures[n][m] for n in names)]
-        return min(labels, key=lambda c: mean(names, m, c, key))
+        label = min(labels, key=lambda c: mean(names, m, c, key))
+        return label, (mean(names, m, label, 'tilt_deg', True)
+                       < mean(names, m, label, 'tilt_deg'))
     every = list(figures)
     choice = {f: {m: best([n for n in every if fold_of[n] != f], m) for m in TRACKED}
               for f in sorted(set(fold_of.values()))}
     shipped = {m: best(every, m) for m in TRACKED}
 
+    def errors(name: str, m: str, picked: tuple[str, bool]) -> FusedErrors:
+        return classical(name, m, picked[0]) if picked[1] else figures[name][m][picked[0]]
+
+    def named(picked: tuple[str, bool]) -> str:
+        return picked[0] + (TILT_LABEL if picked[1] else '')
+
     def cell(e: FusedErrors, label: str) -> dict[str, Any]:
         return {'aoe_deg': e.aoe, 'tilt_deg': e.tilt, 'aoe_yaw_deg': e.aoe_yaw, 'filter': label}
     recordings = {n: {NO_MODEL_FUSED: cell(figures[n][NO_MODEL_FUSED][NO_MODEL_FUSED],
                                            VQF_DEFAULTS.label),
-                      **{FUSED_ROWS[m]: cell(figures[n][m][choice[fold_of[n]][m]],
-                                             choice[fold_of[n]][m]) for m in TRACKED}}
+                      **{FUSED_ROWS[m]: cell(errors(n, m, choice[fold_of[n]][m]),
+                                             named(choice[fold_of[n]][m]))
+                         for m in TRACKED}}
                   for n in every}
     grid = {fusion_label(flt, removed): (flt, removed) for flt, removed in FUSION_GRID}
 
     def stored(m: str) -> dict[str, Any]:
-        flt, removed = grid[shipped[m]]
-        std = np.sqrt(np.mean([figures[n][m][shipped[m]].std_rad ** 2 for n in every], axis=0))
-        return {'label': shipped[m], 'tau_acc_s': flt.tau_acc_s,
+        flt, removed = grid[shipped[m][0]]
+        std = np.sqrt(np.mean([errors(n, m, shipped[m]).std_rad ** 2 for n in every], axis=0))
+        return {'label': named(shipped[m]), 'tau_acc_s': flt.tau_acc_s,
                 'bias_estimation': flt.bias_estimation, 'accel_bias_removed': removed,
-                'orientation_std_rad': std.tolist()}
+                'classical_tilt': shipped[m][1], 'orientation_std_rad': std.tolist()}
     return {'chosen': {m: stored(m) for m in TRACKED},
-            'chosen_on': f"the mean {JUDGED[key]} over every held-out recording; each fold's "
-                         "figures use the other folds' choice",
-            'per_fold': {str(f): c for f, c in choice.items()},
+            'chosen_on': f'the mean {JUDGED[key]} over every held-out recording, then the '
+                         "lower mean tilt error, the filter's own or VQF's defaults' on the "
+                         "raw IMU; each fold's figures use the other folds' choice",
+            'per_fold': {str(f): {m: named(p) for m, p in c.items()}
+                         for f, c in choice.items()},
             'candidates': {m: {c: mean(every, m, c, key) for c in figures[every[0]][m]}
                            for m in TRACKED},
+            'tilt': {m: {'own': mean(every, m, shipped[m][0], 'tilt_deg'),
+                         'classical': mean(every, m, shipped[m][0], 'tilt_deg', True)}
+                     for m in TRACKED},  # the mean tilt of the chosen filter, both ways
             'recordings': recordings,
             'mean': {row: {k: float(np.mean([recordings[n][row][k] for n in every]))
                            for k in ('aoe_deg', 'tilt_deg', 'aoe_yaw_deg')}
                      for row in recordings[every[0]]}}
+
+
+def _fused(n: Networks, flt: Filter, gyro: np.ndarray) -> FusedErrors:
+    """Return a filter's errors on a held-out recording's gyro (the raw one for its tilt)."""
+    seq = n.seq
+    return fused_score(seq, seq.on_poses(run(flt, gyro, seq.stream[:, 3:], n.rate_hz,
+                                             seq.stream_stamp_ns, seq.stream[:, :3])))
 
 
 def _labelled(label: str) -> dict[str, Any] | None:

@@ -222,7 +222,7 @@ def _score(seq: Sequence, gyros: dict[str, np.ndarray],
         roe[method] = err.roe
     for method, (source, flt) in rows.items():
         quat = seq.on_poses(run(flt, gyros[source], seq.stream[:, 3:], seq.rate_hz,
-                                seq.stream_stamp_ns))
+                                seq.stream_stamp_ns, gyros['raw']))
         err = score(seq, quat)
         fused[method] = {
             'filter': flt.label, 'aoe_deg': err.aoe, 'tilt_deg': err.tilt,

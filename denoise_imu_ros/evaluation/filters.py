@@ -45,6 +45,7 @@ IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
 MADGWICK_GAINS = (0.001, 0.003, 0.01, 0.033, 0.1, 0.3)     # ahrs's default: 0.033
 NO_BIAS = (0.0, 0.0, 0.0)
 FUSED = {'aoe_deg': 'aoe', 'tilt_deg': 'tilt'}  # a judged figure's FusedErrors field
+TILT_LABEL = ", the tilt of VQF's defaults on the raw IMU"  # a filter's with classical_tilt
 
 
 @dataclass(frozen=True)
@@ -56,6 +57,7 @@ class Filter:
     bias_estimation: bool = False
     gain: float = 0.0
     accel_bias_m_s2: tuple[float, float, float] = NO_BIAS  # removed before the filter
+    classical_tilt: bool = False  # the tilt of VQF's defaults on the raw IMU (vqf only)
 
     @property
     def label(self) -> str:
@@ -63,13 +65,15 @@ class Filter:
         removed = ', accel bias removed' if any(self.accel_bias_m_s2) else ''
         if self.kind == 'vqf':
             return (f'vqf tau_acc {self.tau_acc_s:g} s, bias estimation '
-                    f'{"on" if self.bias_estimation else "off"}{removed}')
+                    f'{"on" if self.bias_estimation else "off"}{removed}'
+                    + (TILT_LABEL if self.classical_tilt else ''))
         return f'{self.kind} gain {self.gain:g}{removed}'
 
     @property
     def settings(self) -> FusionSettings:
         """Return the filter's VQF settings, checked (model files are user input)."""
-        return FusionSettings(self.tau_acc_s, self.bias_estimation, self.accel_bias_m_s2)
+        return FusionSettings(self.tau_acc_s, self.bias_estimation, self.accel_bias_m_s2,
+                              self.classical_tilt)
 
     def as_dict(self) -> dict[str, Any]:
         """Return what a model file stores of it."""
@@ -86,7 +90,8 @@ class Filter:
             if kind == 'vqf':
                 settings = FusionSettings(**stored.get('settings', {}))
                 return cls('vqf', settings.tau_acc_s, settings.bias_estimation,
-                           accel_bias_m_s2=settings.accel_bias_m_s2)
+                           accel_bias_m_s2=settings.accel_bias_m_s2,
+                           classical_tilt=settings.classical_tilt)
             if kind not in LABELS:
                 raise ValueError(f'unknown filter {kind!r}')
             gain = float(stored['gain'])
@@ -109,18 +114,19 @@ def grid(kind: str, accel_bias: tuple[float, float, float] | None = None) -> lis
 
 
 def run(flt: Filter, gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
-        stamp_ns: np.ndarray | None = None) -> np.ndarray:
+        stamp_ns: np.ndarray | None = None, raw: np.ndarray | None = None) -> np.ndarray:
     """
     Orientation (N, 4) xyzw at every stamp, stepped to stamp k by samples k - 1 and k.
 
     The step is at their mean (:func:`~denoise_imu_ros.pipeline.fusion.interval_rates`).
 
     With ``stamp_ns``, VQF integrates the real intervals as the node does (the baselines
-    step by one period: the recordings scored have none missing).
+    step by one period: the recordings scored have none missing). ``raw``: the gyro as
+    received, for a filter with the classical tilt.
     """
     if flt.kind == 'vqf':
         return fuse(gyro, accel, rate_hz, flt.settings,
-                    None if stamp_ns is None else step_periods(stamp_ns, rate_hz))
+                    None if stamp_ns is None else step_periods(stamp_ns, rate_hz), raw)
     accel = accel - np.array(flt.accel_bias_m_s2)  # as fuse does
     rates = interval_rates(np.asarray(gyro, dtype=np.float64))
     if flt.kind == 'madgwick':  # its sample 0 sets the tilt, rate k steps to stamp k
@@ -371,7 +377,8 @@ def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None, where: str =
     def own(meta: ModelMeta) -> Filter:  # a model file's settings for its own gyro
         settings = meta.fusion.chosen
         return Filter('vqf', settings.tau_acc_s, settings.bias_estimation,
-                      accel_bias_m_s2=settings.accel_bias_m_s2)
+                      accel_bias_m_s2=settings.accel_bias_m_s2,
+                      classical_tilt=settings.classical_tilt)
 
     rows = {'raw + VQF defaults': ('raw', VQF_DEFAULTS),
             'raw + VQF': ('raw', chosen('raw', 'vqf')),

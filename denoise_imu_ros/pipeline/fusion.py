@@ -12,6 +12,12 @@ constant bias, fitted on the training recordings' poses (``tune-fusion``), is re
 before the filter sees it: a bias b tilts the estimated vertical by about |b| / g, which
 the filter cannot average away (0.7 deg for EuRoC's ADIS16448).
 
+With ``classical_tilt`` a second VQF runs at its defaults (its own bias estimation on) on
+the raw gyro and accelerometer, what a user runs with no model, and the orientation takes
+its roll and pitch with this filter's heading (:func:`~denoise_imu_ros.core.rotation.
+with_tilt_of`): where the corrected gyro's filter tilts worse than the classical one on
+recordings of another power-on (``crossval --sessions`` chooses it), the tilt is that one's.
+
 Time convention, as imu_tools' (imu_filter_madgwick, VQF, every filter a user would
 swap in): the orientation published at stamp k includes sample k's rate. At sample k the
 filter integrates the interval from stamp k - 1 to stamp k at the mean of samples k - 1
@@ -42,8 +48,11 @@ import numpy as np
 from vqf import VQF
 
 from ..core.limits import MAX_GAP_FACTOR
-from ..core.rotation import hamilton, level_heading, Quat
+from ..core.rotation import hamilton, level_heading, Quat, with_tilt_of
 from ..core.schema import FusionSettings, ModelMeta
+
+
+CLASSICAL = FusionSettings(3.0, True)  # VQF's own defaults: tau 3 s, its bias estimation on
 
 
 def _vqf(rate_hz: float, settings: FusionSettings) -> VQF:
@@ -69,28 +78,45 @@ class GravityFilter:
         # preallocated: this runs on every IMU message
         self._step, self._accel, self._last = np.empty(3), np.empty(3), np.zeros(3)
         self._heading: Quat | None = None  # the turn to yaw 0, set by the first sample
+        self._classical = _vqf(rate_hz, CLASSICAL) if settings.classical_tilt else None
+        self._raw_step, self._raw_last = np.empty(3), np.zeros(3)
 
     def reset(self) -> None:
         """Start again: the next sample's accelerometer sets the tilt, yaw 0."""
         self._vqf.resetState()
+        if self._classical is not None:
+            self._classical.resetState()
         self._heading = None
 
-    def update(self, gyro: np.ndarray, accel: np.ndarray, periods: float = 1.0) -> np.ndarray:
+    def update(self, gyro: np.ndarray, accel: np.ndarray, periods: float = 1.0,
+               raw: np.ndarray | None = None) -> np.ndarray:
         """
         Orientation (4,) xyzw at this sample's stamp, this sample's ``gyro`` included.
 
         ``periods``: the interval since the last sample, in nominal periods (no step at
-        the first sample since a reset).
+        the first sample since a reset). ``raw``: the gyro as received (the classical
+        tilt's; ``accel`` is as received).
         """
+        scale = 0.5 * periods if self._heading is not None else 0.0
         np.subtract(accel, self._accel_bias, out=self._accel)
         np.add(self._last, gyro, out=self._step)  # the interval's rate: its two ends' mean
-        self._step *= 0.5 * periods if self._heading is not None else 0.0
+        self._step *= scale
         self._last[:] = gyro
         self._vqf.update(self._step, self._accel)
         w, x, y, z = self._vqf.getQuat6D().tolist()  # floats: numpy on four costs more
+        q = (x, y, z, w)
+        if self._classical is not None:
+            if raw is None:
+                raise ValueError('the classical tilt needs the raw gyro')
+            np.add(self._raw_last, raw, out=self._raw_step)
+            self._raw_step *= scale
+            self._raw_last[:] = raw
+            self._classical.update(self._raw_step, np.asarray(accel, dtype=np.float64))
+            cw, cx, cy, cz = self._classical.getQuat6D().tolist()
+            q = with_tilt_of(q, (cx, cy, cz, cw))
         if self._heading is None:
-            self._heading = level_heading((x, y, z, w))
-        return np.array(hamilton(self._heading, (x, y, z, w)))
+            self._heading = level_heading(q)
+        return np.array(hamilton(self._heading, q))
 
 
 def interval_rates(gyro: np.ndarray) -> np.ndarray:
@@ -117,19 +143,28 @@ def step_periods(stamp_ns: np.ndarray, rate_hz: float,
 
 def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
          settings: FusionSettings = FusionSettings(),
-         periods: np.ndarray | None = None) -> np.ndarray:
+         periods: np.ndarray | None = None, raw: np.ndarray | None = None) -> np.ndarray:
     """
     Orientation (N, 4) xyzw at every stamp of (N, 3) gyro and accelerometer samples.
 
     ``periods`` (N,): each interval to a stamp in nominal periods (:func:`step_periods`);
-    None: every interval one period.
+    None: every interval one period. ``raw`` (N, 3): the gyro as received, for the
+    classical tilt (``accel`` as received).
     """
-    step = interval_rates(np.asarray(gyro, dtype=np.float64))
-    if periods is not None:
-        step *= np.asarray(periods, dtype=np.float64)[:, None]
-    out = _xyzw(_vqf(rate_hz, settings).updateBatch(
-        np.ascontiguousarray(step),
-        np.asarray(accel, dtype=np.float64) - np.array(settings.accel_bias_m_s2))['quat6D'])
+    def batch(rates: np.ndarray, flt: FusionSettings) -> np.ndarray:
+        step = interval_rates(np.asarray(rates, dtype=np.float64))
+        if periods is not None:
+            step *= np.asarray(periods, dtype=np.float64)[:, None]
+        return _xyzw(_vqf(rate_hz, flt).updateBatch(
+            np.ascontiguousarray(step),
+            np.asarray(accel, dtype=np.float64) - np.array(flt.accel_bias_m_s2))['quat6D'])
+    out = batch(gyro, settings)
+    if settings.classical_tilt:
+        if raw is None:
+            raise ValueError('the classical tilt needs the raw gyro')
+        tilts = batch(raw, CLASSICAL)  # as update's, sample by sample on floats
+        out = np.array([with_tilt_of(tuple(h), tuple(t))
+                        for h, t in zip(out.tolist(), tilts.tolist())]).reshape(-1, 4)
     if not len(out):
         return out
     return np.stack(hamilton(level_heading(out[0]), out.T), axis=-1)  # as update's, on arrays

@@ -271,7 +271,7 @@ class OnlineDenoiser:
             self._pending_reset = False
         flow = Flow(np.concatenate([gyro, accel], dtype=np.float64), event,
                     (stamp_ns - self._last_ns) * 1e-9 if event is None else 0.0,
-                    periods if event is None else 0.0)  # a gap: yaw held
+                    periods if event is None else 0.0, raw=gyro)  # a gap: yaw held
         if not self.pipeline.step(flow, events):  # never published: dropped as if lost
             return self._drop(Drop.NON_FINITE_OUTPUT)
         if event in (Event.START, Event.TIME_JUMP):  # another stream: its rate is new too

@@ -77,17 +77,20 @@ class Flow:
     What the stages hand on: one sample's values, or a recording's arrays.
 
     ``fed`` is the model's input (the raw gyro less the turn-on bias, and the
-    accelerometer), ``out`` the gyro so far; the rest are set by the stages that have
-    them (``bias`` the tracked bias removed, ``hold`` the envelope's hold of the tracker,
-    ``beyond`` its samples beyond the sustained bound, ``variance`` the output's).
+    accelerometer), ``raw`` the gyro as received, ``out`` the gyro so far; the rest are
+    set by the stages that have them (``bias`` the tracked bias removed, ``hold`` the
+    envelope's hold of the tracker, ``beyond`` its samples beyond the sustained bound,
+    ``variance`` the output's).
     """
 
-    __slots__ = ('fed', 'out', 'bias', 'hold', 'beyond', 'event', 'dt_s', 'periods',
+    __slots__ = ('fed', 'raw', 'out', 'bias', 'hold', 'beyond', 'event', 'dt_s', 'periods',
                  'attitude', 'orientation', 'variance')
 
     def __init__(self, fed: np.ndarray, event: Event | None = None, dt_s: Any = 0.0,
-                 periods: Any = 0.0, out: np.ndarray | None = None) -> None:
+                 periods: Any = 0.0, out: np.ndarray | None = None,
+                 raw: np.ndarray | None = None) -> None:
         self.fed, self.event, self.dt_s, self.periods = fed, event, dt_s, periods
+        self.raw: Any = fed[..., :3].copy() if raw is None else raw  # no stage changes it
         self.out: Any = out
         self.bias: Any = None
         self.hold: Any = False
@@ -365,13 +368,13 @@ class Orientation(Stage):
 
     def step(self, flow: Flow) -> None:
         """Update with this sample (no gyro step after an event: the yaw is held)."""
-        flow.orientation = self.filter.update(flow.out, flow.fed[3:], flow.periods)
+        flow.orientation = self.filter.update(flow.out, flow.fed[3:], flow.periods, flow.raw)
 
     def run(self, flow: Flow) -> None:
         """Filter the recording in one compiled batch."""
         flow.orientation = fuse(flow.out, flow.fed[:, 3:], self.rate_hz, self.settings,
                                 flow.periods if isinstance(flow.periods, np.ndarray)
-                                else None)
+                                else None, flow.raw)
 
 
 # The one table: the order of the stages and the events that reset each.

@@ -152,7 +152,9 @@ class GyroDenoiser(Node):
                f', {self._pub_fused.topic_name} (VQF: tau_acc {fusion.tau_acc_s:g} s, bias '
                f'estimation {"on" if fusion.bias_estimation else "off"}, accelerometer bias '
                + ('removed: none stored' if not any(fusion.accel_bias_m_s2) else
-                  f'removed {[round(b, 4) for b in fusion.accel_bias_m_s2]} m/s^2') + ')')
+                  f'removed {[round(b, 4) for b in fusion.accel_bias_m_s2]} m/s^2')
+               + ("; roll and pitch of VQF's defaults on the raw IMU" if fusion.classical_tilt
+                  else '') + ')')
             + f', {self._pub_att.topic_name}')
         if self._not_recommended:
             self.get_logger().warning(self._not_recommended)

@@ -106,6 +106,11 @@ class Settings:
         'model', "The filter's own gyro-bias estimation: 'model' (the model file's choice), "
         "on or off. On stacks a second estimator on the network's correction.",
         read_only=True, switches=(True, False))
+    fusion_classical_tilt: str | bool = _p(
+        'model', "The orientation's roll and pitch from VQF's defaults on the raw gyro and "
+        'accelerometer (what runs with no model), its heading from the corrected gyro: '
+        "'model' (where the model file's cross-validation on another power-on found that "
+        'tilt lower), on or off.', read_only=True, switches=(True, False))
     fusion_accel_bias: str | bool = _p(
         'model', "The accelerometer bias removed before the filter and from imu/attitude's "
         "initial tilt, and from imu/corrected's and imu/data's accelerometer where the model "
@@ -231,10 +236,12 @@ class Settings:
         """Return the model file's filter settings with these overrides applied."""
         chosen = loaded.meta.fusion.chosen
         bias, accel = self.choice('fusion_bias_estimation'), self.choice('fusion_accel_bias')
+        tilt = self.choice('fusion_classical_tilt')
         return FusionSettings(
             tau_acc_s=self.fusion_tau_acc if self.fusion_tau_acc > 0 else chosen.tau_acc_s,
             bias_estimation=chosen.bias_estimation if bias == 'model' else bias == 'on',
-            accel_bias_m_s2=chosen.accel_bias_m_s2 if accel == 'model' else (0.0, 0.0, 0.0))
+            accel_bias_m_s2=chosen.accel_bias_m_s2 if accel == 'model' else (0.0, 0.0, 0.0),
+            classical_tilt=chosen.classical_tilt if tilt == 'model' else tilt == 'on')
 
     def denoiser(self, loaded: ModelFile) -> OnlineDenoiser:
         """Return the pipeline these settings run for a model file."""

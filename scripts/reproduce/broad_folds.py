@@ -54,16 +54,16 @@ def open_loop(report: dict[str, Any]) -> list[str]:
 
 
 def fused(out: Path, dest: Path, data: str, report: dict[str, Any],
-          tune: bool = False, vqf: tuple[float, bool] | None = None) -> list[str]:
+          tune: bool = False, vqf: tuple[float, bool, bool] | None = None) -> list[str]:
     """
     Markdown lines: ``imu/data`` of each fold's seeds and ensemble against VQF's defaults.
 
     Each fold's models with the tracking, and the network with the blend, that the other
     folds chose (the report's ``per_fold``), as its open-loop figures; with ``tune``, their
     filters chosen on their own training trials' validation tails (``tune-fusion
-    --attach``, as the shipped file's); with ``vqf`` (tau_acc_s, bias estimation), that
-    VQF for every gyro of theirs (as ``tune-fusion --attach`` stores a choice); else at the
-    defaults ``train`` stores.
+    --attach``, as the shipped file's); with ``vqf`` (tau_acc_s, bias estimation, the
+    classical tilt), that VQF for every gyro of theirs (as ``tune-fusion --attach`` stores a
+    choice); else at the defaults ``train`` stores.
     """
     from denoise_imu_ros.core.modelfile import add_metadata
     from denoise_imu_ros.core.schema import Blend
@@ -97,11 +97,12 @@ def fused(out: Path, dest: Path, data: str, report: dict[str, Any],
                 add_metadata(folder / 'network.safetensors', blend=Blend(
                     report['blend']['per_fold'][str(i)], classical).as_dict())
             if vqf is not None:
-                chosen = Filter('vqf', *vqf)
+                chosen = Filter('vqf', vqf[0], vqf[1], classical_tilt=vqf[2])
+                raw = Filter('vqf', vqf[0], vqf[1])  # the raw gyro's rows: its own tilt
                 for row in ('network', 'calibrated'):
                     add_metadata(folder / f'{row}.safetensors', fusion={
                         'settings': chosen.settings.as_dict(),
-                        'filters': {'raw vqf': chosen.as_dict()}})
+                        'filters': {'raw vqf': raw.as_dict()}})
             if tune and not (folder / 'tuned').exists():
                 nets = [str(folder / f'{row}.safetensors') for row in ('network', 'calibrated')]
                 attach(*nets, tune_model(*nets, data, progress=False))
@@ -147,18 +148,22 @@ def main() -> None:
                         'OUT/vqf_tau<TAU>_bias_<on|off>)')
     parser.add_argument('--tune', action='store_true', help="imu/data's filters chosen on "
                         "each fold model's training trials' tails, as the shipped file's")
+    parser.add_argument('--classical-tilt', action='store_true', help='with --vqf: the '
+                        "orientation's roll and pitch of VQF's defaults on the raw IMU")
     parser.add_argument('--vqf', nargs=2, metavar=('TAU_S', 'BIAS'), help="imu/data's filter "
                         'for every gyro: VQF with this tau and its bias estimation on or off')
     args = parser.parse_args()
     if args.tune and args.vqf:
         parser.error('--tune and --vqf choose the filter two ways: give one')
+    if args.classical_tilt and not args.vqf:
+        parser.error('--classical-tilt sets a tilt of --vqf: give it with --vqf')
     vqf = None
     if args.vqf:
         tau, bias = args.vqf
         if bias not in ('on', 'off'):
             parser.error(f'--vqf: bias estimation on or off, not {bias!r}')
         try:
-            vqf = (float(tau), bias == 'on')
+            vqf = (float(tau), bias == 'on', args.classical_tilt)
         except ValueError:
             parser.error(f'--vqf: tau in seconds, not {tau!r}')
     report = json.loads((args.out / 'crossval.json').read_text())
@@ -169,7 +174,8 @@ def main() -> None:
     lines += open_loop(report)
     if args.data:
         kind = ('tuned' if args.tune else 'fused' if vqf is None
-                else f'vqf_tau{vqf[0]:g}_bias_{args.vqf[1]}')
+                else f'vqf_tau{vqf[0]:g}_bias_{args.vqf[1]}'
+                + ('_classical_tilt' if args.classical_tilt else ''))
         lines += fused(args.out, args.dest or args.out / kind, args.data, report, args.tune,
                        vqf)
     print('\n'.join(lines))

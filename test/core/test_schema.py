@@ -97,7 +97,8 @@ def test_every_shipped_model_parses(name):
 def test_folds_that_leave_a_power_on_out_set_the_filter_of_the_row_a_model_file_runs():
     """The folds' filter for that row, the file's accelerometer bias where they remove one."""
     chosen = {'tracker only': {'tau_acc_s': 5.0, 'bias_estimation': True,
-                               'accel_bias_removed': True, 'orientation_std_rad': [1, 2, 3]},
+                               'accel_bias_removed': True, 'classical_tilt': True,
+                               'orientation_std_rad': [1, 2, 3]},
               'network': {'tau_acc_s': 3.0, 'bias_estimation': False,
                           'accel_bias_removed': False, 'orientation_std_rad': [4, 5, 6]}}
     report = {'fold_kind': 'leave one power-on session out',
@@ -109,18 +110,19 @@ def test_folds_that_leave_a_power_on_out_set_the_filter_of_the_row_a_model_file_
     assert not meta.fusion.by_crossval
     got = fusion_metadata(report, 'tracker only', meta)
     assert got['settings'] == {'tau_acc_s': 5.0, 'bias_estimation': True,
-                               'accel_bias_m_s2': bias}
+                               'accel_bias_m_s2': bias, 'classical_tilt': True}
     assert got['filters'] == own['filters'] and got['orientation_std_rad'] == [1, 2, 3]
     assert got['chosen_on'] == 'crossval: the folds'
     assert parse_meta({'sample_rate_hz': 200.0, 'fusion': got}, 'test').fusion.by_crossval
-    assert fusion_metadata(report, 'network', meta)['settings']['accel_bias_m_s2'] == [
-        0.0, 0.0, 0.0]
+    network = fusion_metadata(report, 'network', meta)['settings']  # a report without the tilt
+    assert network['accel_bias_m_s2'] == [0.0, 0.0, 0.0] and not network['classical_tilt']
     assert fusion_metadata(report, 'calibrated', meta) is None  # no choice for it
     assert fusion_metadata(dict(report, fold_kind='leave recordings out'), 'network',
                            meta) is None  # the tails share the power-on: their choice stands
     assert fusion_metadata({'fold_kind': report['fold_kind']}, 'network', meta) is None
     # a report from a file (user input) that does not hold together is one clear error
-    for bad in ({'tau_acc_s': -1.0}, {'orientation_std_rad': 'small'}, {'bias_estimation': 1}):
+    for bad in ({'tau_acc_s': -1.0}, {'orientation_std_rad': 'small'}, {'bias_estimation': 1},
+                {'classical_tilt': 'yes'}):
         broken = dict(report, fusion={'chosen': {'network': dict(chosen['network'], **bad)},
                                       'chosen_on': 'the folds'})
         with pytest.raises(ModelFileError, match='crossval.fusion.chosen.network'):

@@ -10,6 +10,7 @@ from denoise_imu_ros.core.schema import judged_on, parse_meta
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation.crossval import (attach_mismatches, BLEND_WEIGHTS, crossval, folds,
                                                  summarize)
+from denoise_imu_ros.evaluation.filters import TILT_LABEL
 from denoise_imu_ros.evaluation.reports import crossval_table
 from denoise_imu_ros.learn.checkpoint import load_model
 from helpers import write_asl
@@ -388,14 +389,21 @@ def test_crossval_of_several_seeds_scores_their_ensemble(tmp_path, capsys):
     assert 'The network rows blend' in printed.out
     # and, the folds leaving a power-on out, imu/data's filter: each fold's figures at the
     # filter the other fold's recording chose, VQF's defaults on the raw gyro beside
+    # its tilt the filter's own or, where lower, that of VQF's defaults on the raw IMU
     fusion = report['fusion']
     for fold, name in (('0', 'rec0'), ('1', 'rec1')):
         rows = fusion['recordings'][name]
         assert rows['network + VQF']['filter'] == fusion['per_fold'][fold]['network']
         assert rows['raw + VQF defaults']['filter'] == 'vqf tau_acc 3 s, bias estimation on'
-    chosen = fusion['chosen']['network']
-    assert fusion['candidates']['network'][chosen['label']] == min(
-        fusion['candidates']['network'].values())
+        if rows['network + VQF']['filter'].endswith(TILT_LABEL):
+            assert rows['network + VQF']['tilt_deg'] == pytest.approx(
+                rows['raw + VQF defaults']['tilt_deg'], abs=1e-9)
+    for row in ('tracker only', 'calibrated', 'network'):
+        chosen, tilt = fusion['chosen'][row], fusion['tilt'][row]
+        base = chosen['label'].removesuffix(TILT_LABEL)
+        assert fusion['candidates'][row][base] == min(fusion['candidates'][row].values())
+        assert chosen['classical_tilt'] == (tilt['classical'] < tilt['own']) == (
+            base != chosen['label'])
     assert '`imu/data` on the unseen recordings' in printed.out
     assert main(args + ['--seeds', '3', '3']) == 1
     assert '--seeds must list distinct seeds' in capsys.readouterr().err

@@ -5,7 +5,7 @@
 from denoise_imu_ros.core.modelfile import read_model_file
 from denoise_imu_ros.core.schema import parse_meta
 from denoise_imu_ros.data.load import load_imu
-from denoise_imu_ros.pipeline.fusion import (fuse, FusionSettings, GravityFilter,
+from denoise_imu_ros.pipeline.fusion import (CLASSICAL, fuse, FusionSettings, GravityFilter,
                                              orientation_covariance, step_periods)
 from denoise_imu_ros.pipeline.online import OnlineDenoiser
 from helpers import SAMPLE
@@ -20,18 +20,38 @@ def imu():
 
 
 @pytest.mark.parametrize('settings', [FusionSettings(), FusionSettings(10.0, True),
-                                      FusionSettings(5.0, False, (-0.01, 0.12, 0.06))])
+                                      FusionSettings(5.0, False, (-0.01, 0.12, 0.06)),
+                                      FusionSettings(5.0, False, (-0.01, 0.12, 0.06), True)])
 def test_online_equals_offline_bit_for_bit(imu, settings):
     online = GravityFilter(200.0, settings)
     buffer = np.empty(6)  # the caller refills one array, as a streaming engine may
+    raw = imu[:, :3] + [0.01, -0.02, 0.005]  # a corrected gyro is not the raw one
 
-    def update(row: np.ndarray) -> np.ndarray:
+    def update(row: np.ndarray, raw_gyro: np.ndarray) -> np.ndarray:
         buffer[:] = row
-        return online.update(buffer[:3], buffer[3:])
-    one_by_one = np.array([update(row) for row in imu])
-    assert np.array_equal(one_by_one, fuse(imu[:, :3], imu[:, 3:], 200.0, settings))
+        return online.update(buffer[:3], buffer[3:], raw=raw_gyro)
+    one_by_one = np.array([update(row, g) for row, g in zip(imu, raw)])
+    assert np.array_equal(one_by_one, fuse(imu[:, :3], imu[:, 3:], 200.0, settings, raw=raw))
     online.reset()
-    assert np.array_equal(online.update(imu[0, :3], imu[0, 3:]), one_by_one[0])
+    assert np.array_equal(online.update(imu[0, :3], imu[0, 3:], raw=raw[0]), one_by_one[0])
+
+
+def test_the_classical_tilt_is_vqf_defaults_on_the_raw_imu_the_heading_the_filters(imu):
+    """Never a worse tilt than what a user runs with no model, where chosen; our heading."""
+    corrected = imu[:, :3] - [0.004, -0.003, 0.006]
+    own = FusionSettings(5.0, False, (-0.01, 0.12, 0.06))
+    split = Rotation.from_quat(fuse(corrected, imu[:, 3:], 200.0,
+                                    FusionSettings(5.0, False, (-0.01, 0.12, 0.06), True),
+                                    raw=imu[:, :3]))
+    classical = Rotation.from_quat(fuse(imu[:, :3], imu[:, 3:], 200.0, CLASSICAL))
+    heading = Rotation.from_quat(fuse(corrected, imu[:, 3:], 200.0, own))
+    up = [0.0, 0.0, 1.0]
+    np.testing.assert_allclose(split.inv().apply(up), classical.inv().apply(up), atol=1e-12)
+    assert np.abs(heading.inv().apply(up) - classical.inv().apply(up)).max() > 1e-4
+    np.testing.assert_allclose(split.as_euler('ZYX')[:, 0], heading.as_euler('ZYX')[:, 0],
+                               atol=1e-12)
+    with pytest.raises(ValueError, match='the classical tilt needs the raw gyro'):
+        fuse(corrected, imu[:, 3:], 200.0, FusionSettings(classical_tilt=True))
 
 
 @pytest.mark.parametrize('accel', [(0.0, 0.0, 9.81), (9.2, 0.1, -3.3), (-2.0, 6.0, 7.0),

@@ -540,7 +540,8 @@ def test_process_bag_with_the_nodes_params_file_writes_what_that_node_publishes(
               'angular_velocity_stddev': 0.003, 'max_gap_factor': 5.0,
               'time_jump_threshold': 0.5, 'rate_tolerance': 0.1, 'publish_fused': fused,
               'fusion_tau_acc': 7.0, 'fusion_bias_estimation': 'on',
-              'fusion_accel_bias': 'off', 'rest_bias': 'off', 'envelope_guard': 'off',
+              'fusion_classical_tilt': 'on', 'fusion_accel_bias': 'off', 'rest_bias': 'off',
+              'envelope_guard': 'off',
               'classical_blend': 'off', 'fused_orientation_stddev': 0.02}
     from denoise_imu_ros.runtime.settings import Settings  # every one but the model's and depth
     assert set(params) == {n for n, _, _ in Settings.specs()} - {'model', 'input_queue_depth'}

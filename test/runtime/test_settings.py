@@ -111,3 +111,5 @@ def test_imu_corrected_leaves_the_accelerometer_bias_out_where_it_carries(
     assert out.accel.tolist() == [0.1 - published[0], 0.2 - published[1], 9.8 - published[2]]
     off = settings.with_(fusion_accel_bias='off')
     assert off.corrected_accel_bias(loaded) == (0.0, 0.0, 0.0)
+    assert not settings.fusion(loaded).classical_tilt  # the file's: none stored
+    assert settings.with_(fusion_classical_tilt='on').fusion(loaded).classical_tilt
