@@ -14,7 +14,8 @@ a model taught without its poses' heading). Where the file blends its output wit
 classical pipeline's (its ``blend``), also rounds with ``rest_bias`` on and
 ``classical_blend`` off, and the blend alone (``Blender.apply``). And rounds with
 ``imu/data``'s filter (the file's settings), with and without the classical tilt (a
-second VQF on the raw IMU). Prints the median per-sample time of each, and the ratios
+second VQF on the raw IMU), their order swapped every round, and each filter alone
+(``GravityFilter.update``). Prints the median per-sample time of each, and the ratios
 on/off, blend/no blend and classical tilt/own tilt.
 Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
      [--data ../shared/data/broad] [--recording 03_undisturbed_slow_rotation_C]
@@ -23,6 +24,7 @@ Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
 
 import argparse
 import dataclasses
+import gc
 from pathlib import Path
 import time
 
@@ -30,6 +32,7 @@ from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.pipeline.blend import Blender
 from denoise_imu_ros.pipeline.envelope import Guard
+from denoise_imu_ros.pipeline.fusion import GravityFilter
 from denoise_imu_ros.pipeline.online import OnlineDenoiser
 from denoise_imu_ros.pipeline.rest_bias import BiasTracker, resolve, RestBias
 from denoise_imu_ros.pipeline.vertical import Vertical
@@ -41,6 +44,7 @@ DATA = Path(__file__).resolve().parents[2] / 'shared' / 'data' / 'broad'
 def per_sample_s(step, stamps: np.ndarray, imu: np.ndarray) -> float:
     """Return the mean time of ``step(stamp, gyro, accel)`` over the samples, seconds."""
     rows = [(int(t), r[:3].copy(), r[3:].copy()) for t, r in zip(stamps, imu)]
+    gc.collect()  # the last round's garbage is not this one's cost
     start = time.perf_counter()
     for t, g, a in rows:
         step(t, g, a)
@@ -64,6 +68,7 @@ def main() -> None:
     filters = {'on, imu/data': dataclasses.replace(own, classical_tilt=False),
                'on, imu/data, classical tilt': dataclasses.replace(own, classical_tilt=True)}
     times = {'off': [], 'on': [], 'on, no blend': [], **{name: [] for name in filters},
+             **{f'{name} filter alone': [] for name in filters},
              'estimator alone': [],
              'tracker alone': [], 'envelope guard alone': [], 'blend alone': [],
              'vertical alone': []}
@@ -74,9 +79,12 @@ def main() -> None:
                 continue
             den = OnlineDenoiser.from_model_file(model, rest_choice=choice, blend_choice=mix)
             times[name].append(per_sample_s(den.process, stamps, imu))
-        for name, fusion in filters.items():
-            den = OnlineDenoiser.from_model_file(model, fusion, rest_choice='on')
+        for name in sorted(filters, reverse=len(times['off']) % 2 == 0):  # order swapped
+            den = OnlineDenoiser.from_model_file(model, filters[name], rest_choice='on')
             times[name].append(per_sample_s(den.process, stamps, imu))
+            gravity = GravityFilter(sample_rate(model), filters[name])
+            times[f'{name} filter alone'].append(
+                per_sample_s(lambda t, g, a: gravity.update(g, a, 1.0, g), stamps, imu))
         rest = RestBias(resolve(model.meta, 'on'), sample_rate(model))
         times['estimator alone'].append(
             per_sample_s(lambda t, g, a: rest.update(g, a), stamps, imu))
@@ -111,8 +119,9 @@ def main() -> None:
     print(f'{model.path.name}, {len(stamps)} samples of {args.recording}, '
           f'{args.rounds} rounds alternating, median per sample:')
     for name, value in median.items():
-        print(f'  the {name.replace(" alone", "")} alone: {value * 1e6:.1f} us'
-              if name.endswith(' alone') else f'  rest_bias {name}: {value * 1e6:.1f} us')
+        print(f'  the {name.replace(" alone", "").replace("on, ", "")} alone: '
+              f'{value * 1e6:.1f} us' if name.endswith(' alone')
+              else f'  rest_bias {name}: {value * 1e6:.1f} us')
     print(f'  on / off: {median["on"] / median["off"]:.3f}')
     if blended:
         print(f'  blend / no blend (rest_bias on): {median["on"] / median["on, no blend"]:.3f}')
