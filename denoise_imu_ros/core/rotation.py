@@ -62,17 +62,20 @@ def yaw_turn(q: Quat) -> Quat:
     Return the turn about z by ``q``'s yaw (the first angle of its Z-Y-X decomposition).
 
     From the rotation matrix's first column by square roots alone, no trigonometry: the
-    same floats online and in a batch. A yaw of 180 deg is the half turn; an undefined one
-    (the x axis vertical) none.
+    same floats online and in a batch. Half the yaw's (sin, cos) is along (b, r + a) and
+    along (r - a, b), a and b its cosine and sine times r: the one without cancellation is
+    taken (its sign is the quaternion's, the same turn). An undefined yaw (the x axis
+    vertical) is none.
     """
     x, y, z, w = q
-    a = 1.0 - 2.0 * (y * y + z * z)  # cos(yaw) and sin(yaw), times the same length
+    a = 1.0 - 2.0 * (y * y + z * z)
     b = 2.0 * (w * z + x * y)
-    c = math.sqrt(a * a + b * b) + a  # (b, c) is along (sin, cos) of half the yaw
-    n = math.sqrt(b * b + c * c)
-    if n < _SMALL_ANGLE:
-        return (0.0, 0.0, 1.0, 0.0) if abs(b) + abs(a) >= _SMALL_ANGLE else (0.0, 0.0, 0.0, 1.0)
-    return 0.0, 0.0, b / n, c / n
+    r = math.sqrt(a * a + b * b)
+    if r < _SMALL_ANGLE:
+        return 0.0, 0.0, 0.0, 1.0
+    s, c = (b, r + a) if a >= 0.0 else (r - a, b)
+    n = math.sqrt(s * s + c * c)
+    return 0.0, 0.0, s / n, c / n
 
 
 def with_tilt_of(heading: Quat, tilt: Quat) -> Quat:

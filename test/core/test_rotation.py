@@ -81,3 +81,18 @@ def test_kabsch_of_a_reflected_cloud_is_still_a_rotation():
     ref, ref_rssd = Rotation.align_vectors(a, b)
     assert abs(np.linalg.det(r) - 1) < 1e-12
     assert abs(np.sqrt(np.sum((a - b @ r.T) ** 2)) - ref_rssd) < 1e-9 * ref_rssd
+
+
+def test_yaw_turn_and_with_tilt_of_equal_scipys_euler_angles():
+    """The yaw of one, the roll and pitch of the other, near a half turn of yaw too."""
+    near = [Rotation.from_euler('ZYX', [np.pi - d * s, p, 0.4]) for d in (1e-3, 1e-9, 0.0)
+            for s in (1, -1) for p in (0.3, -1.2)]
+    cases = list(Rotation.random(500, random_state=4)) + near
+    for a, b in zip(cases, cases[1:] + cases[:1]):
+        turn = Rotation.from_quat(rotation.yaw_turn(tuple(a.as_quat())))
+        assert _same(turn.as_quat(), Rotation.from_euler('z', a.as_euler('ZYX')[0])) < 1e-12
+        both = rotation.with_tilt_of(tuple(a.as_quat()), tuple(b.as_quat()))
+        want = Rotation.from_euler('ZYX', [a.as_euler('ZYX')[0], *b.as_euler('ZYX')[1:]])
+        assert _same(both, want) < 1e-12
+    assert rotation.yaw_turn(tuple(Rotation.from_euler('ZYX', [1.0, np.pi / 2, 0.0]).as_quat())
+                             ) == (0.0, 0.0, 0.0, 1.0)  # the x axis vertical: no yaw
