@@ -78,7 +78,7 @@ def _baselines(model: str, seq: Sequence) -> Baselines:
     gyro = StreamingCorrector(calib.config, calib.arrays).process(seq.stream)
     rate = sample_rate(calib)
     fused = fuse(gyro, seq.stream[:, 3:], rate, calib.meta.fusion.chosen,
-                 step_periods(seq.stream_stamp_ns, rate))
+                 step_periods(seq.stream_stamp_ns, rate), seq.stream[:, :3])
     return Baselines(seq.imu[:, :3], seq.on_poses(gyro), seq.on_poses(fused))
 
 

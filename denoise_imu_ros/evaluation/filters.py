@@ -59,6 +59,11 @@ class Filter:
     accel_bias_m_s2: tuple[float, float, float] = NO_BIAS  # removed before the filter
     classical_tilt: bool = False  # the tilt of VQF's defaults on the raw IMU (vqf only)
 
+    def __post_init__(self) -> None:
+        """Refuse a classical tilt on a filter that has none (only VQF's is composed)."""
+        if self.classical_tilt and self.kind != 'vqf':
+            raise ValueError(f'the classical tilt is a VQF setting, not {self.kind}\'s')
+
     @property
     def label(self) -> str:
         """Name in tables and model files."""

@@ -90,7 +90,7 @@ class Flow:
                  periods: Any = 0.0, out: np.ndarray | None = None,
                  raw: np.ndarray | None = None) -> None:
         self.fed, self.event, self.dt_s, self.periods = fed, event, dt_s, periods
-        self.raw: Any = fed[..., :3].copy() if raw is None else raw  # no stage changes it
+        self.raw: Any = raw  # the orientation's classical tilt: no stage changes it
         self.out: Any = out
         self.bias: Any = None
         self.hold: Any = False
@@ -109,13 +109,13 @@ class Flow:
         a gap of more than ``max_gap_factor`` periods), ``dt_s`` each interval's length.
         """
         if stamp_ns is None:
-            return cls(imu)
+            return cls(imu, raw=imu[:, :3].copy())
         stamps = np.asarray(stamp_ns, dtype=np.int64)
         dt = np.zeros(len(stamps))
         dt[1:] = np.diff(stamps) * 1e-9
         periods = dt * rate_hz
         periods[periods > max_gap_factor] = 0.0
-        return cls(imu, dt_s=dt, periods=periods)
+        return cls(imu, dt_s=dt, periods=periods, raw=imu[:, :3].copy())
 
 
 class Stage:

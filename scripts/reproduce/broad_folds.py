@@ -62,8 +62,9 @@ def fused(out: Path, dest: Path, data: str, report: dict[str, Any],
     folds chose (the report's ``per_fold``), as its open-loop figures; with ``tune``, their
     filters chosen on their own training trials' validation tails (``tune-fusion
     --attach``, as the shipped file's); with ``vqf`` (tau_acc_s, bias estimation, the
-    classical tilt), that VQF for every gyro of theirs (as ``tune-fusion --attach`` stores a
-    choice); else at the defaults ``train`` stores.
+    classical tilt), that VQF for the models' gyros and, without the classical tilt, for the
+    raw gyro's rows (as ``tune-fusion --attach`` stores a choice); else at the defaults
+    ``train`` stores.
     """
     from denoise_imu_ros.core.modelfile import add_metadata
     from denoise_imu_ros.core.schema import Blend

@@ -152,3 +152,17 @@ def test_covariance_comes_from_the_model_file_or_the_node_or_a_default():
     assert orientation_covariance(meta)[::4] == pytest.approx([1e-4, 4e-4, 9e-4])
     assert orientation_covariance(meta, 0.1)[::4] == pytest.approx([0.01] * 3)
     assert orientation_covariance(parse_meta({}, 'm'))[::4] == pytest.approx([0.0025] * 3)
+
+
+def test_a_classical_tilt_is_refused_without_the_raw_gyro_and_on_other_filters(imu):
+    from denoise_imu_ros.evaluation.filters import Filter
+    from denoise_imu_ros.pipeline.stages import Flow, Orientation
+    orientation = Orientation(200.0, FusionSettings(classical_tilt=True))
+    with pytest.raises(ValueError, match='the classical tilt needs the raw gyro'):
+        orientation.run(Flow(imu, out=imu[:, :3]))  # the model's input is not the raw gyro
+    flow = Flow.recording(imu)
+    flow.out = imu[:, :3]
+    orientation.run(flow)  # a recording's flow carries its raw gyro
+    assert np.isfinite(flow.orientation).all()
+    with pytest.raises(ValueError, match='the classical tilt is a VQF setting'):
+        Filter('madgwick', gain=0.1, classical_tilt=True)

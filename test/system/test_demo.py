@@ -35,3 +35,18 @@ def test_a_bad_rate_is_one_line_and_starts_no_node(tmp_path, monkeypatch, capsys
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and err.startswith('denoise-imu-demo: error:')
     assert started == []  # nothing left running
+
+
+def test_the_demos_baselines_run_a_models_own_filter_classical_tilt_included(tmp_path, data_dir):
+    """broad_calibrated's filter takes its tilt from the raw IMU: the demo feeds it that."""
+    from denoise_imu_ros.core.modelfile import read_model_file
+    from denoise_imu_ros.data.load import load_sequence
+    from denoise_imu_ros.demo import _baselines
+    from helpers import crop_asl
+    import numpy as np
+    assert read_model_file('broad_calibrated').meta.fusion.chosen.classical_tilt
+    trial = crop_asl(data_dir / 'broad' / '03_undisturbed_slow_rotation_C', tmp_path / 't', 20.0)
+    seq = load_sequence(trial)
+    baselines = _baselines('broad_network', seq)
+    assert baselines.calibrated_vqf.shape == (len(seq.gt_quat), 4)
+    assert np.isfinite(baselines.calibrated_vqf).all()
