@@ -62,7 +62,7 @@ class Filter:
     def __post_init__(self) -> None:
         """Refuse a classical tilt on a filter that has none (only VQF's is composed)."""
         if self.classical_tilt and self.kind != 'vqf':
-            raise ValueError(f'the classical tilt is a VQF setting, not {self.kind}\'s')
+            raise ValueError(f"the classical tilt is a VQF setting, not {self.kind}'s")
 
     @property
     def label(self) -> str:
