@@ -24,7 +24,7 @@ import warnings
 import numpy as np
 
 from .errors import DatasetError, DataWarning
-from .rotation import conjugate_arrays, multiply_arrays
+from .rotation import relative_arrays
 
 RATE_TOLERANCE = 0.05     # relative rate mismatch refused offline, an ERROR online
 MAX_GYRO_RAD_S = 100.0    # ~5,700 deg/s
@@ -165,7 +165,7 @@ def check_gyro_against_poses(gyro: np.ndarray, gt_quat: np.ndarray, gt_valid: np
     ok = gt_valid[:-1] & gt_valid[1:]
     if ok.sum() < 2:
         return
-    step = multiply_arrays(conjugate_arrays(gt_quat[:-1]), gt_quat[1:])[ok]
+    step = relative_arrays(gt_quat[:-1], gt_quat[1:])[ok]
     angle = Rotation.from_quat(step).magnitude()
     pose_rms = float(np.sqrt(np.mean((angle / dt[ok]) ** 2)))
     gyro_rms = float(np.sqrt(np.mean(np.sum(gyro[:-1][ok] ** 2, axis=1))))

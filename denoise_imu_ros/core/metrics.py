@@ -15,7 +15,7 @@ from typing import NamedTuple, TYPE_CHECKING
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .rotation import conjugate_arrays, multiply_arrays
+from .rotation import conjugate_arrays, multiply_arrays, relative_arrays
 
 if TYPE_CHECKING:
     from .records import Sequence
@@ -25,11 +25,6 @@ SCAN_BLOCK = 16  # steps composed per block by integrate (4x faster than one sca
 RESIDUAL_BLOCK = 16  # samples per increment of the gyro residual estimate (training, noise)
 ALIGN_AT_S = 1.5  # a fused orientation's arbitrary yaw is aligned to the ground truth here
 MAX_STRETCH = 2  # an increment between poses spans at most this many times its length
-
-
-def _between(q: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-    """Return the rotations q_i^-1 q_j of (N, 4) xyzw unit quaternions, numpy's products."""
-    return multiply_arrays(conjugate_arrays(q[i]), q[j])
 
 
 def _prefix_products(q: np.ndarray) -> np.ndarray:
@@ -105,9 +100,9 @@ def block_errors(gt_quat: np.ndarray, starts: np.ndarray, ends: np.ndarray,
     R_gt_inc^T R_est_inc of each increment from ``starts`` to ``ends``, ``est`` the
     integrated gyro at every stamp.
     """
-    gt = Rotation.from_quat(gt_quat).as_quat()  # normalised
-    err = multiply_arrays(conjugate_arrays(_between(gt, starts, ends)),
-                          _between(est.as_quat(), starts, ends))
+    gt, q = Rotation.from_quat(gt_quat).as_quat(), est.as_quat()  # normalised
+    err = relative_arrays(relative_arrays(gt[starts], gt[ends]),
+                          relative_arrays(q[starts], q[ends]))
     return Rotation.from_quat(err).as_rotvec().reshape(-1, 3)
 
 
@@ -209,7 +204,8 @@ def attitude_errors(est: Rotation, gt: Rotation, gt_pos: np.ndarray, valid: np.n
         if len(i) == 0:
             roe[d] = np.zeros(0)
             continue
-        rel = multiply_arrays(conjugate_arrays(_between(gt_q, i, j)), _between(est_q, i, j))
+        rel = relative_arrays(relative_arrays(gt_q[i], gt_q[j]),
+                              relative_arrays(est_q[i], est_q[j]))
         roe[d] = np.degrees(Rotation.from_quat(rel).magnitude())
     return AttitudeErrors(
         aoe=float(np.sqrt(np.mean(angle[valid] ** 2))),

@@ -96,6 +96,11 @@ def multiply_arrays(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     return out / np.linalg.norm(out, axis=-1, keepdims=True)
 
 
+def relative_arrays(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Rotations p^-1 q of (..., 4) xyzw unit quaternion arrays: from each p to its q."""
+    return multiply_arrays(conjugate_arrays(p), q)
+
+
 def from_gravity(ax: float, ay: float, az: float) -> Quat:
     """Return roll and pitch from a (static) accelerometer reading, yaw 0 (z up)."""
     roll = math.atan2(ay, az)
@@ -109,11 +114,11 @@ def level_heading(q: Any) -> Quat:
     """
     Return the turn about z that gives the xyzw ``q`` yaw 0, as :func:`from_gravity`'s.
 
-    Its product with ``q`` has q's tilt and the ZYX yaw 0 (pitch within +-90 deg).
+    Its product with ``q`` has q's tilt and the ZYX yaw 0 (pitch within +-90 deg): the
+    inverse of :func:`yaw_turn`.
     """
-    x, y, z, w = (float(v) for v in q)
-    yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    return 0.0, 0.0, math.sin(-0.5 * yaw), math.cos(-0.5 * yaw)
+    _, _, s, c = yaw_turn(tuple(float(v) for v in q))
+    return 0.0, 0.0, -s, c
 
 
 def kabsch(h: np.ndarray) -> np.ndarray:

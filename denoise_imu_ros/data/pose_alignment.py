@@ -36,7 +36,7 @@ from ..core.errors import DatasetError
 from ..core.memo import content_key, Kept
 from ..core.metrics import integrate
 from ..core.records import Recording, Sequence
-from ..core.rotation import conjugate_arrays, kabsch, multiply_arrays
+from ..core.rotation import kabsch, relative_arrays
 
 RATE_WINDOW_S = 0.05       # window of the mean rates compared (at least two pose periods)
 GRID_S = 1e-3              # pose-rate grid
@@ -81,7 +81,7 @@ class Rates:
                                'compared with the gyro (two pose periods at least)')
         self.pose_t = (grid_ns[:-w] - t0) * 1e-9                 # window starts, pose clock
         # q_n^-1 q_n+w by numpy's products: scipy's cost about 15 times more (core.rotation)
-        relative = multiply_arrays(conjugate_arrays(quat[:-w]), quat[w:])
+        relative = relative_arrays(quat[:-w], quat[w:])
         self.pose = Rotation.from_quat(relative).as_rotvec() / (w * GRID_S)
         self.pose_ok = valid[:-w] & valid[w:]
         self._pose_rows = np.ascontiguousarray(self.pose.T)

@@ -38,7 +38,8 @@ from ..core.rotation import from_gravity
 from ..core.schema import JUDGED, judged_on, MAX_ACCEL_BIAS_M_S2, ModelMeta
 from ..data.load import load_sequence
 from ..learn.checkpoint import load_model, LoadedModel
-from ..pipeline.fusion import fuse, FusionSettings, interval_rates, step_periods
+from ..pipeline.fusion import (fuse, FusionSettings, interval_rates, step_periods,
+                               VQF_OWN_DEFAULTS)
 
 TAU_ACC_GRID_S = (0.5, 1.0, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0)   # VQF's accelerometer time constant
 IMUFUSION_GAINS = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)          # its default: 0.5
@@ -358,7 +359,7 @@ def table(report: dict[str, Any]) -> str:
 
 DEFAULTS = {'imufusion': Filter('imufusion', gain=0.5), 'madgwick': Filter('madgwick', gain=0.033)}
 LABELS = {'vqf': 'VQF', 'imufusion': 'imufusion', 'madgwick': 'Madgwick'}
-VQF_DEFAULTS = Filter('vqf', 3.0, True)  # the vqf package's own: tau 3 s, bias estimation on
+VQF_DEFAULTS = Filter('vqf', VQF_OWN_DEFAULTS.tau_acc_s, VQF_OWN_DEFAULTS.bias_estimation)
 
 
 def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None, where: str = 'model file'

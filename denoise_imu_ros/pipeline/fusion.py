@@ -52,7 +52,7 @@ from ..core.rotation import hamilton, level_heading, Quat, with_tilt_of
 from ..core.schema import FusionSettings, ModelMeta
 
 
-CLASSICAL = FusionSettings(3.0, True)  # VQF's own defaults: tau 3 s, its bias estimation on
+VQF_OWN_DEFAULTS = FusionSettings(3.0, True)  # the vqf package's: tau 3 s, bias estimation on
 
 
 def _vqf(rate_hz: float, settings: FusionSettings) -> VQF:
@@ -78,7 +78,7 @@ class GravityFilter:
         # preallocated: this runs on every IMU message
         self._step, self._accel, self._last = np.empty(3), np.empty(3), np.zeros(3)
         self._heading: Quat | None = None  # the turn to yaw 0, set by the first sample
-        self._classical = _vqf(rate_hz, CLASSICAL) if settings.classical_tilt else None
+        self._classical = _vqf(rate_hz, VQF_OWN_DEFAULTS) if settings.classical_tilt else None
         self._raw_step, self._raw_last = np.empty(3), np.zeros(3)
 
     def reset(self) -> None:
@@ -162,7 +162,7 @@ def fuse(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
     if settings.classical_tilt:
         if raw is None:
             raise ValueError('the classical tilt needs the raw gyro')
-        tilts = batch(raw, CLASSICAL)  # as update's, sample by sample on floats
+        tilts = batch(raw, VQF_OWN_DEFAULTS)  # composed as update's, sample by sample
         out = np.array([with_tilt_of(tuple(h), tuple(t))
                         for h, t in zip(out.tolist(), tilts.tolist())]).reshape(-1, 4)
     if not len(out):

@@ -109,9 +109,8 @@ class Settings:
     fusion_classical_tilt: str | bool = _p(
         'model', "The orientation's roll and pitch from VQF's defaults on the raw gyro and "
         'accelerometer as received (what runs with no model), its heading from the corrected '
-        'gyro: '
-        "'model' (where the model file's cross-validation on another power-on found that "
-        'tilt lower), on or off.', read_only=True, switches=(True, False))
+        "gyro: 'model' (where the model file's cross-validation on another power-on found "
+        'that tilt lower), on or off.', read_only=True, switches=(True, False))
     fusion_accel_bias: str | bool = _p(
         'model', "The accelerometer bias removed before the filter and from imu/attitude's "
         "initial tilt, and from imu/corrected's and imu/data's accelerometer where the model "

@@ -96,3 +96,9 @@ def test_yaw_turn_and_with_tilt_of_equal_scipys_euler_angles():
         assert _same(both, want) < 1e-12
     assert rotation.yaw_turn(tuple(Rotation.from_euler('ZYX', [1.0, np.pi / 2, 0.0]).as_quat())
                              ) == (0.0, 0.0, 0.0, 1.0)  # the x axis vertical: no yaw
+
+
+def test_relative_arrays_equal_scipys_inverse_composition():
+    p, q = Rotation.random(300, random_state=6), Rotation.random(300, random_state=7)
+    got = rotation.relative_arrays(p.as_quat(), q.as_quat())
+    assert (Rotation.from_quat(got).inv() * (p.inv() * q)).magnitude().max() < 1e-12

@@ -5,8 +5,9 @@
 from denoise_imu_ros.core.modelfile import read_model_file
 from denoise_imu_ros.core.schema import parse_meta
 from denoise_imu_ros.data.load import load_imu
-from denoise_imu_ros.pipeline.fusion import (CLASSICAL, fuse, FusionSettings, GravityFilter,
-                                             orientation_covariance, step_periods)
+from denoise_imu_ros.pipeline.fusion import (fuse, FusionSettings, GravityFilter,
+                                             orientation_covariance, step_periods,
+                                             VQF_OWN_DEFAULTS)
 from denoise_imu_ros.pipeline.online import OnlineDenoiser
 from helpers import SAMPLE
 import numpy as np
@@ -43,7 +44,7 @@ def test_the_classical_tilt_is_vqf_defaults_on_the_raw_imu_the_heading_the_filte
     split = Rotation.from_quat(fuse(corrected, imu[:, 3:], 200.0,
                                     FusionSettings(5.0, False, (-0.01, 0.12, 0.06), True),
                                     raw=imu[:, :3]))
-    classical = Rotation.from_quat(fuse(imu[:, :3], imu[:, 3:], 200.0, CLASSICAL))
+    classical = Rotation.from_quat(fuse(imu[:, :3], imu[:, 3:], 200.0, VQF_OWN_DEFAULTS))
     heading = Rotation.from_quat(fuse(corrected, imu[:, 3:], 200.0, own))
     up = [0.0, 0.0, 1.0]
     np.testing.assert_allclose(split.inv().apply(up), classical.inv().apply(up), atol=1e-12)
