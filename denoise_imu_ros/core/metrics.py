@@ -15,7 +15,7 @@ from typing import NamedTuple, TYPE_CHECKING
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .rotation import conjugate_arrays, multiply_arrays, relative_arrays
+from .rotation import conjugate_arrays, log_arrays, multiply_arrays, relative_arrays
 
 if TYPE_CHECKING:
     from .records import Sequence
@@ -103,7 +103,7 @@ def block_errors(gt_quat: np.ndarray, starts: np.ndarray, ends: np.ndarray,
     gt, q = Rotation.from_quat(gt_quat).as_quat(), est.as_quat()  # normalised
     err = relative_arrays(relative_arrays(gt[starts], gt[ends]),
                           relative_arrays(q[starts], q[ends]))
-    return Rotation.from_quat(err).as_rotvec().reshape(-1, 3)
+    return log_arrays(err).reshape(-1, 3)
 
 
 def increment_residuals(gt_quat: np.ndarray, gt_valid: np.ndarray, gyro: np.ndarray,
@@ -291,8 +291,8 @@ def fused_errors(est: Rotation, gt: Rotation, valid: np.ndarray, t_s: np.ndarray
     def rms(e: np.ndarray) -> float:
         return float(np.sqrt(np.mean(e[ok] ** 2)))
 
-    vec = Rotation.from_quat(multiply_arrays(aligned.as_quat(), conjugate_arrays(
-        gt[k:].as_quat()))).as_rotvec()[ok]
+    vec = log_arrays(multiply_arrays(aligned.as_quat(), conjugate_arrays(
+        gt[k:].as_quat())))[ok]
     return FusedErrors(rms(angle), rms(tilt), rms(yaw),
                        tilt_growth_deg_min(t_s[k:] - t_s[k], tilt, ok),
                        np.sqrt(np.mean(vec ** 2, axis=0)), k)

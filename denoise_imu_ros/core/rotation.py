@@ -9,8 +9,9 @@ rotation per sample, on plain floats: ``scipy.spatial.transform`` costs more to 
 recording composes every step with the next (metrics.integrate): scipy's composition of
 two arrays of rotations costs about 15 times numpy's products here, and the clock-offset
 search fits a frame to a few thousand rate pairs some 1500 times a recording, where
-scipy's align_vectors costs several times the SVD it wraps (:func:`kabsch`). Everything
-else offline (rotation vectors, splines) uses scipy.
+scipy's align_vectors costs several times the SVD it wraps (:func:`kabsch`), and scipy's
+rotation vectors of an array cost about 20 times :func:`log_arrays`. Everything else
+offline (constructors, splines' fits, Euler angles) uses scipy.
 """
 
 from __future__ import annotations
@@ -99,6 +100,23 @@ def multiply_arrays(p: np.ndarray, q: np.ndarray) -> np.ndarray:
 def relative_arrays(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Rotations p^-1 q of (..., 4) xyzw unit quaternion arrays: from each p to its q."""
     return multiply_arrays(conjugate_arrays(p), q)
+
+
+def log_arrays(q: np.ndarray) -> np.ndarray:
+    """
+    Rotation vectors (..., 3) of (..., 4) xyzw unit quaternions, angles within [0, pi].
+
+    scipy's formula (``Rotation.as_rotvec``): the quaternion with w >= 0, the angle from
+    atan2, its Taylor series below 1e-3 rad. At exactly a half turn (w = 0) the sign of
+    the vector may differ from scipy's: the same rotation.
+    """
+    q = np.where(q[..., 3:] < 0.0, -q, q)
+    angle = 2.0 * np.arctan2(np.linalg.norm(q[..., :3], axis=-1), q[..., 3])
+    small = angle <= 1e-3
+    square = angle * angle
+    scale = np.where(small, 2.0 + square / 12.0 + 7.0 * square * square / 2880.0,
+                     angle / (np.sin(0.5 * angle) + small))
+    return scale[..., None] * q[..., :3]
 
 
 def from_gravity(ax: float, ay: float, az: float) -> Quat:

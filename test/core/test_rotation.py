@@ -102,3 +102,15 @@ def test_relative_arrays_equal_scipys_inverse_composition():
     p, q = Rotation.random(300, random_state=6), Rotation.random(300, random_state=7)
     got = rotation.relative_arrays(p.as_quat(), q.as_quat())
     assert (Rotation.from_quat(got).inv() * (p.inv() * q)).magnitude().max() < 1e-12
+
+
+@pytest.mark.parametrize('scale', [0.0, 1e-9, 1e-4, 1e-3, 0.1, 1.0, 3.1])
+def test_log_arrays_equals_scipy_rotation_vectors_on_both_quaternion_signs(scale):
+    rotvec = np.random.default_rng(7).normal(size=(400, 3))
+    rotvec *= scale / np.maximum(np.linalg.norm(rotvec, axis=1, keepdims=True), 1e-300)
+    rotvec[:200] *= np.random.default_rng(8).uniform(0.5, 1.0, (200, 1))
+    quat = Rotation.from_rotvec(rotvec).as_quat()
+    for q in (quat, -quat):  # the same rotations, w < 0 on one side
+        np.testing.assert_allclose(rotation.log_arrays(q), Rotation.from_quat(q).as_rotvec(),
+                                   rtol=0, atol=1e-14)
+    assert rotation.log_arrays(quat.reshape(4, 100, 4)).shape == (4, 100, 3)

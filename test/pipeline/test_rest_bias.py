@@ -237,15 +237,15 @@ def test_the_classical_rows_tracking_is_the_folds_choice_then_the_blends_then_th
 
 def _tilted_turns(seconds: float, bias: np.ndarray, seed: int = 0) -> np.ndarray:
     """Return a gyro biased by ``bias`` turning about tilted axes, with true gravity."""
+    from denoise_imu_ros.core.rotation import exp, multiply
     from scipy.spatial.transform import Rotation
     rng = np.random.default_rng(seed)
     t = np.arange(int(seconds * RATE)) / RATE
     rate = np.stack([0.6 * np.sin(0.7 * t), 0.5 * np.cos(0.5 * t), 0.3 * np.sin(0.3 * t)], 1)
-    att = Rotation.identity()
-    accel = np.empty_like(rate)
-    for k, w in enumerate(rate):
-        accel[k] = att.inv().apply([0.0, 0.0, 9.81])
-        att = att * Rotation.from_rotvec(w / RATE)
+    att, quat = (0.0, 0.0, 0.0, 1.0), np.empty((len(t), 4))
+    for k, w in enumerate(rate / RATE):
+        quat[k], att = att, multiply(att, exp(*w))
+    accel = Rotation.from_quat(quat).inv().apply([0.0, 0.0, 9.81])
     return np.hstack([rate + bias + rng.normal(0, 0.002, rate.shape),
                       accel + rng.normal(0, 0.02, accel.shape)])
 
