@@ -3,7 +3,7 @@
 """Integration and AOE/ROE: against a plain loop, evo, and hand-made errors."""
 
 from denoise_imu_ros.core.metrics import attitude_errors, integrate
-from denoise_imu_ros.data.load import load_sequence
+from denoise_imu_ros.data.asl import read_asl
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -23,9 +23,10 @@ def test_prefix_scan_integration_equals_the_step_by_step_loop():
 
 
 def test_aoe_matches_evo_ape_rotation_error_on_a_real_raw_gyro_trajectory(euroc):
+    from denoise_imu_ros.data.timebase import crop, onto_imu_stamps
     from evo.core import metrics
     from evo.core.trajectory import PoseTrajectory3D
-    seq = load_sequence(euroc / 'V1_03_difficult')
+    seq = onto_imu_stamps(crop(read_asl(euroc / 'V1_03_difficult'), 0.0, 40.0))  # 7633 poses
     est = integrate(seq.gt_quat[0], seq.imu[:-1, :3], seq.dt)
     ours = attitude_errors(est, Rotation.from_quat(seq.gt_quat), seq.gt_pos, seq.gt_valid)
 
@@ -36,7 +37,7 @@ def test_aoe_matches_evo_ape_rotation_error_on_a_real_raw_gyro_trajectory(euroc)
     ape = metrics.APE(metrics.PoseRelation.rotation_angle_deg)
     ape.process_data((traj(seq.gt_quat), traj(est.as_quat())))
     assert ours.aoe == pytest.approx(ape.get_statistic(metrics.StatisticsType.rmse), rel=1e-6)
-    assert ours.aoe > 50  # raw EuRoC gyro drifts by tens of degrees (paper: 119 deg)
+    assert ours.aoe > 50  # raw EuRoC gyro drifts by tens of degrees (71 in these 40 s)
 
 
 def test_yaw_and_tilt_split_the_error_and_roe_ignores_a_constant_world_offset():
