@@ -39,7 +39,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.signal import savgol_filter
 from scipy.spatial.transform import Rotation
 
 from ..core.errors import DatasetError
@@ -78,6 +77,7 @@ def window_starts(valid: np.ndarray, length: int, stride: int | None = None) -> 
 def velocity_from_positions(position: np.ndarray, stamp_s: np.ndarray,
                             span_s: float = VELOCITY_SPAN_S) -> np.ndarray:
     """Return the velocity (N, 3) of positions at regular stamps by a local quadratic fit."""
+    from scipy.signal import savgol_filter  # importing scipy.signal costs more than a fit
     dt = float(np.median(np.diff(stamp_s)))
     window = max(5, int(round(span_s / dt)) | 1)  # odd, and more samples than the order
     return savgol_filter(position, window, 2, deriv=1, delta=dt, axis=0)
