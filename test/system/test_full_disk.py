@@ -16,6 +16,7 @@ from pathlib import Path
 import subprocess
 import sys
 
+from denoise_imu_ros.cli import main
 from helpers import ROOT, write_asl, write_untrained_model
 
 CHILD = r"""
@@ -44,9 +45,7 @@ def test_a_full_disk_ends_every_writing_command_with_one_line_and_nothing_half_w
     data = tmp_path / 'data'
     write_asl(data / 'rec', n_imu=4000)
     model = write_untrained_model(tmp_path / 'model.safetensors', {'sample_rate_hz': 200.0})
-    subprocess.run([sys.executable, '-m', 'denoise_imu_ros.cli', 'convert',
-                    '--input', str(data / 'rec'), '--out', str(data / 'bag')],
-                   check=True, cwd=tmp_path)
+    assert main(['convert', '--input', str(data / 'rec'), '--out', str(data / 'bag')]) == 0
     before = _digest(tmp_path)
     out = tmp_path / 'out'
     out.mkdir()
