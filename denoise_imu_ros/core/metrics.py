@@ -168,15 +168,20 @@ class AttitudeErrors(NamedTuple):
                 for d, e in self.roe.items()}
 
 
+def world_error(est: Rotation, gt: Rotation) -> np.ndarray:
+    """Return the world-frame errors E = R_est R_gt^T as (N, 4) xyzw quaternions."""
+    return multiply_arrays(est.as_quat(), conjugate_arrays(gt.as_quat()))
+
+
 def error_components(est: Rotation, gt: Rotation) -> tuple[np.ndarray, ...]:
     """
-    Angle, tilt and yaw (deg, each (N,)) of the world-frame error E = R_est R_gt^T.
+    Angle, tilt and yaw (deg, each (N,)) of the world-frame error E (:func:`world_error`).
 
     The angle is that of E; the tilt is how far E moves the vertical (what gravity can
     correct); the yaw is the first angle of E's intrinsic Z-Y-X decomposition, its
     rotation about the world z axis, in [-180, 180).
     """
-    err = Rotation.from_quat(multiply_arrays(est.as_quat(), conjugate_arrays(gt.as_quat())))
+    err = Rotation.from_quat(world_error(est, gt))
     tilt = np.degrees(np.arccos(np.clip(err.as_matrix()[:, 2, 2], -1.0, 1.0)))
     return np.degrees(err.magnitude()), tilt, np.degrees(err.as_euler('ZYX')[:, 0])
 
@@ -291,8 +296,7 @@ def fused_errors(est: Rotation, gt: Rotation, valid: np.ndarray, t_s: np.ndarray
     def rms(e: np.ndarray) -> float:
         return float(np.sqrt(np.mean(e[ok] ** 2)))
 
-    vec = log_arrays(multiply_arrays(aligned.as_quat(), conjugate_arrays(
-        gt[k:].as_quat())))[ok]
+    vec = log_arrays(world_error(aligned, gt[k:]))[ok]
     return FusedErrors(rms(angle), rms(tilt), rms(yaw),
                        tilt_growth_deg_min(t_s[k:] - t_s[k], tilt, ok),
                        np.sqrt(np.mean(vec ** 2, axis=0)), k)
