@@ -138,7 +138,9 @@ def spline_at(spline: RotationSpline, t: np.ndarray) -> np.ndarray:
 
     Scipy's evaluation: the knot before each time, times the rotation vector the cubic
     gives there; scipy's composition of the two arrays costs most of that
-    (:mod:`~denoise_imu_ros.core.rotation`).
+    (:mod:`~denoise_imu_ros.core.rotation`). It reads the spline's ``times``,
+    ``rotations`` and ``interpolator``, attributes scipy does not document (scipy is
+    pinned; a test compares the two evaluations).
     """
     index = np.clip(np.searchsorted(spline.times, t, side='right') - 1, 0,
                     len(spline.times) - 2)

@@ -104,7 +104,7 @@ def test_relative_arrays_equal_scipys_inverse_composition():
     assert (Rotation.from_quat(got).inv() * (p.inv() * q)).magnitude().max() < 1e-12
 
 
-@pytest.mark.parametrize('scale', [0.0, 1e-9, 1e-4, 1e-3, 0.1, 1.0, 3.1])
+@pytest.mark.parametrize('scale', [0.0, 1e-9, 1e-4, 1e-3, 0.1, 1.0, 3.1, np.pi - 1e-9, np.pi])
 def test_log_arrays_equals_scipy_rotation_vectors_on_both_quaternion_signs(scale):
     rotvec = np.random.default_rng(7).normal(size=(400, 3))
     rotvec *= scale / np.maximum(np.linalg.norm(rotvec, axis=1, keepdims=True), 1e-300)
@@ -114,3 +114,10 @@ def test_log_arrays_equals_scipy_rotation_vectors_on_both_quaternion_signs(scale
         np.testing.assert_allclose(rotation.log_arrays(q), Rotation.from_quat(q).as_rotvec(),
                                    rtol=0, atol=1e-14)
     assert rotation.log_arrays(quat.reshape(4, 100, 4)).shape == (4, 100, 3)
+
+
+def test_log_arrays_takes_scipys_sign_at_exactly_a_half_turn():
+    quat = np.array([[1.0, 0, 0, 0], [-1.0, 0, 0, 0], [0, -0.6, 0.8, 0], [0, 0, -1.0, -0.0],
+                     [-0.6, 0.8, 0, 0]])
+    np.testing.assert_allclose(rotation.log_arrays(quat), Rotation.from_quat(quat).as_rotvec(),
+                               rtol=0, atol=1e-15)

@@ -174,9 +174,9 @@ def test_unusable_recordings_get_a_one_line_verdict_and_exit_code_1(tmp_path, ca
     other = dataclasses.replace(rec, gt_quat=read_asl(euroc / 'MH_02_easy').gt_quat[
         :len(rec.gt_quat)])
     with pytest.raises(DatasetError, match='no pose rate to compare with the gyro'):
-        check(dataclasses.replace(  # poses that jump everywhere: nothing to compare, said
-            rec, imu_stamp_ns=rec.imu_stamp_ns[:8000], imu=rec.imu[:8000],
-            gt_quat=Rotation.random(len(rec.gt_quat), random_state=4).as_quat()))
+        jumping = crop(rec, 0.0, 40.0)  # poses that jump everywhere: nothing to compare, said
+        check(dataclasses.replace(jumping, gt_quat=Rotation.random(
+            len(jumping.gt_quat), random_state=4).as_quat()))
     assert 'do not follow the gyro at any clock offset searched (within +-0.5 s' in ' '.join(
         check(other)['reasons'])
     # and align auto does not apply such an estimate (eval --align auto, training)

@@ -113,13 +113,14 @@ def test_a_long_stretch_fitted_in_pieces_is_one_spline_over_it(monkeypatch):
     assert len(timebase._pieces(0, 2000)) == 7
 
 
-def test_a_spline_evaluated_by_numpys_products_is_scipys_to_rounding():
+@pytest.mark.parametrize('count', [2, 3, 500])
+def test_a_spline_evaluated_by_numpys_products_is_scipys_to_rounding(count):
     from denoise_imu_ros.data.timebase import spline_at
     from scipy.spatial.transform import Rotation, RotationSpline
     rng = np.random.default_rng(3)
-    knots = np.cumsum(rng.uniform(0.004, 0.006, 500))
+    knots = np.cumsum(rng.uniform(0.004, 0.006, count))
     spline = RotationSpline(knots, Rotation.from_rotvec(np.cumsum(
-        rng.normal(0.0, 0.3, (500, 3)), axis=0)))
+        rng.normal(0.0, 0.3, (count, 3)), axis=0)))
     t = np.r_[knots[0] - 0.01, knots, np.sort(rng.uniform(knots[0], knots[-1], 2000)),
               knots[-1] + 0.01]  # the knots themselves, between them and beyond both ends
     np.testing.assert_allclose(spline_at(spline, t), spline(t).as_quat(), rtol=0, atol=1e-14)
