@@ -577,6 +577,7 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
             {f.name for f in fields(InputEnvelope)}),
         gyro_variance=_settings(raw, 'gyro_variance', where, lambda v: GyroVariance(
             v.get('theta'), v.get('mean_s', 0.1), v.get('scales', (0.1, 0.5, 1.0))),
-            {'theta', 'mean_s', 'scales', 'fitted_on', 'nees'}),
+            {'theta', 'mean_s', 'scales', 'fitted_on', 'reference_noise_deg', 'nees',
+             'held_out'}),
         code_version=_optional(raw, 'code_version', where, str, 'a version'),
         members=len(members))

@@ -14,8 +14,14 @@ TRUE = GyroVariance((-8.0, 1.2, 0.0, 0.0))
 RATE = 200.0
 
 
-def _recording(seed: int, n: int = 24000) -> tuple[Sequence, np.ndarray, np.ndarray]:
-    """Poses of a true motion; a gyro whose white errors have TRUE's variance at each sample."""
+def _recording(seed: int, n: int = 24000, pose_noise_rad: float = 0.0
+               ) -> tuple[Sequence, np.ndarray, np.ndarray]:
+    """
+    Poses of a true motion; a gyro whose white errors have TRUE's variance at each sample.
+
+    Each pose turned by its own white noise of ``pose_noise_rad`` per axis.
+    """
+    from scipy.spatial.transform import Rotation
     rng = np.random.default_rng(seed)
     t = np.arange(n) / RATE
     rate = np.stack([np.sin(0.3 * t), np.cos(0.7 * t), 2.0 * np.sin(0.05 * t) ** 2], axis=1)
@@ -23,7 +29,8 @@ def _recording(seed: int, n: int = 24000) -> tuple[Sequence, np.ndarray, np.ndar
     sigma = np.sqrt(variances(rate, accel, RATE, TRUE))  # the true rate's motion
     gyro = rate + sigma[:, None] * rng.normal(size=(n, 3))
     stamps = (1e9 + t * 1e9).astype(np.int64)
-    quat = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rate[:-1], np.diff(t)).as_quat()
+    quat = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rate[:-1], np.diff(t))
+    quat = (quat * Rotation.from_rotvec(pose_noise_rad * rng.normal(size=(n, 3)))).as_quat()
     seq = Sequence('s', stamps, np.hstack([gyro, accel]), quat, np.zeros((n, 3)),
                    np.ones(n, bool))
     return seq, gyro, accel
@@ -34,8 +41,10 @@ def test_the_fit_finds_the_variance_the_errors_were_drawn_with_and_its_nees_is_t
     for seed in range(3):
         seq, gyro, accel = _recording(seed)
         train.append(Windows.of(seq, gyro, features(gyro, accel, RATE, TRUE)))
-    found = fit(train)
+    fitted = fit(train)
+    found = fitted.variance
     assert abs(found.theta[0] - TRUE.theta[0]) < 0.3 and abs(found.theta[1] - TRUE.theta[1]) < 0.3
+    assert np.degrees(np.sqrt(fitted.reference_var)) < 0.005  # exact poses: almost none
     seq, gyro, accel = _recording(7)  # another recording
     held = [Windows.of(seq, gyro, features(gyro, accel, RATE, found))]
     for window, row in nees(found, held).items():
@@ -43,6 +52,25 @@ def test_the_fit_finds_the_variance_the_errors_were_drawn_with_and_its_nees_is_t
         assert 0.68 < row['in_2_sigma'] < 0.80, window
     one = GyroVariance((found.theta[0] + 2.0, *found.theta[1:]))  # 2.7 times too wide
     assert all(row['mean'] < 1.5 for row in nees(one, held).values())
+
+
+def test_the_poses_own_noise_is_fitted_beside_the_gyros_and_counted_in_the_nees():
+    noise = np.radians(0.1)  # per axis and pose: a window's ends hold twice its variance
+    train = []
+    for seed in range(3):
+        seq, gyro, accel = _recording(seed, pose_noise_rad=noise)
+        train.append(Windows.of(seq, gyro, features(gyro, accel, RATE, TRUE)))
+    fitted = fit(train)
+    assert abs(fitted.variance.theta[0] - TRUE.theta[0]) < 0.3
+    assert 0.8 < fitted.reference_var / (2 * noise ** 2) < 1.25
+    seq, gyro, accel = _recording(7, pose_noise_rad=noise)
+    held = [Windows.of(seq, gyro, features(gyro, accel, RATE, fitted.variance))]
+    for window, row in nees(fitted.variance, held, fitted.reference_var).items():
+        assert 2.7 < row['mean'] < 3.3, window
+    # the gyro's variance alone, fitted as if the poses were exact, is too wide at 2 s
+    alone = fit(train, reference_noise=False)
+    assert alone.reference_var == 0.0
+    assert nees(alone.variance, held)['2 s']['mean'] < 2.5
 
 
 def test_fit_variance_fits_on_the_tails_stores_it_and_refuses_a_shipped_file(tmp_path, capsys):
@@ -60,6 +88,7 @@ def test_fit_variance_fits_on_the_tails_stores_it_and_refuses_a_shipped_file(tmp
     stored = load_model(str(model)).meta
     assert stored.gyro_variance is not None
     assert set(stored.raw['gyro_variance']['nees']) == {'0.1 s', '0.2 s', '0.5 s', '1 s', '2 s'}
+    assert stored.raw['gyro_variance']['reference_noise_deg'] >= 0.0
     assert main(['fit-variance', '--model', 'euroc', '--attach']) == 1  # before any work
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and 'shipped' in err
