@@ -12,9 +12,9 @@ log-likelihood of the rotation increments' errors (the angle of dR_pose^T dR_gyr
 WINDOWS_S windows, half-overlapping, of the training recordings' validation tails: what
 the network did not train on. Each window's error also holds the poses' own noise at its
 two ends, the same whatever the window's length where the gyro's grows with it: the fit
-takes one such variance of the reference beside the model's (``reference_noise_deg``;
-motion capture at a millimetre resolves none at these lengths, TUM-VI's some 0.2 deg),
-and leaves it out of what ``imu/corrected`` publishes. The NEES of each window, that
+takes one such variance of the reference beside the model's (``reference_noise_deg``:
+EuRoC's motion capture shows none at these lengths, TUM-VI's some 0.2 deg per axis), and
+leaves it out of what ``imu/corrected`` publishes. The NEES of each window, that
 noise counted (3 where the variance describes the error; 73.9 % of windows inside the
 2-sigma ellipsoid then), says how well it does.
 """
