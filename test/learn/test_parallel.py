@@ -92,7 +92,7 @@ def test_two_processes_give_the_whole_batch_gradient_and_statistics(short_euroc,
 
 def test_a_two_process_run_trains_and_returns_a_plain_model(short_euroc):
     cfg = load_config(CONFIG, data=str(short_euroc), sequences=SEQUENCES[:2], window=N,
-                      steps=24, val_every=12, restart_period=24, swa_start=12, workers=2)
+                      steps=12, val_every=6, restart_period=12, swa_start=6, workers=2)
     result = train(cfg, progress=False)
     model, meta = result.model, result.meta
     history = meta['history']
