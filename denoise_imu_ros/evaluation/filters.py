@@ -89,15 +89,19 @@ class Filter:
                 'accel_bias_m_s2': list(self.accel_bias_m_s2)}
 
     @classmethod
+    def vqf(cls, settings: FusionSettings) -> Filter:
+        """Return VQF with these settings (the inverse of :attr:`settings`)."""
+        return cls('vqf', settings.tau_acc_s, settings.bias_estimation,
+                   accel_bias_m_s2=settings.accel_bias_m_s2,
+                   classical_tilt=settings.classical_tilt)
+
+    @classmethod
     def from_dict(cls, stored: Any, where: str = 'model file') -> Filter:
         """Rebuild a filter from :meth:`as_dict`'s mapping (a model file's: checked)."""
         try:
             kind = stored.get('filter', 'vqf')
             if kind == 'vqf':
-                settings = FusionSettings(**stored.get('settings', {}))
-                return cls('vqf', settings.tau_acc_s, settings.bias_estimation,
-                           accel_bias_m_s2=settings.accel_bias_m_s2,
-                           classical_tilt=settings.classical_tilt)
+                return cls.vqf(FusionSettings(**stored.get('settings', {})))
             if kind not in LABELS:
                 raise ValueError(f'unknown filter {kind!r}')
             gain = float(stored['gain'])
@@ -359,7 +363,7 @@ def table(report: dict[str, Any]) -> str:
 
 DEFAULTS = {'imufusion': Filter('imufusion', gain=0.5), 'madgwick': Filter('madgwick', gain=0.033)}
 LABELS = {'vqf': 'VQF', 'imufusion': 'imufusion', 'madgwick': 'Madgwick'}
-VQF_DEFAULTS = Filter('vqf', VQF_OWN_DEFAULTS.tau_acc_s, VQF_OWN_DEFAULTS.bias_estimation)
+VQF_DEFAULTS = Filter.vqf(VQF_OWN_DEFAULTS)
 
 
 def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None, where: str = 'model file'
@@ -381,10 +385,7 @@ def eval_filters(net_meta: ModelMeta, calib_meta: ModelMeta | None, where: str =
         return DEFAULTS.get(kind, Filter('vqf'))
 
     def own(meta: ModelMeta) -> Filter:  # a model file's settings for its own gyro
-        settings = meta.fusion.chosen
-        return Filter('vqf', settings.tau_acc_s, settings.bias_estimation,
-                      accel_bias_m_s2=settings.accel_bias_m_s2,
-                      classical_tilt=settings.classical_tilt)
+        return Filter.vqf(meta.fusion.chosen)
 
     rows = {'raw + VQF defaults': ('raw', VQF_DEFAULTS),
             'raw + VQF': ('raw', chosen('raw', 'vqf')),

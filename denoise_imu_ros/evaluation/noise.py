@@ -39,21 +39,20 @@ from typing import Any
 import allantools
 import numpy as np
 from scipy.optimize import nnls
-from scipy.spatial.transform import Rotation
 
 from ..core import jsonio
 from ..core.atomic import save_figure, write_text
 from ..core.errors import OutputError
 from ..core.metrics import increment_residuals, RESIDUAL_BLOCK
 from ..core.records import Sequence
+from ..core.rotation import log_arrays, relative_arrays
 
 GAUSS = (0.6827, 0.9545, 0.9973)  # fractions within 1, 2, 3 sigma of a normal distribution
 
 
 def gyro_error(seq: Sequence, gyro: np.ndarray) -> np.ndarray:
     """(M, 3) rad/s: gyro minus the ground truth's body rate, at trusted stamps only."""
-    gt = Rotation.from_quat(seq.gt_quat)
-    rate = (gt[:-1].inv() * gt[1:]).as_rotvec() / seq.dt[:, None]
+    rate = log_arrays(relative_arrays(seq.gt_quat[:-1], seq.gt_quat[1:])) / seq.dt[:, None]
     ok = seq.gt_valid[:-1] & seq.gt_valid[1:]
     return (gyro[:-1] - rate)[ok]
 
