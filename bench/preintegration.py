@@ -14,13 +14,13 @@ truth's increments (its velocity EuRoC's state estimate's where the recording ha
 a VIO's evaluation takes it, else the derivative of its positions: EuRoC's positions jump by
 up to 0.14 m in one sample, which a derivative turns into 28 m/s). Prints per row the RMS rotation
 (deg), velocity (m/s) and position (m) increment errors, the mean NEES of rotation and
-velocity with the covariance propagated from the per-sample covariance (the gyro's: what
-``imu/corrected`` publishes, each message's own variance where the model file has one
-(``fit-variance``), beside its validation residual, one for every message (the datasheet's where
-the file has none); the
-accelerometer's and the raw gyro's: EuRoC's sensor.yaml noise densities, as a VIO
-configuration takes them) and the fraction of windows inside the 2-sigma ellipsoid (73.9 %
-if the covariance is right), then the largest difference between GTSAM's increments and
+velocity with the covariance propagated from the per-sample covariance (what
+``imu/corrected`` publishes: each message's own variances where the model file has them
+(``fit-variance``), beside, for the gyro, its validation residual, one for every message
+(the datasheet's where the file has none); the accelerometer's where the file has none and
+the raw IMU's: EuRoC's sensor.yaml noise densities, as a VIO configuration takes them) and
+the fraction of windows inside the 2-sigma ellipsoid (73.9 % if the covariance is right),
+then the largest difference between GTSAM's increments and
 ours (GTSAM integrates in the tangent space of the rotation with its exact Jacobians, where
 ours takes one sample's right Jacobian as the identity: the two agree to the order of that
 term, not to rounding, on EuRoC; on TUM-VI's handheld motion the increments differ by up to
@@ -54,17 +54,17 @@ def gtsam_increments(gyro: np.ndarray, accel: np.ndarray, stamp_s: np.ndarray,
                      starts: np.ndarray, length: int, gyro_var: np.ndarray,
                      accel_var: np.ndarray) -> Increments:
     """
-    Pre-integrate each window with GTSAM, each sample's gyro covariance its own.
+    Pre-integrate each window with GTSAM, each sample's covariances its own.
 
     The parameters are shared with the pre-integration, which reads them at every sample:
-    set before each, they give that sample's covariance (the accelerometer's: the first's).
+    set before each, they give that sample's covariances.
     """
     dt = np.diff(stamp_s)
     params = gtsam.PreintegrationParams.MakeSharedU(GRAVITY)
     # GTSAM takes continuous-time densities: a sample's variance times its period
     params.setGyroscopeCovariance(np.diag(gyro_var[0] * dt[0]))
     params.setAccelerometerCovariance(np.diag(accel_var[0] * dt[0]))
-    varies = not (gyro_var == gyro_var[0]).all()
+    varies = not ((gyro_var == gyro_var[0]).all() and (accel_var == accel_var[0]).all())
     params.setIntegrationCovariance(np.zeros((3, 3)))
     pim = gtsam.PreintegratedImuMeasurements(params, gtsam.imuBias.ConstantBias())
     rot, vel, pos, cov = [], [], [], []
@@ -74,6 +74,7 @@ def gtsam_increments(gyro: np.ndarray, accel: np.ndarray, stamp_s: np.ndarray,
         for k in range(s, s + length):
             if varies:
                 params.setGyroscopeCovariance(np.diag(gyro_var[k] * dt[k]))
+                params.setAccelerometerCovariance(np.diag(accel_var[k] * dt[k]))
             pim.integrateMeasurement(accel[k], gyro[k], dt[k])
         rot.append(pim.deltaRij().matrix())
         vel.append(pim.deltaVij())
@@ -106,9 +107,9 @@ def main() -> None:
         n = len(stamp_s)
         vel, vel_source = ground_truth_velocity(Path(args.data) / name, seq.stamp_ns,
                                                 seq.gt_pos, stamp_s)
-        accel_var = np.full((n, 3), ACCEL_DENSITY ** 2 * rate)
+        datasheet = np.full((n, 3), ACCEL_DENSITY ** 2 * rate)
         imus = {'raw': (seq.imu[:, :3], seq.imu[:, 3:],
-                        np.full((n, 3), GYRO_DENSITY ** 2 * rate))}
+                        np.full((n, 3), GYRO_DENSITY ** 2 * rate), datasheet)}
         for label, mf in models.items():
             var = np.broadcast_to(np.diag(np.reshape(gyro_covariance(mf), (3, 3))), (n, 3))
             if not var.any():  # none in the file (zeros): the datasheet's, as for the raw gyro
@@ -118,18 +119,25 @@ def main() -> None:
             full = corrected_gyro(mf, stream)
             gyro = full[len(seq.lead_in):]
             bias = np.array(Settings().corrected_accel_bias(mf))  # the node's, at defaults
-            imus[f'{label}, accelerometer as it came'] = (gyro, seq.imu[:, 3:], var)
-            spec = mf.meta.gyro_variance
+            imus[f'{label}, accelerometer as it came'] = (gyro, seq.imu[:, 3:], var, datasheet)
+            spec, accel_spec = mf.meta.gyro_variance, mf.meta.accel_variance
+            accel_var = datasheet
             if spec is not None:
-                imus[f'{label}, its validation residual'] = (gyro, seq.imu[:, 3:] - bias, var)
+                imus[f'{label}, its validation residual'] = (gyro, seq.imu[:, 3:] - bias, var,
+                                                             datasheet)
                 var = np.repeat(variances(full, stream[:, 3:], rate, spec)[
                     len(seq.lead_in):, None], 3, axis=1)
-            imus[label] = (gyro, seq.imu[:, 3:] - bias, var)
+            if accel_spec is not None:
+                imus[f'{label}, its gyro variance'] = (gyro, seq.imu[:, 3:] - bias, var,
+                                                       datasheet)
+                accel_var = np.repeat(variances(full, stream[:, 3:], rate, accel_spec)[
+                    len(seq.lead_in):, None], 3, axis=1)
+            imus[label] = (gyro, seq.imu[:, 3:] - bias, var, accel_var)
         for window_s in args.windows:
             length = int(round(window_s * rate))
             starts = window_starts(seq.gt_valid, length)
             ref = reference(seq.gt_quat, seq.gt_pos, vel, stamp_s, starts, length)
-            for label, (gyro, accel, gyro_var) in imus.items():
+            for label, (gyro, accel, gyro_var, accel_var) in imus.items():
                 ours = preintegrate(gyro, accel, stamp_s, starts, length, gyro_var, accel_var)
                 theirs = gtsam_increments(gyro, accel, stamp_s, starts, length, gyro_var,
                                           accel_var)

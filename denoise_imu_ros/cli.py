@@ -223,28 +223,39 @@ def _tune_fusion(args: argparse.Namespace) -> None:
 
 def _fit_variance(args: argparse.Namespace) -> None:
     from .core.modelfile import add_metadata, check_attachable, read_model_file
-    from .evaluation.gyro_variance import fit_model
+    from .evaluation.variance import fit_model
     if args.attach:  # before the work, not after
         check_attachable(args.model)
-    report = fit_model(args.model, args.data, progress=not args.quiet)['gyro_variance']
-    print(f"gyro variance exp(theta . phi), theta {[round(t, 3) for t in report['theta']]}, "
-          f"fitted on the {report['fitted_on']}; beside it the poses' own noise in every "
-          f"window, {report['reference_noise_deg']:.3f} deg per axis (not published)")
-    print('| window | mean NEES, that noise counted (3 if right) | in 2 sigma (73.9 % if right) '
-          '| windows |\n|---|---|---|---|')
-    for window, row in report['nees'].items():
-        print(f"| {window} | {row['mean']:.2f} | {row['in_2_sigma']:.0%} | {row['windows']} |")
-    if report['held_out']:
-        windows = list(report['nees'])
-        print("each recording's tail under the fit on the others' tails, mean NEES (in 2 sigma):\n"
-              f"| recording | {' | '.join(windows)} |\n|---|{'---|' * len(windows)}")
-        for name, rows in report['held_out'].items():
-            print(f'| {name} | ' + ' | '.join(
-                f"{rows[w]['mean']:.2f} ({rows[w]['in_2_sigma']:.0%})" if w in rows else '-'
-                for w in windows) + ' |')
+    reports = fit_model(args.model, args.data, progress=not args.quiet)
+    for key, sensor, increments, noise in (
+            ('gyro_variance', 'gyro', 'rotation', 'reference_noise_deg'),
+            ('accel_variance', 'accelerometer', 'velocity', 'reference_noise_m_s')):
+        if key not in reports:
+            print(f'{sensor}: no variance fitted (the poses have no positions)')
+            continue
+        report = reports[key]
+        unit = 'deg' if noise.endswith('deg') else 'm/s'
+        print(f'{sensor} variance exp(theta . phi), theta '
+              f"{[round(t, 3) for t in report['theta']]}, fitted on the "
+              f"{report['fitted_on']}; beside it the poses' own noise in every window, "
+              f'{report[noise]:.3f} {unit} per axis (not published)')
+        print(f'| {increments} increments over | mean NEES, that noise counted (3 if right) | '
+              'in 2 sigma (73.9 % if right) | windows |\n|---|---|---|---|')
+        for window, row in report['nees'].items():
+            print(f"| {window} | {row['mean']:.2f} | {row['in_2_sigma']:.0%} | "
+                  f"{row['windows']} |")
+        if report['held_out']:
+            windows = list(report['nees'])
+            print("each recording's tail under the fit on the others' tails, mean NEES (in 2 "
+                  f"sigma):\n| recording | {' | '.join(windows)} |\n|---|{'---|' * len(windows)}")
+            for name, rows in report['held_out'].items():
+                print(f'| {name} | ' + ' | '.join(
+                    f"{rows[w]['mean']:.2f} ({rows[w]['in_2_sigma']:.0%})" if w in rows
+                    else '-' for w in windows) + ' |')
     if args.attach:
-        add_metadata(read_model_file(args.model).path, gyro_variance=report)
-        print(f"stored it in {args.model}: imu/corrected carries each message's own variance")
+        add_metadata(read_model_file(args.model).path, **{'accel_variance': None, **reports})
+        print(f"stored them in {args.model}: imu/corrected carries each message's own "
+              'variances')
 
 
 def _ensemble(args: argparse.Namespace) -> None:
@@ -311,7 +322,8 @@ def _noise(args: argparse.Namespace) -> None:
     sys.stdout.write(markdown(report))
     print(f'\nFor a VIO ({args.out}/noise.yaml; Allan plots and JSON beside it):\n')
     sys.stdout.write(yaml_snippet(report['pooled'], ', '.join(report['recordings']),
-                                  report.get('published_density')))
+                                  report.get('published_density'),
+                                  report.get('published_accel_density')))
 
 
 def _start_up_warnings(model: str, rest: str = 'model', mix: str = 'model') -> None:
@@ -563,13 +575,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument('--quiet', action='store_true')
     p.set_defaults(func=_tune_fusion)
 
-    p = command('fit-variance', "fit the corrected gyro's variance per message to the "
-                "rotation increments' errors on the model's validation tails, and store it",
+    p = command('fit-variance', "fit the corrected gyro's and accelerometer's variance per "
+                "message to the rotation and velocity increments' errors on the model's "
+                'validation tails, and store them',
                 '--model model.safetensors --attach')
     p.add_argument('--model', required=True, help='the network model (shipped name or file)')
     p.add_argument('--data', help="folder of the training recordings (default: the model's)")
     p.add_argument('--attach', action='store_true',
-                   help='store it in the model file (imu/corrected then carries it)')
+                   help='store them in the model file (imu/corrected then carries them)')
     p.add_argument('--quiet', action='store_true')
     p.set_defaults(func=_fit_variance)
 

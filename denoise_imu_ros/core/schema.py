@@ -21,9 +21,9 @@ from .errors import ModelFileError
 from .limits import MAX_RATE_HZ
 
 __all__ = ['ACCEL_CHOICES', 'AS_IT_CAME', 'BiasTracking', 'Blend', 'Fusion', 'FusionSettings',
-           'GyroVariance', 'InputEnvelope', 'JUDGED', 'judged_on', 'MAX_ACCEL_BIAS_M_S2',
-           'ModelMeta', 'NO_MODEL', 'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'TRACKER_ONLY',
-           'Validation', 'Verdict']
+           'InputEnvelope', 'JUDGED', 'judged_on', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'NO_MODEL',
+           'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'SampleVariance', 'TRACKER_ONLY',
+           'Validation', 'VARIANCE_KEYS', 'Verdict']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
 # the ``kind`` of a model file that runs the classical pipeline, no model: the turn-on bias
@@ -226,15 +226,16 @@ class Blend:
 
 
 @dataclass(frozen=True)
-class GyroVariance:
+class SampleVariance:
     """
-    The corrected gyro's variance per sample, the same on each axis: exp(theta . phi).
+    A corrected sensor's variance per sample, the same on each axis: exp(theta . phi).
 
     phi: 1, then log1p(m / scale) of three causal means m over ``mean_s`` seconds: of the
     rate's norm (rad/s), of the accelerometer norm's distance from gravity (m/s^2) and of
     the rate's change per second (rad/s^2), each over its ``scales`` entry
-    (``pipeline/covariance.py``). ``fit-variance`` fits theta by the likelihood of the
-    rotation increments' errors on the validation tails.
+    (``pipeline/covariance.py``). ``fit-variance`` fits the gyro's theta by the likelihood
+    of the rotation increments' errors on the validation tails, the accelerometer's by
+    that of the velocity increments' ((rad/s)^2 and (m/s^2)^2).
     """
 
     theta: tuple[float, float, float, float]
@@ -379,7 +380,8 @@ class ModelMeta:
     bias_tracking: BiasTracking | None = None   # None: the model's output as it is
     input_envelope: InputEnvelope | None = None  # None: the correction applies everywhere
     blend: Blend | None = None                  # None: the network's output unblended
-    gyro_variance: GyroVariance | None = None   # None: one covariance for every message
+    gyro_variance: SampleVariance | None = None   # None: one covariance for every message
+    accel_variance: SampleVariance | None = None  # None: the input's covariance passed on
     code_version: str | None = None
     members: int = 0                            # an ensemble's trainings; 0 for one
 
@@ -538,6 +540,25 @@ def _blend(v: dict[str, Any]) -> Blend:
     return Blend(v.get('weight'), None if tracking is None else _tracking(tracking))
 
 
+VARIANCE_KEYS = {'theta', 'mean_s', 'scales', 'fitted_on', 'reference_noise_deg',
+                 'reference_noise_m_s', 'nees', 'held_out'}
+
+
+def _variance(v: dict[str, Any]) -> SampleVariance:
+    return SampleVariance(v.get('theta'), v.get('mean_s', 0.1), v.get('scales', (0.1, 0.5, 1.0)))
+
+
+def _accel_variance(raw: dict[str, Any], where: str, gyro: SampleVariance | None
+                    ) -> SampleVariance | None:
+    """Return the accelerometer's variance model: on the gyro's features, so beside it."""
+    accel = _settings(raw, 'accel_variance', where, _variance, VARIANCE_KEYS)
+    if accel is not None and (gyro is None or (accel.mean_s, accel.scales)
+                              != (gyro.mean_s, gyro.scales)):
+        raise ModelFileError(f'{where}: accel_variance needs a gyro_variance of the same '
+                             'mean_s and scales: both are computed from one set of features')
+    return accel
+
+
 def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
     """Return the typed metadata of a model file's entries; ``where`` names it in errors."""
     rate = raw.get('sample_rate_hz')
@@ -556,6 +577,7 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
     members = raw.get('members') or []
     if not isinstance(members, list):
         raise _fail(where, 'members', members, 'a list')
+    gyro_variance = _settings(raw, 'gyro_variance', where, _variance, VARIANCE_KEYS)
     return ModelMeta(
         raw=raw,
         sample_rate_hz=None if rate is None else float(rate),
@@ -575,9 +597,7 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
             v.get('gyro_rad_s'), v.get('accel_offset_m_s2'),
             v.get('fallback_rad_s', (0.0, 0.0, 0.0)), v.get('sustained_accel_m_s2')),
             {f.name for f in fields(InputEnvelope)}),
-        gyro_variance=_settings(raw, 'gyro_variance', where, lambda v: GyroVariance(
-            v.get('theta'), v.get('mean_s', 0.1), v.get('scales', (0.1, 0.5, 1.0))),
-            {'theta', 'mean_s', 'scales', 'fitted_on', 'reference_noise_deg', 'nees',
-             'held_out'}),
+        gyro_variance=gyro_variance,
+        accel_variance=_accel_variance(raw, where, gyro_variance),
         code_version=_optional(raw, 'code_version', where, str, 'a version'),
         members=len(members))

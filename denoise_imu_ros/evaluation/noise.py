@@ -141,14 +141,16 @@ def covariance_check(err: np.ndarray, std: np.ndarray,
 
 
 def yaml_snippet(pooled: dict[str, dict[str, Any]], where: str,
-                 published: dict[str, float] | None = None) -> str:
+                 published: dict[str, float] | None = None,
+                 published_accel: dict[str, float] | None = None) -> str:
     """
     Return the lines to paste into a Kalibr / OpenVINS / VINS-Fusion IMU configuration.
 
     One YAML document: the corrected gyro's figures (what ``imu/corrected`` publishes) as
     the keys, the other gyros' as comments for comparison (a key twice is not YAML), and
-    where the model gives each message its own variance, that as a density (``published``:
-    its median and 95th percentile over the recordings) in a comment.
+    where the model gives each message its own variances, those as densities (``published``
+    the gyro's, ``published_accel`` the accelerometer's: the median and 95th percentile
+    over the recordings) in comments.
     """
     def line(fig: dict[str, Any], comment: str = '') -> str:
         bound = (', an upper bound: the recordings are too short to resolve it'
@@ -163,6 +165,10 @@ def yaml_snippet(pooled: dict[str, dict[str, Any]], where: str,
         text += ("# imu/corrected's own variance per message (fit-variance) as a density: "
                  f"median {published['median']:.3e}, 95th percentile {published['p95']:.3e}"
                  ' rad/s/sqrt(Hz)\n')
+    if published_accel is not None:
+        text += ("# and its accelerometer's: median "
+                 f"{published_accel['median']:.3e}, 95th percentile "
+                 f"{published_accel['p95']:.3e} m/s^2/sqrt(Hz)\n")
     for name, fig in pooled.items():
         if name != 'corrected':
             text += f'# the {name} gyro, for comparison:\n' + line(fig, '# ')
@@ -198,7 +204,8 @@ def write(out: Path, report: dict[str, Any]) -> None:
         raise OutputError(f'{out}: cannot create the output folder ({err.strerror})') from err
     write_text(out / 'noise.json', jsonio.dumps(report, indent=2))
     write_text(out / 'noise.yaml', yaml_snippet(report['pooled'], ', '.join(report['recordings']),
-                                                report.get('published_density')))
+                                                report.get('published_density'),
+                                                report.get('published_accel_density')))
     for name, curves in report['recordings'].items():
         plot(out / f'allan_{name}.png', {g: c['figures'] for g, c in curves.items()})
 
@@ -303,7 +310,9 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     if note:
         print(f'warning: {note}', file=sys.stderr)
     seqs, gyros = [], {'raw': [], 'calibrated': [], 'corrected': []}
-    spec, published = net.meta.gyro_variance, []
+    specs = {'published_density': net.meta.gyro_variance,
+             'published_accel_density': net.meta.accel_variance}
+    published: dict[str, list[np.ndarray]] = {}
     for name, short in zip(sequences, names):
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
                             min_samples=net.model.receptive_field, poses=poses,
@@ -315,15 +324,17 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
             gyros['calibrated'].append(seq.on_poses(calib.correct(seq.stream)))
         stream = net.correct(seq.stream)
         gyros['corrected'].append(seq.on_poses(stream))
-        if spec is not None:  # what imu/corrected publishes for these samples
-            published.append(variances(stream, seq.stream[:, 3:], sample_rate(net), spec))
+        for key, spec in specs.items():  # what imu/corrected publishes for these samples
+            if spec is not None:
+                published.setdefault(key, []).append(
+                    variances(stream, seq.stream[:, 3:], sample_rate(net), spec))
     gyros = {g: v for g, v in gyros.items() if v}
     std = np.sqrt(np.diag(np.reshape(gyro_covariance(net), (3, 3))))
     report = noise_report(seqs, gyros, std if std.any() else None)
     report.update(model=str(net.path), baseline=baseline, training_fit_note=note)
-    if published:  # a density: a sample's variance times its period
-        density = np.sqrt(np.concatenate(published) / sample_rate(net))
-        report['published_density'] = {'median': float(np.median(density)),
-                                       'p95': float(np.percentile(density, 95))}
+    for key, found in published.items():  # a density: a sample's variance times its period
+        density = np.sqrt(np.concatenate(found) / sample_rate(net))
+        report[key] = {'median': float(np.median(density)),
+                       'p95': float(np.percentile(density, 95))}
     write(Path(out), report)
     return report

@@ -1,13 +1,14 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
 """
-The corrected gyro's variance per sample: what a VIO back-end weighs ``imu/corrected`` by.
+The corrected IMU's variance per sample: what a VIO back-end weighs ``imu/corrected`` by.
 
-A model file's :class:`~denoise_imu_ros.core.schema.GyroVariance` gives each sample's
-variance, the same on each axis, as exp(theta . phi): phi is 1 and three causal means over
-the last ``mean_s`` seconds (since the last reset) of the output rate's norm, of the
+A model file's :class:`~denoise_imu_ros.core.schema.SampleVariance` gives each sample's
+gyro variance, the same on each axis, as exp(theta . phi): phi is 1 and three causal means
+over the last ``mean_s`` seconds (since the last reset) of the output rate's norm, of the
 accelerometer norm's distance from gravity and of the output rate's change per second,
-each log1p-scaled. The error of a corrected gyro grows with how fast and how hard the IMU
+each log1p-scaled; its accelerometer variance, where it has one, the same features with a
+theta of its own. The error of a corrected IMU grows with how fast and how hard it
 moves; one constant would be too large at rest and too small in fast motion. The means
 restart with the network's history (a start, a gap, a clock jump).
 
@@ -23,12 +24,12 @@ import math
 import numpy as np
 
 from ..core.limits import GRAVITY_M_S2
-from ..core.schema import GyroVariance
+from ..core.schema import SampleVariance
 
 __all__ = ['features', 'Variance', 'variances']
 
 
-def features(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: GyroVariance,
+def features(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: SampleVariance,
              restarts: np.ndarray | None = None) -> np.ndarray:
     """
     Return phi (N, 4) of every sample of one or more runs.
@@ -52,13 +53,13 @@ def features(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: GyroVari
     return np.hstack([np.ones((n, 1)), np.log1p(mean / np.array(spec.scales))])
 
 
-def variances(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: GyroVariance,
+def variances(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: SampleVariance,
               restarts: np.ndarray | None = None) -> np.ndarray:
     """Return each sample's variance (N,), (rad/s)^2, as :func:`features` sees the runs."""
     return np.exp(features(gyro, accel, rate_hz, spec, restarts) @ np.array(spec.theta))
 
 
-def _width(spec: GyroVariance, rate_hz: float) -> int:
+def _width(spec: SampleVariance, rate_hz: float) -> int:
     """Return the samples of the means' window."""
     return max(1, int(round(spec.mean_s * rate_hz)))
 
@@ -67,13 +68,16 @@ class Variance:
     """
     :func:`variances` one sample at a time: running sums over a ring of samples.
 
-    On plain floats: numpy's calls on three numbers cost several times this work.
+    The gyro's, and the accelerometer's where ``accel`` is given (on the same features:
+    its ``mean_s`` and ``scales`` are the gyro's). On plain floats: numpy's calls on three
+    numbers cost several times this work.
     """
 
-    def __init__(self, spec: GyroVariance, rate_hz: float) -> None:
-        self.spec, self.rate_hz = spec, rate_hz
+    def __init__(self, spec: SampleVariance, rate_hz: float,
+                 accel: SampleVariance | None = None) -> None:
+        self.spec, self.rate_hz, self.accel = spec, rate_hz, accel
         self._width = _width(spec, rate_hz)
-        self._theta = tuple(spec.theta)
+        self._thetas = (tuple(spec.theta),) + (() if accel is None else (tuple(accel.theta),))
         self._scales = tuple(spec.scales)
         self.reset()
 
@@ -84,8 +88,12 @@ class Variance:
         self._count = self._next = 0
         self._last: tuple[float, float, float] | None = None
 
-    def update(self, gyro: np.ndarray, accel: np.ndarray) -> float:
-        """Take one output rate and its accelerometer; return the sample's variance."""
+    def update(self, gyro: np.ndarray, accel: np.ndarray) -> tuple[float, float | None]:
+        """
+        Take one output rate and its accelerometer; return the sample's variances.
+
+        The gyro's, then the accelerometer's (None without its model).
+        """
         gx, gy, gz = (float(v) for v in gyro)
         ax, ay, az = (float(v) for v in accel)
         if self._last is None:
@@ -103,6 +111,8 @@ class Variance:
         self._ring[self._next] = raw
         self._next = (self._next + 1) % self._width
         self._count = min(self._count + 1, self._width)
-        theta, count = self._theta, self._count
-        return math.exp(theta[0] + sum(t * math.log1p(m / count / c)
-                                       for t, m, c in zip(theta[1:], sums, self._scales)))
+        count = self._count
+        phi = [math.log1p(m / count / c) for m, c in zip(sums, self._scales)]
+        found = [math.exp(theta[0] + sum(t * f for t, f in zip(theta[1:], phi)))
+                 for theta in self._thetas]
+        return found[0], found[1] if len(found) > 1 else None

@@ -83,6 +83,7 @@ class Output(NamedTuple):
     rate_suspect: bool = False  # the stream is off the model's period (see rate_suspect)
     accel_cov: np.ndarray | None = None  # the input's, finite (from process_imu)
     gyro_var: float | None = None  # the output rate's variance, (rad/s)^2, if the model has one
+    accel_var: float | None = None  # the accelerometer's, (m/s^2)^2, if the model has one
 
 
 @dataclass
@@ -282,4 +283,5 @@ class OnlineDenoiser:
         return Output(stamp_ns=stamp_ns, gyro=flow.out, accel=accel - self.corrected_accel_bias,
                       attitude=flow.attitude, event=event,
                       orientation=flow.orientation, rate_suspect=self.rate_suspect,
-                      accel_cov=accel_cov, gyro_var=flow.variance)
+                      accel_cov=accel_cov, gyro_var=flow.variance,
+                      accel_var=flow.accel_variance)

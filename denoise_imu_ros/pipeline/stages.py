@@ -21,7 +21,7 @@ bias tracking   ``BiasTracker.update``     ``tracked_bias``           start, jum
 envelope apply  ``Guard.apply``            ``guard_batch``            (the check's)
 classical mix   ``Blender.apply``          ``blend_batch``            start, jump
 vertical drop   ``Vertical.apply``         ``drop_vertical``          start, jump
-gyro variance   ``Variance.update``        ``variances``              start, gap, jump
+variances       ``Variance.update``        ``variances``              start, gap, jump
 attitude        :class:`Attitude`          the same step, in a loop   start, jump, request
 orientation     ``GravityFilter.update``   ``fuse``                   start, jump, request
 ==============  =========================  =========================  ===================
@@ -43,18 +43,18 @@ import numpy as np
 
 from . import envelope, rest_bias
 from .blend import blend_batch, Blender, resolve as resolve_blend
-from .covariance import Variance, variances
+from .covariance import features, Variance
 from .fusion import fuse, FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
 from .vertical import drop_vertical, drops_vertical, Vertical
 from ..core import rotation
 from ..core.limits import MAX_GAP_FACTOR
 from ..core.modelfile import ModelFile, sample_rate
-from ..core.schema import BiasTracking, Blend, GyroVariance, InputEnvelope, RestBiasSettings
+from ..core.schema import BiasTracking, Blend, InputEnvelope, RestBiasSettings, SampleVariance
 
 __all__ = ['Attitude', 'BiasTrackingStage', 'ClassicalMix', 'correction', 'corrected',
-           'EnvelopeApply', 'EnvelopeCheck', 'Event', 'finish', 'Flow', 'GyroVarianceStage',
-           'model_input', 'Network', 'Orientation', 'Pipeline', 'Stage', 'STAGES', 'TurnOnBias',
+           'EnvelopeApply', 'EnvelopeCheck', 'Event', 'finish', 'Flow', 'model_input', 'Network',
+           'Orientation', 'Pipeline', 'Stage', 'STAGES', 'TurnOnBias', 'VarianceStage',
            'VerticalDrop']
 
 
@@ -80,11 +80,11 @@ class Flow:
     accelerometer), ``raw`` the gyro as received, ``out`` the gyro so far; the rest are
     set by the stages that have them (``bias`` the tracked bias removed, ``hold`` the
     envelope's hold of the tracker, ``beyond`` its samples beyond the sustained bound,
-    ``variance`` the output's).
+    ``variance`` the output's, ``accel_variance`` the accelerometer's).
     """
 
     __slots__ = ('fed', 'raw', 'out', 'bias', 'hold', 'beyond', 'event', 'dt_s', 'periods',
-                 'attitude', 'orientation', 'variance')
+                 'attitude', 'orientation', 'variance', 'accel_variance')
 
     def __init__(self, fed: np.ndarray, event: Event | None = None, dt_s: Any = 0.0,
                  periods: Any = 0.0, out: np.ndarray | None = None,
@@ -98,6 +98,7 @@ class Flow:
         self.attitude: Any = None
         self.orientation: Any = None
         self.variance: Any = None
+        self.accel_variance: Any = None
 
     @classmethod
     def recording(cls, imu: np.ndarray, stamp_ns: np.ndarray | None = None,
@@ -291,25 +292,29 @@ class VerticalDrop(Stage):
         flow.out = drop_vertical(flow.out, flow.fed, self.rate_hz)
 
 
-class GyroVarianceStage(Stage):
-    """Each output rate's variance, from how fast and how hard the IMU moves."""
+class VarianceStage(Stage):
+    """Each output's variance, the gyro's and the accelerometer's, from how the IMU moves."""
 
-    def __init__(self, spec: GyroVariance, rate_hz: float) -> None:
-        self.spec, self.rate_hz = spec, rate_hz
-        self.variance = Variance(spec, rate_hz)
+    def __init__(self, spec: SampleVariance, rate_hz: float,
+                 accel: SampleVariance | None = None) -> None:
+        self.spec, self.rate_hz, self.accel = spec, rate_hz, accel
+        self.variance = Variance(spec, rate_hz, accel)
 
     def reset(self, events: frozenset[Event] = RUN) -> None:
         """Start the motion's means again, with the network's history."""
         self.variance.reset()
 
     def step(self, flow: Flow) -> None:
-        """Give this output its variance."""
-        flow.variance = self.variance.update(flow.out, flow.fed[3:])
+        """Give this output its variances."""
+        flow.variance, flow.accel_variance = self.variance.update(flow.out, flow.fed[3:])
 
     def run(self, flow: Flow) -> None:
-        """Give every output its variance; the means restart at each gap (periods 0)."""
+        """Give every output its variances; the means restart at each gap (periods 0)."""
         restarts = (flow.periods == 0) if isinstance(flow.periods, np.ndarray) else None
-        flow.variance = variances(flow.out, flow.fed[:, 3:], self.rate_hz, self.spec, restarts)
+        phi = features(flow.out, flow.fed[:, 3:], self.rate_hz, self.spec, restarts)
+        flow.variance = np.exp(phi @ np.array(self.spec.theta))
+        if self.accel is not None:
+            flow.accel_variance = np.exp(phi @ np.array(self.accel.theta))
 
 
 class Attitude(Stage):
@@ -386,7 +391,7 @@ STAGES: tuple[tuple[type[Stage], frozenset[Event]], ...] = (
     (EnvelopeApply, frozenset()),  # its guard is the check's, reset there
     (ClassicalMix, RUN),
     (VerticalDrop, RUN),
-    (GyroVarianceStage, HISTORY),
+    (VarianceStage, HISTORY),
     (Attitude, ATTITUDE),
     (Orientation, ATTITUDE),
 )
@@ -446,8 +451,8 @@ def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
     (``model``, ``off``: :func:`~denoise_imu_ros.pipeline.blend.resolve`), the
     classical pipeline's alone beyond the envelope's sustained bound only where the
     envelope guards. ``batch``: the network over arrays (torch's, for a model loaded with
-    torch) instead of the per-sample engine. Last, where the file has one, each output's
-    variance (:mod:`~denoise_imu_ros.pipeline.covariance`).
+    torch) instead of the per-sample engine. Last, where the file has them, each output's
+    variances (:mod:`~denoise_imu_ros.pipeline.covariance`).
     """
     rate = sample_rate(model)
     settings = rest_bias.resolve(model.meta, rest)
@@ -467,7 +472,7 @@ def correction(model: ModelFile, rest: str = 'model', guard: str = 'model',
     if drops_vertical(model.meta, rest):
         stages.append(VerticalDrop(rate))
     if model.meta.gyro_variance is not None:
-        stages.append(GyroVarianceStage(model.meta.gyro_variance, rate))
+        stages.append(VarianceStage(model.meta.gyro_variance, rate, model.meta.accel_variance))
     return stages
 
 
@@ -484,10 +489,11 @@ def corrected(model: ModelFile, imu: np.ndarray, rest: str = 'model', guard: str
     """
     Return the corrected gyro (N, 3) of a recording's raw samples (N, 6), one run.
 
-    The stages up to the gyro's own variance, which is not the gyro (:func:`variances`).
+    The stages up to the variances, which are not the gyro
+    (:func:`~denoise_imu_ros.pipeline.covariance.variances`).
     """
     return Pipeline(correction(model, rest, guard, batch, mix)).run(
-        Flow.recording(imu), before=GyroVarianceStage).out
+        Flow.recording(imu), before=VarianceStage).out
 
 
 def model_input(model: Any, imu: np.ndarray, rest: str = 'model') -> np.ndarray:

@@ -202,11 +202,7 @@ class GyroDenoiser(Node):
     def _apply_parameters(self) -> None:
         """Apply the parameters that may change while the node runs."""
         settings = self._settings()
-        out = self._outputs
-        out.embed_attitude = settings.embed_attitude
-        # arrays built here, once, not per message
-        out.gyro_cov, out.orientation_cov, out.fused_cov = settings.covariances(self._loaded)
-        out.per_sample_gyro = settings.per_sample_gyro(self._loaded)
+        settings.configure(self._outputs, self._loaded)
         settings.retune(self._denoiser)
 
     def _on_parameters(self, _params: list) -> None:

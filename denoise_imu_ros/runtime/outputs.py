@@ -13,8 +13,9 @@ by construction. The policy (:func:`withheld`):
   (and the attitude embedded in ``imu/corrected``) is withheld, the corrected rate and the
   gravity-aided orientation are not.
 Headers are the raw message's, never re-stamped; covariances are the model's (or the
-node's overrides), fixed when the outputs are set up, except the gyro's where the model
-gives each sample a variance (``per_sample_gyro``).
+node's overrides; the accelerometer's the input's where neither gives one), fixed when the
+outputs are set up, except where the model gives each sample a variance
+(``per_sample_gyro``, ``per_sample_accel``).
 """
 
 from __future__ import annotations
@@ -73,11 +74,14 @@ class Outputs:
     embed_attitude: bool = False        # the attitude in imu/corrected too
     orientation_cov: np.ndarray = field(default_factory=lambda: np.diag([0.05 ** 2] * 3).ravel())
     per_sample_gyro: bool = False       # each sample's own variance instead of gyro_cov
+    accel_cov: np.ndarray | None = None  # imu/corrected's linear_acceleration_covariance
+    per_sample_accel: bool = False      # each sample's own variance instead of accel_cov
     counts: dict[str, int] = field(default_factory=lambda: dict.fromkeys(
         ('corrected_withheld', 'fused_withheld', 'attitude_withheld'), 0))
     _corrected: Any = None
     _attitude: Any = None
     _sample_cov: np.ndarray = field(default_factory=lambda: np.zeros(9))
+    _accel_sample_cov: np.ndarray = field(default_factory=lambda: np.zeros(9))
 
     def send(self, raw: Any, out: Output) -> Decision:
         """Send what the policy publishes of one sample (``raw``: its input message)."""
@@ -87,9 +91,13 @@ class Outputs:
         if self.per_sample_gyro and out.gyro_var is not None:
             gyro_cov = self._sample_cov
             gyro_cov[0] = gyro_cov[4] = gyro_cov[8] = out.gyro_var
+        accel_cov = out.accel_cov if self.accel_cov is None else self.accel_cov
+        if self.per_sample_accel and out.accel_var is not None:
+            accel_cov = self._accel_sample_cov
+            accel_cov[0] = accel_cov[4] = accel_cov[8] = out.accel_var
         self._corrected = msgs.corrected_imu(
             self.types, raw, out.gyro, gyro_cov, embed, self.orientation_cov,
-            out.accel_cov, into=self._corrected, accel=out.accel)
+            accel_cov, into=self._corrected, accel=out.accel)
         if decision.corrected is None:
             self.send_corrected(self._corrected)
         else:

@@ -139,10 +139,9 @@ class _BagOutputs:
         corrected, fused, attitude = (
             self._sender(name, msgtype) if want else None
             for name, msgtype, want in zip(names, (IMU_TYPE, IMU_TYPE, ATTITUDE_TYPE), wanted))
-        gyro_cov, orientation_cov, fused_cov = settings.covariances(loaded)
         self.outputs = Outputs(BAG_TYPES, corrected, fused, attitude, settings.fixed_frame,
-                               gyro_cov, fused_cov, settings.embed_attitude, orientation_cov,
-                               settings.per_sample_gyro(loaded))
+                               np.zeros(9), np.zeros(9))
+        settings.configure(self.outputs, loaded)
 
     def _sender(self, name: str, msgtype: str) -> Callable[[Any], None]:
         topic = self._wr.add_connection(name, msgtype, typestore=TYPESTORE)

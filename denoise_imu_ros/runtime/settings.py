@@ -22,6 +22,7 @@ from typing import Any, Mapping, NamedTuple
 import numpy as np
 import yaml
 
+from .outputs import Outputs
 from ..core.errors import OptionError
 from ..core.limits import MAX_GAP_FACTOR, RATE_TOLERANCE
 from ..core.modelfile import gyro_covariance, MODEL_HELP, ModelFile
@@ -81,6 +82,11 @@ class Settings:
         'one (fit-variance --attach), else the per-axis residual std it measured on its '
         'validation data (zeros, "unknown" to ROS, for a file without it); 0: zeros.',
         floats=(-1.0, 10.0))
+    linear_acceleration_stddev: float = _p(
+        -1.0, "m/s^2; < 0: the model's, each message's own variance where its file has one "
+        '(fit-variance --attach) and its accelerometer bias is removed (fusion_accel_bias '
+        "'model'), else the input message's covariance; >= 0: that on the diagonal of every "
+        'message (0: zeros, "unknown" to ROS).', floats=(-1.0, 100.0))
     max_gap_factor: float = _p(
         MAX_GAP_FACTOR, 'A stamp gap above this many nominal periods restarts the network '
         'history (warm-up) and holds the attitude across the gap.', floats=(1.5, 1000.0))
@@ -276,11 +282,31 @@ class Settings:
         """Whether imu/corrected carries each sample's gyro variance (the model's, no override)."""
         return loaded.meta.gyro_variance is not None and self.angular_velocity_stddev < 0
 
-    def covariances(self, loaded: ModelFile) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Return imu/corrected's gyro and embedded-attitude covariances, and imu/data's."""
-        return (np.array(gyro_covariance(loaded, self.angular_velocity_stddev)),
-                np.diag([self.orientation_stddev ** 2] * 3).ravel(),
-                np.array(orientation_covariance(loaded.meta, self.fused_orientation_stddev)))
+    def per_sample_accel(self, loaded: ModelFile) -> bool:
+        """
+        Whether imu/corrected carries each sample's accelerometer variance.
+
+        The model's, fitted on its accelerometer less the bias it removes: not with another
+        bias (``fusion_accel_bias`` off) or an override.
+        """
+        return (loaded.meta.accel_variance is not None and self.linear_acceleration_stddev < 0
+                and self.choice('fusion_accel_bias') == 'model')
+
+    def accel_covariance(self) -> np.ndarray | None:
+        """Return imu/corrected's fixed accelerometer covariance; None: the input's own."""
+        std = self.linear_acceleration_stddev
+        return None if std < 0 else np.diag([std ** 2] * 3).ravel()
+
+    def configure(self, out: Outputs, loaded: ModelFile) -> None:
+        """Set what the outputs embed and the covariances they carry (arrays built once)."""
+        out.embed_attitude = self.embed_attitude
+        out.gyro_cov = np.array(gyro_covariance(loaded, self.angular_velocity_stddev))
+        out.orientation_cov = np.diag([self.orientation_stddev ** 2] * 3).ravel()
+        out.fused_cov = np.array(orientation_covariance(loaded.meta,
+                                                        self.fused_orientation_stddev))
+        out.per_sample_gyro = self.per_sample_gyro(loaded)
+        out.accel_cov = self.accel_covariance()
+        out.per_sample_accel = self.per_sample_accel(loaded)
 
 
 def _within(value: float, low: float, high: float) -> bool:

@@ -6,7 +6,7 @@ The per-sample variance fit of ``fit-variance`` for the gyro and for the acceler
 What a VIO back-end weighs ``imu/corrected`` by: each sample's variance, the same on every
 axis, exp(theta . phi) (``pipeline/covariance.py``), theta fitted by the Gaussian negative
 log-likelihood (a proper scoring rule) of the increments' errors over 0.1-2 s windows of the
-training recordings' validation tails (``evaluation/gyro_variance.py``): the gyro's on
+training recordings' validation tails (``evaluation/variance.py``): the gyro's on
 rotation increments (what ``fit-variance`` stores), the accelerometer's the same way on
 velocity increments (the accelerometer less the model's fitted bias; the velocity the ground
 truth's state estimate's). Beside each, the same fit of a constant and, for the gyro, the
@@ -22,19 +22,19 @@ import argparse
 from pathlib import Path
 
 from denoise_imu_ros.core.modelfile import gyro_covariance, read_model_file
-from denoise_imu_ros.core.schema import GyroVariance
+from denoise_imu_ros.core.schema import SampleVariance
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation.correct import corrected_gyro
-from denoise_imu_ros.evaluation.gyro_variance import fit, Windows, WINDOWS_S
 from denoise_imu_ros.evaluation.preintegration import (
     errors, ground_truth_velocity, preintegrate, reference, window_starts)
+from denoise_imu_ros.evaluation.variance import fit, Windows, WINDOWS_S
 from denoise_imu_ros.pipeline.covariance import features
 import numpy as np
 
 TRAIN = ['MH_01_easy', 'MH_03_medium', 'MH_05_difficult', 'V1_02_medium', 'V2_01_easy',
          'V2_03_difficult']
 TEST = ['MH_02_easy', 'MH_04_difficult', 'V1_01_easy', 'V1_03_difficult', 'V2_02_medium']
-SHAPE = GyroVariance((0.0, 0.0, 0.0, 0.0))  # the features' means and scales
+SHAPE = SampleVariance((0.0, 0.0, 0.0, 0.0))  # the features' means and scales
 
 
 class Scored:
@@ -92,7 +92,7 @@ def main() -> None:
         print(f'{sensor}: learnt theta {np.round(learnt.theta, 3).tolist()}, constant '
               f'{np.round(constant.theta, 3).tolist()}')
 
-    def per_sample(spec: GyroVariance):
+    def per_sample(spec: SampleVariance):
         return lambda r: np.repeat(np.exp(r.phi @ np.array(spec.theta))[:, None], 3, axis=1)
     rows = {
         "the file's gyro constant": (lambda r: np.broadcast_to(published, (len(r.phi), 3)),

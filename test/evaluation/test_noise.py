@@ -26,10 +26,12 @@ def test_the_fit_recovers_white_noise_and_random_walk_and_keeps_pose_noise_apart
     assert keys == ['gyroscope_noise_density', 'gyroscope_random_walk'] == list(pasted)
     assert abs(pasted['gyroscope_noise_density'] / density - 1) < 0.2
     assert '# gyroscope_noise_density: 5.000e-03' in snippet  # the raw one, a comment
-    own = yaml_snippet({'corrected': fig}, 'a test', {'median': 1.2e-3, 'p95': 3.4e-3})
+    own = yaml_snippet({'corrected': fig}, 'a test', {'median': 1.2e-3, 'p95': 3.4e-3},
+                       {'median': 5.6e-3, 'p95': 7.8e-3})
     assert yaml.safe_load(own) == yaml.safe_load(yaml_snippet({'corrected': fig}, 'a test'))
     said = 'variance per message (fit-variance) as a density: median 1.200e-03, 95th percentile'
     assert f'{said} 3.400e-03' in own  # a comment: the keys stay one density
+    assert "accelerometer's: median 5.600e-03, 95th percentile 7.800e-03 m/s^2" in own
 
 
 def test_a_random_walk_too_slow_to_resolve_is_an_upper_bound_not_zero():

@@ -1,15 +1,16 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
-"""The output's variance per sample: per sample equals over arrays, reset with the network."""
+"""The outputs' variances per sample: per sample equal over arrays, reset with the network."""
 
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
-from denoise_imu_ros.core.schema import GyroVariance
+from denoise_imu_ros.core.schema import SampleVariance
 from denoise_imu_ros.pipeline.covariance import features, variances
-from denoise_imu_ros.pipeline.stages import Event, Flow, GyroVarianceStage, Pipeline
+from denoise_imu_ros.pipeline.stages import Event, Flow, Pipeline, VarianceStage
 import numpy as np
 import pytest
 
-SPEC = GyroVariance((-7.5, 1.5, 2.0, -1.5), 0.1, (0.1, 0.5, 1.0))
+SPEC = SampleVariance((-7.5, 1.5, 2.0, -1.5), 0.1, (0.1, 0.5, 1.0))
+ACCEL = SampleVariance((-4.4, 0.6, 1.1, 0.1), 0.1, (0.1, 0.5, 1.0))
 
 
 def _motion(n: int = 3000, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -26,19 +27,25 @@ def test_the_pipeline_per_sample_equals_it_over_arrays_and_restarts_at_a_gap():
     fed = np.hstack([gyro, accel])
     periods = np.ones(len(fed))
     periods[[0, 1700]] = 0.0  # the first sample, and one after a gap
-    batch = Pipeline([GyroVarianceStage(SPEC, 200.0)]).run(
-        Flow(fed, dt_s=periods / 200.0, periods=periods, out=gyro)).variance
-    online, stage = Pipeline([GyroVarianceStage(SPEC, 200.0)]), []
+    batch = Pipeline([VarianceStage(SPEC, 200.0, ACCEL)]).run(
+        Flow(fed, dt_s=periods / 200.0, periods=periods, out=gyro))
+    online, stage = Pipeline([VarianceStage(SPEC, 200.0, ACCEL)]), []
     for k in range(len(fed)):
         event = Event.START if k == 0 else Event.GAP if periods[k] == 0 else None
         flow = Flow(fed[k].copy(), event, 0.0, periods[k], out=gyro[k])
         online.step(flow, frozenset() if event is None else frozenset({event}))
-        stage.append(flow.variance)
-    np.testing.assert_allclose(stage, batch, rtol=1e-9)
-    # after the gap the means start again: as a recording of its own
-    np.testing.assert_allclose(batch[1700:], variances(gyro[1700:], accel[1700:], 200.0, SPEC),
-                               rtol=1e-12)
-    assert not np.allclose(batch[1700:1720], variances(gyro, accel, 200.0, SPEC)[1700:1720])
+        stage.append((flow.variance, flow.accel_variance))
+    np.testing.assert_allclose(stage, np.stack([batch.variance, batch.accel_variance], axis=1),
+                               rtol=1e-9)
+    for spec, found in ((SPEC, batch.variance), (ACCEL, batch.accel_variance)):
+        # after the gap the means start again: as a recording of its own
+        np.testing.assert_allclose(found[1700:], variances(gyro[1700:], accel[1700:], 200.0,
+                                                           spec), rtol=1e-12)
+        assert not np.allclose(found[1700:1720], variances(gyro, accel, 200.0, spec)[1700:1720])
+    gyro_only = Pipeline([VarianceStage(SPEC, 200.0)]).run(
+        Flow(fed, dt_s=periods / 200.0, periods=periods, out=gyro))
+    np.testing.assert_array_equal(gyro_only.variance, batch.variance)
+    assert gyro_only.accel_variance is None
 
 
 def test_the_variance_is_its_intercept_at_rest_and_grows_with_the_motion_as_theta_says():
@@ -62,3 +69,18 @@ def test_a_variance_model_that_is_none_is_refused_in_one_line(entry, said):
     from denoise_imu_ros.core.schema import parse_meta
     with pytest.raises(ModelFileError, match=f'x: .*{said}'):
         parse_meta({'gyro_variance': entry}, 'x')
+    with pytest.raises(ModelFileError, match=f'x: .*{said}'):
+        parse_meta({'gyro_variance': SPEC.as_dict(), 'accel_variance': entry}, 'x')
+
+
+@pytest.mark.parametrize('gyro', [None, {'theta': [0, 0, 0, 0], 'mean_s': 0.2}])
+def test_an_accelerometer_variance_without_the_gyros_features_is_refused(gyro):
+    from denoise_imu_ros.core.errors import ModelFileError
+    from denoise_imu_ros.core.schema import parse_meta
+    entries = {'accel_variance': ACCEL.as_dict(), **({} if gyro is None else
+                                                     {'gyro_variance': gyro})}
+    with pytest.raises(ModelFileError, match='x: accel_variance needs a gyro_variance of the '
+                       'same mean_s and scales'):
+        parse_meta(entries, 'x')
+    meta = parse_meta({'accel_variance': ACCEL.as_dict(), 'gyro_variance': SPEC.as_dict()}, 'x')
+    assert meta.accel_variance == ACCEL and meta.gyro_variance == SPEC

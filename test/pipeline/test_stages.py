@@ -6,15 +6,14 @@ import dataclasses
 import re
 
 from denoise_imu_ros.core.modelfile import read_model_file
-from denoise_imu_ros.core.schema import Blend, GyroVariance, RestBiasSettings
+from denoise_imu_ros.core.schema import Blend, RestBiasSettings, SampleVariance
 from denoise_imu_ros.data.load import load_imu
 from denoise_imu_ros.pipeline import envelope, stages
 from denoise_imu_ros.pipeline.blend import Blender
 from denoise_imu_ros.pipeline.online import OnlineDenoiser
 from denoise_imu_ros.pipeline.stages import (Attitude, ClassicalMix, correction, EnvelopeApply,
-                                             EnvelopeCheck, Event, Flow, GyroVarianceStage,
-                                             Orientation, Pipeline, STAGES, TurnOnBias,
-                                             VerticalDrop)
+                                             EnvelopeCheck, Event, Flow, Orientation, Pipeline,
+                                             STAGES, TurnOnBias, VarianceStage, VerticalDrop)
 from helpers import DATA
 import numpy as np
 import pytest
@@ -51,7 +50,7 @@ def test_every_stage_per_sample_equals_the_same_stage_over_arrays(recording):
         mix = ClassicalMix(Blender(Blend(0.6, model.meta.bias_tracking), rate))
         return Pipeline([*correction(model, guard='off', mix='off'), EnvelopeCheck(guard, rate),
                          EnvelopeApply(guard), mix, VerticalDrop(rate),
-                         GyroVarianceStage(GyroVariance((-7.5, 1.5, 2.0, -1.5)), rate),
+                         VarianceStage(SampleVariance((-7.5, 1.5, 2.0, -1.5)), rate),
                          Attitude(fusion.accel_bias_m_s2), Orientation(rate, fusion)])
     online = OnlineDenoiser(every_stage(), rate)
     assert [type(s) for s in online.pipeline.stages] == [kind for kind, _ in STAGES]

@@ -56,3 +56,22 @@ def test_what_is_sent_carries_the_raw_header_and_the_covariances_and_withheld_is
                   np.zeros(9))
     off.send(raw, _output())  # imu/data off: nothing sent there, nothing counted
     assert len(sent['fused']) == 2 and off.counts['fused_withheld'] == 0
+
+
+def test_the_accelerometer_covariance_is_each_samples_own_the_fixed_one_or_the_inputs():
+    sent = []
+    input_cov = np.eye(3).ravel() * 0.04
+    out = Outputs(BAG_TYPES, lambda m: sent.append(np.array(m.linear_acceleration_covariance)),
+                  None, lambda m: None, 'odom', np.zeros(9), np.zeros(9))
+    raw = msgs.imu(BAG_TYPES, msgs.header(BAG_TYPES, 7 * 10**9, 'imu4'), [0, 0, 0], [0, 0, 9.8])
+    sample = Output(stamp_ns=10**9, gyro=np.zeros(3), accel=np.array([0, 0, 9.7]),
+                    attitude=np.array([0.0, 0.0, 0.0, 1.0]), event=None, accel_cov=input_cov,
+                    gyro_var=1e-4, accel_var=2.5e-3)
+    out.send(raw, sample)                  # neither a model's nor a fixed one: the input's
+    out.per_sample_accel = True
+    out.send(raw, sample)                  # the sample's own
+    out.send(raw, sample._replace(accel_var=3.5e-3))
+    out.per_sample_accel, out.accel_cov = False, np.eye(3).ravel() * 0.01
+    out.send(raw, sample)                  # the node's override
+    np.testing.assert_array_equal(sent, [input_cov, np.eye(3).ravel() * 2.5e-3,
+                                         np.eye(3).ravel() * 3.5e-3, np.eye(3).ravel() * 0.01])

@@ -26,7 +26,7 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
 
     And the last two with an input envelope the bag's motion leaves: guarded (the fallback
     beyond it), and with the guard turned off, that model taught without its poses' heading
-    (its correction about the vertical dropped); both with a variance for each message.
+    (its correction about the vertical dropped); both with variances for each message.
     """
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core.modelfile import add_metadata
@@ -43,6 +43,7 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
         blend={'weight': 0.6, 'tracking': {'sigma_motion_deg_s': 0.1, 'forgetting_s': 100.0}}
         if track else None,
         gyro_variance={'theta': [-7.5, 1.5, 2.0, -1.5]} if track else None,
+        accel_variance={'theta': [-4.4, 0.6, 1.1, 0.1]} if track else None,
         train_config={'heading_weight': heading})
     bag = crop_bag(SAMPLE, tmp_path / 'head', 3.5)  # every topic, 700 IMU messages
     assert cli(['process-bag', '--input', str(bag), '--out', str(tmp_path / 'out'), '--model',
@@ -68,8 +69,9 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
     # the gravity-aided orientation, bit for bit, with its covariance
     assert np.array_equal(np.array([_fields(m) for m in h.fused]), np.array(bags['/imu/data']))
     assert bags['/imu/data'][0][-9] > 0  # orientation provided (REP-145)
-    variances = {row[3] for row in bags['/imu/corrected']}  # angular_velocity_covariance[0]
-    assert len(variances) > (600 if track else 0) and (len(variances) == 1) != track
+    for column in (3, 15):  # angular_velocity_ and linear_acceleration_covariance[0]
+        variances = {row[column] for row in bags['/imu/corrected']}
+        assert len(variances) > (600 if track else 0) and (len(variances) == 1) != track
     h.diagnostics.clear()
     h.spin_until(lambda: h.diagnostics, timeout=5.0)
     diagnostics = {v.key: v.value for v in h.diagnostics[-1].status[0].values}
@@ -539,7 +541,8 @@ def test_process_bag_with_the_nodes_params_file_writes_what_that_node_publishes(
             m.header = msgs.header(BAG_TYPES, t, 'imu0')
             w.write(conn, t0 + 5_000_000 * k, TYPESTORE.serialize_cdr(m, IMU_TYPE))
     params = {'fixed_frame': 'map', 'embed_attitude': True, 'orientation_stddev': 0.2,
-              'angular_velocity_stddev': 0.003, 'max_gap_factor': 5.0,
+              'angular_velocity_stddev': 0.003, 'linear_acceleration_stddev': 0.02,
+              'max_gap_factor': 5.0,
               'time_jump_threshold': 0.5, 'rate_tolerance': 0.1, 'publish_fused': fused,
               'fusion_tau_acc': 7.0, 'fusion_bias_estimation': 'on',
               'fusion_classical_tilt': 'on', 'fusion_accel_bias': 'off', 'rest_bias': 'off',
@@ -573,3 +576,4 @@ def test_process_bag_with_the_nodes_params_file_writes_what_that_node_publishes(
     assert [(m.header.frame_id, m.quaternion.x, m.quaternion.w) for m in h.attitude] == [
         (m.header.frame_id, m.quaternion.x, m.quaternion.w) for m in written['/imu/attitude']]
     assert written['/imu/corrected'][0].orientation_covariance[0] == pytest.approx(0.04)
+    assert written['/imu/corrected'][0].linear_acceleration_covariance[0] == pytest.approx(4e-4)

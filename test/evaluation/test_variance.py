@@ -1,16 +1,16 @@
 # SPDX-FileCopyrightText: 2026 denoise_imu_ros authors
 # SPDX-License-Identifier: Apache-2.0
-"""fit-variance: the likelihood's fit finds the variance a gyro's errors were drawn with."""
+"""fit-variance: the likelihood's fit finds the variances the IMU's errors were drawn with."""
 
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.metrics import integrate
 from denoise_imu_ros.core.records import Sequence
-from denoise_imu_ros.core.schema import GyroVariance
-from denoise_imu_ros.evaluation.gyro_variance import fit, nees, Windows
+from denoise_imu_ros.core.schema import SampleVariance
+from denoise_imu_ros.evaluation.variance import fit, nees, Windows
 from denoise_imu_ros.pipeline.covariance import features, variances
 import numpy as np
 
-TRUE = GyroVariance((-8.0, 1.2, 0.0, 0.0))
+TRUE = SampleVariance((-8.0, 1.2, 0.0, 0.0))
 RATE = 200.0
 
 
@@ -50,7 +50,7 @@ def test_the_fit_finds_the_variance_the_errors_were_drawn_with_and_its_nees_is_t
     for window, row in nees(found, held).items():
         assert 2.7 < row['mean'] < 3.3, window
         assert 0.68 < row['in_2_sigma'] < 0.80, window
-    one = GyroVariance((found.theta[0] + 2.0, *found.theta[1:]))  # 2.7 times too wide
+    one = SampleVariance((found.theta[0] + 2.0, *found.theta[1:]))  # 2.7 times too wide
     assert all(row['mean'] < 1.5 for row in nees(one, held).values())
 
 
@@ -73,6 +73,46 @@ def test_the_poses_own_noise_is_fitted_beside_the_gyros_and_counted_in_the_nees(
     assert nees(alone.variance, held)['2 s']['mean'] < 2.5
 
 
+def _moving(seed: int, accel_true: SampleVariance, n: int = 24000
+            ) -> tuple[Sequence, np.ndarray, np.ndarray, np.ndarray]:
+    """
+    Return a recording whose poses move; its accelerometer's white errors of that variance.
+
+    The poses' velocities and positions are the true specific force integrated over each
+    sample's interval as pre-integration takes it, so that only the errors are left.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / RATE
+    rate = np.stack([np.sin(0.3 * t), np.cos(0.7 * t), 0.5 * np.sin(0.05 * t)], axis=1)
+    quat = integrate(np.array([0.0, 0.0, 0.0, 1.0]), rate[:-1], np.diff(t))
+    world = np.stack([np.sin(0.5 * t), np.cos(0.9 * t), 0.3 * np.sin(1.3 * t)], axis=1)
+    true = quat.inv().apply(world + [0.0, 0.0, GRAVITY_M_S2])  # specific force, body frame
+    vel = np.concatenate([[[0.0, 0.0, 0.0]], np.cumsum(world[:-1] / RATE, axis=0)])
+    pos = np.concatenate([[[0.0, 0.0, 0.0]], np.cumsum(
+        vel[:-1] / RATE + 0.5 * world[:-1] / RATE ** 2, axis=0)])
+    sigma = np.sqrt(variances(rate, true, RATE, accel_true))
+    accel = true + sigma[:, None] * rng.normal(size=(n, 3))
+    stamps = (1e9 + t * 1e9).astype(np.int64)
+    seq = Sequence('s', stamps, np.hstack([rate, accel]), quat.as_quat(), pos, np.ones(n, bool))
+    return seq, rate, accel, vel
+
+
+def test_the_accelerometers_variance_is_found_from_the_velocity_increments():
+    true = SampleVariance((-5.0, 1.0, 0.0, 0.0))
+    train = []
+    for seed in range(3):
+        seq, gyro, accel, vel = _moving(seed, true)
+        train.append(Windows.velocity(seq, gyro, accel, vel, features(gyro, accel, RATE, true)))
+    fitted = fit(train)
+    assert abs(fitted.variance.theta[0] - true.theta[0]) < 0.3
+    assert abs(fitted.variance.theta[1] - true.theta[1]) < 0.3
+    assert np.sqrt(fitted.reference_var) < 1e-3  # exact velocities: almost none
+    seq, gyro, accel, vel = _moving(7, true)
+    held = [Windows.velocity(seq, gyro, accel, vel, features(gyro, accel, RATE, true))]
+    for window, row in nees(fitted.variance, held, fitted.reference_var).items():
+        assert 2.7 < row['mean'] < 3.3, window
+
+
 def test_fit_variance_fits_on_the_tails_stores_it_and_refuses_a_shipped_file(tmp_path, capsys):
     from denoise_imu_ros.cli import main
     from denoise_imu_ros.learn.checkpoint import load_model, save_model
@@ -85,10 +125,13 @@ def test_fit_variance_fits_on_the_tails_stores_it_and_refuses_a_shipped_file(tmp
     out = capsys.readouterr().out
     assert 'validation tails of euroc_V1_03_90s (from sample 16000 on)' in out
     assert all(f'| {w} s |' in out for w in ('0.1', '0.2', '0.5', '1', '2'))
+    assert 'accelerometer variance exp(theta . phi)' in out
     stored = load_model(str(model)).meta
-    assert stored.gyro_variance is not None
-    assert set(stored.raw['gyro_variance']['nees']) == {'0.1 s', '0.2 s', '0.5 s', '1 s', '2 s'}
+    assert stored.gyro_variance is not None and stored.accel_variance is not None
+    for key in ('gyro_variance', 'accel_variance'):
+        assert set(stored.raw[key]['nees']) == {'0.1 s', '0.2 s', '0.5 s', '1 s', '2 s'}
     assert stored.raw['gyro_variance']['reference_noise_deg'] >= 0.0
+    assert stored.raw['accel_variance']['reference_noise_m_s'] >= 0.0
     assert main(['fit-variance', '--model', 'euroc', '--attach']) == 1  # before any work
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and 'shipped' in err
