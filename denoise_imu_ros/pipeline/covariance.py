@@ -55,7 +55,7 @@ def features(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: SampleVa
 
 def variances(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: SampleVariance,
               restarts: np.ndarray | None = None) -> np.ndarray:
-    """Return each sample's variance (N,), (rad/s)^2, as :func:`features` sees the runs."""
+    """Return each sample's variance (N,), (rad/s)^2 or (m/s^2)^2, over the runs as given."""
     return np.exp(features(gyro, accel, rate_hz, spec, restarts) @ np.array(spec.theta))
 
 
