@@ -85,9 +85,9 @@ def main() -> None:
     fitted = {}
     for sensor in ('rotation', 'velocity'):
         windows = [getattr(r, sensor) for r in recs['train']]
-        learnt = fit(windows, reference_noise=False).variance
+        learnt = fit(windows, reference_noise=False, lengths_alike=False).variance
         constant = fit([Windows(np.ones((len(w.phi), 1)) * [[1, 0, 0, 0]], w.dt2, w.found)
-                        for w in windows], reference_noise=False).variance
+                        for w in windows], reference_noise=False, lengths_alike=False).variance
         fitted[sensor] = {'constant': constant, 'learnt': learnt}
         print(f'{sensor}: learnt theta {np.round(learnt.theta, 3).tolist()}, constant '
               f'{np.round(constant.theta, 3).tolist()}')
