@@ -231,7 +231,7 @@ def _fit_variance(args: argparse.Namespace) -> None:
             ('gyro_variance', 'gyro', 'rotation', 'reference_noise_deg'),
             ('accel_variance', 'accelerometer', 'velocity', 'reference_noise_m_s')):
         if key not in reports:
-            print(f'{sensor}: no variance fitted (the poses have no positions)')
+            print(f"{sensor}: no variance fitted (a recording's poses have no positions)")
             continue
         report = reports[key]
         unit = 'deg' if noise.endswith('deg') else 'm/s'

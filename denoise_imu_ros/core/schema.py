@@ -235,12 +235,14 @@ class SampleVariance:
     the rate's change per second (rad/s^2), each over its ``scales`` entry
     (``pipeline/covariance.py``). ``fit-variance`` fits the gyro's theta by the likelihood
     of the rotation increments' errors on the validation tails, the accelerometer's by
-    that of the velocity increments' ((rad/s)^2 and (m/s^2)^2).
+    that of the velocity increments' ((rad/s)^2 and (m/s^2)^2). The accelerometer's says
+    which accelerometer it describes: the one less ``accel_bias_m_s2`` (None for the gyro).
     """
 
     theta: tuple[float, float, float, float]
     mean_s: float = 0.1
     scales: tuple[float, float, float] = (0.1, 0.5, 1.0)
+    accel_bias_m_s2: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         """Refuse what no variance model is (model files are user input)."""
@@ -253,13 +255,22 @@ class SampleVariance:
                              f'{self.mean_s!r}')
         if not (_triple(self.scales) and min(self.scales) > 0):
             raise ValueError(f'scales must be three positive numbers, not {self.scales!r}')
+        bias = self.accel_bias_m_s2
+        if bias is not None and not (_triple(bias) and max(map(abs, bias)) <= MAX_ACCEL_BIAS_M_S2):
+            raise ValueError(f'accel_bias_m_s2 must be three numbers within '
+                             f'{MAX_ACCEL_BIAS_M_S2:g} m/s^2, not {bias!r}')
         object.__setattr__(self, 'theta', tuple(map(float, theta)))
         object.__setattr__(self, 'mean_s', float(self.mean_s))
         object.__setattr__(self, 'scales', tuple(map(float, self.scales)))
+        if bias is not None:
+            object.__setattr__(self, 'accel_bias_m_s2', tuple(map(float, bias)))
 
     def as_dict(self) -> dict[str, Any]:
         """Return the variance model as stored in a model file."""
-        return {'theta': list(self.theta), 'mean_s': self.mean_s, 'scales': list(self.scales)}
+        found = {'theta': list(self.theta), 'mean_s': self.mean_s, 'scales': list(self.scales)}
+        if self.accel_bias_m_s2 is not None:
+            found['accel_bias_m_s2'] = list(self.accel_bias_m_s2)
+        return found
 
 
 @dataclass(frozen=True)
@@ -540,12 +551,13 @@ def _blend(v: dict[str, Any]) -> Blend:
     return Blend(v.get('weight'), None if tracking is None else _tracking(tracking))
 
 
-VARIANCE_KEYS = {'theta', 'mean_s', 'scales', 'fitted_on', 'reference_noise_deg',
-                 'reference_noise_m_s', 'nees', 'held_out'}
+VARIANCE_KEYS = {'theta', 'mean_s', 'scales', 'accel_bias_m_s2', 'fitted_on',
+                 'reference_noise_deg', 'reference_noise_m_s', 'nees', 'held_out'}
 
 
 def _variance(v: dict[str, Any]) -> SampleVariance:
-    return SampleVariance(v.get('theta'), v.get('mean_s', 0.1), v.get('scales', (0.1, 0.5, 1.0)))
+    return SampleVariance(v.get('theta'), v.get('mean_s', 0.1), v.get('scales', (0.1, 0.5, 1.0)),
+                          v.get('accel_bias_m_s2'))
 
 
 def _accel_variance(raw: dict[str, Any], where: str, gyro: SampleVariance | None
@@ -556,6 +568,9 @@ def _accel_variance(raw: dict[str, Any], where: str, gyro: SampleVariance | None
                               != (gyro.mean_s, gyro.scales)):
         raise ModelFileError(f'{where}: accel_variance needs a gyro_variance of the same '
                              'mean_s and scales: both are computed from one set of features')
+    if accel is not None and accel.accel_bias_m_s2 is None:
+        raise ModelFileError(f'{where}: accel_variance needs its accel_bias_m_s2: which '
+                             'accelerometer it was fitted on')
     return accel
 
 

@@ -12,33 +12,35 @@ computed by :mod:`~denoise_imu_ros.pipeline.covariance`) is fitted by the Gaussi
 negative log-likelihood of the increments' errors over WINDOWS_S windows, half-overlapping,
 of the training recordings' validation tails (what the network did not train on), each
 window length weighing alike: a VIO's keyframes may be any of them apart, and weighed per
-window the short ones, twenty times as many, decide the fit (EuRoC's tails: rotation NEES
-6.07 at 2 s against 4.50 alike, the short windows' 2.72 against 2.41). The
+window the short ones, twenty times as many, decide the fit (docs/experiments.md). The
 gyro's on the rotation increments (the angle of dR_pose^T dR_gyro), the accelerometer's on
 the velocity increments (pre-integrated from the poses' state, against their velocities:
-a state estimate's where the recording has one, else the positions' derivative), the
-accelerometer as ``imu/corrected`` carries it. Each window's error also holds the poses'
-own noise at its two ends, the same whatever the window's length where the IMU's grows
-with it: the fit takes one such variance of the reference beside the model's
-(``reference_noise_deg``: EuRoC's motion capture shows none at these lengths, TUM-VI's some
-0.2 deg per axis; ``reference_noise_m_s`` for the velocities), and leaves it out of what
-``imu/corrected`` publishes. The NEES of each window, that noise counted (3 where the
-variance describes the error; 73.9 % of windows inside the 2-sigma ellipsoid then), says
-how well it does. The velocity's error left by the gyro's (the specific force turned by
-the rotation's error) is counted in the accelerometer's.
+a state estimate's where the recording has one and its poses are read as written, else the
+positions' derivative), the accelerometer as ``imu/corrected`` carries it (and stored with
+the bias it was less: the node publishes it on that accelerometer only). Each window's
+error also holds the poses' own noise at its two ends, the same whatever the window's
+length where the IMU's grows with it: the fit takes one such variance of the reference
+beside the model's (``reference_noise_deg``: EuRoC's motion capture shows none at these
+lengths, TUM-VI's some 0.2 deg per axis; ``reference_noise_m_s`` for the velocities), and
+leaves it out of what ``imu/corrected`` publishes. The NEES of each window, that noise
+counted (3 where the variance describes the error; 73.9 % of windows inside the 2-sigma
+ellipsoid then), says how well it does. The velocity's error left by the gyro's (the
+specific force turned by the rotation's error) is counted in the accelerometer's.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 import math
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
 from scipy.optimize import minimize
 
 from .filters import training_recordings
-from .preintegration import ground_truth_velocity, preintegrate, reference, window_starts
+from .preintegration import (ground_truth_velocity, preintegrate, reference,
+                             velocity_from_positions, window_starts)
 from ..core.metrics import block_errors, integrate
 from ..core.modelfile import sample_rate
 from ..core.records import Sequence
@@ -50,9 +52,9 @@ from ..runtime.settings import Settings
 __all__ = ['Fit', 'fit', 'fit_model', 'nees', 'Windows', 'WINDOWS_S']
 
 WINDOWS_S = (0.1, 0.2, 0.5, 1.0, 2.0)  # the keyframe spacings a VIO pre-integrates over
-START_LOG_VARIANCE = -9.0               # the fit's start: 0.011 rad/s, any axis
-START_LOG_REFERENCE = -14.0             # and the reference's noise: 0.05 deg per axis
-LOG_REFERENCE_BOUNDS = (-60.0, 0.0)     # from none at all to 1 rad per axis
+START_LOG_VARIANCE = -9.0               # the fit's start: 0.011 rad/s or m/s^2, any axis
+START_LOG_REFERENCE = -14.0             # and the reference's noise: 0.05 deg (or 0.9 mm/s)
+LOG_REFERENCE_BOUNDS = (-60.0, 0.0)     # from none at all to 1 rad (or 1 m/s) per axis
 
 
 class Windows(NamedTuple):
@@ -199,7 +201,9 @@ def fit_model(model_spec: str, data: str | None = None, progress: bool = True,
         rotation.append(Windows.of(seq, gyro, phi, start))
         if np.ptp(seq.gt_pos, axis=0).max() > 0:  # orientation-only poses: no velocity
             stamp_s = (seq.stamp_ns - seq.stamp_ns[0]) * 1e-9
-            truth = ground_truth_velocity(folder / name, seq.stamp_ns, seq.gt_pos, stamp_s)[0]
+            truth = (ground_truth_velocity(folder / name, seq.stamp_ns, seq.gt_pos, stamp_s)[0]
+                     if seq.pose_alignment is None  # a file's velocities, as its poses
+                     else velocity_from_positions(seq.gt_pos, stamp_s))
             velocity.append(Windows.velocity(seq, gyro, seq.on_poses(seq.stream[:, 3:]) - bias,
                                              truth, phi, start))
         if progress:
@@ -212,18 +216,19 @@ def fit_model(model_spec: str, data: str | None = None, progress: bool = True,
         'reference_noise_deg', math.degrees)}
     if len(velocity) == len(names):
         report['accel_variance'] = _report(
-            velocity, names, mean_s, scales, f'velocity increments over {windows_s} s {where}, '
-            f'the accelerometer less {np.round(bias, 4).tolist()} m/s^2', 'reference_noise_m_s',
-            float)
+            velocity, names, mean_s, scales, f'velocity increments over {windows_s} s {where}',
+            'reference_noise_m_s', float, tuple(map(float, bias)))
     return report
 
 
 def _report(windows: list[Windows], names: list[str], mean_s: float,
             scales: tuple[float, float, float], fitted_on: str, noise_key: str,
-            unit: Any) -> dict[str, Any]:
+            unit: Callable[[float], float],
+            accel_bias: tuple[float, float, float] | None = None) -> dict[str, Any]:
     """Return one sensor's fit, its NEES and its held-out NEES, as a model file stores it."""
     found = fit(windows, mean_s, scales)
-    return {**found.variance.as_dict(), 'fitted_on': fitted_on,
+    variance = replace(found.variance, accel_bias_m_s2=accel_bias)
+    return {**variance.as_dict(), 'fitted_on': fitted_on,
             noise_key: unit(math.sqrt(found.reference_var)),
             'nees': nees(found.variance, windows, found.reference_var),
             'held_out': _held_out(names, windows, mean_s, scales)}

@@ -13,7 +13,8 @@ moves; one constant would be too large at rest and too small in fast motion. The
 restart with the network's history (a start, a gap, a clock jump).
 
 Every path computes it alike: :func:`variances` over a recording's arrays (``eval``,
-``tune-fusion``, the benches), :class:`Variance` one sample at a time (node,
+``tune-fusion``, the benches; the pipeline's batch form takes :func:`features` once for
+both sensors, then :func:`from_features`), :class:`Variance` one sample at a time (node,
 ``process-bag``); equal to rounding (running sums against cumulative ones).
 """
 
@@ -26,7 +27,9 @@ import numpy as np
 from ..core.limits import GRAVITY_M_S2
 from ..core.schema import SampleVariance
 
-__all__ = ['features', 'Variance', 'variances']
+__all__ = ['features', 'from_features', 'MAX_LOG_VARIANCE', 'Variance', 'variances']
+
+MAX_LOG_VARIANCE = 50.0  # exp(theta . phi) capped here: glitched input gives a huge, finite one
 
 
 def features(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: SampleVariance,
@@ -56,7 +59,12 @@ def features(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: SampleVa
 def variances(gyro: np.ndarray, accel: np.ndarray, rate_hz: float, spec: SampleVariance,
               restarts: np.ndarray | None = None) -> np.ndarray:
     """Return each sample's variance (N,), (rad/s)^2 or (m/s^2)^2, over the runs as given."""
-    return np.exp(features(gyro, accel, rate_hz, spec, restarts) @ np.array(spec.theta))
+    return from_features(features(gyro, accel, rate_hz, spec, restarts), spec)
+
+
+def from_features(phi: np.ndarray, spec: SampleVariance) -> np.ndarray:
+    """Return exp(theta . phi) of features (N, 4), capped at MAX_LOG_VARIANCE."""
+    return np.exp(np.minimum(phi @ np.array(spec.theta), MAX_LOG_VARIANCE))
 
 
 def _width(spec: SampleVariance, rate_hz: float) -> int:
@@ -75,7 +83,9 @@ class Variance:
 
     def __init__(self, spec: SampleVariance, rate_hz: float,
                  accel: SampleVariance | None = None) -> None:
-        self.spec, self.rate_hz, self.accel = spec, rate_hz, accel
+        if accel is not None and (accel.mean_s, accel.scales) != (spec.mean_s, spec.scales):
+            raise ValueError("the accelerometer's variance model is not on the gyro's features")
+        self.spec, self.rate_hz = spec, rate_hz
         self._width = _width(spec, rate_hz)
         self._thetas = (tuple(spec.theta),) + (() if accel is None else (tuple(accel.theta),))
         self._scales = tuple(spec.scales)
@@ -113,6 +123,6 @@ class Variance:
         self._count = min(self._count + 1, self._width)
         count = self._count
         phi = [math.log1p(m / count / c) for m, c in zip(sums, self._scales)]
-        found = [math.exp(theta[0] + sum(t * f for t, f in zip(theta[1:], phi)))
-                 for theta in self._thetas]
+        found = [math.exp(min(theta[0] + sum(t * f for t, f in zip(theta[1:], phi)),
+                              MAX_LOG_VARIANCE)) for theta in self._thetas]
         return found[0], found[1] if len(found) > 1 else None

@@ -43,7 +43,7 @@ import numpy as np
 
 from . import envelope, rest_bias
 from .blend import blend_batch, Blender, resolve as resolve_blend
-from .covariance import features, Variance
+from .covariance import features, from_features, Variance
 from .fusion import fuse, FusionSettings, GravityFilter
 from .streaming import StreamingCorrector
 from .vertical import drop_vertical, drops_vertical, Vertical
@@ -312,9 +312,9 @@ class VarianceStage(Stage):
         """Give every output its variances; the means restart at each gap (periods 0)."""
         restarts = (flow.periods == 0) if isinstance(flow.periods, np.ndarray) else None
         phi = features(flow.out, flow.fed[:, 3:], self.rate_hz, self.spec, restarts)
-        flow.variance = np.exp(phi @ np.array(self.spec.theta))
+        flow.variance = from_features(phi, self.spec)
         if self.accel is not None:
-            flow.accel_variance = np.exp(phi @ np.array(self.accel.theta))
+            flow.accel_variance = from_features(phi, self.accel)
 
 
 class Attitude(Stage):

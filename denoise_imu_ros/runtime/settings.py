@@ -84,9 +84,9 @@ class Settings:
         floats=(-1.0, 10.0))
     linear_acceleration_stddev: float = _p(
         -1.0, "m/s^2; < 0: the model's, each message's own variance where its file has one "
-        '(fit-variance --attach) and its accelerometer bias is removed (fusion_accel_bias '
-        "'model'), else the input message's covariance; >= 0: that on the diagonal of every "
-        'message (0: zeros, "unknown" to ROS).', floats=(-1.0, 100.0))
+        '(fit-variance --attach) fitted on the accelerometer published (less the same bias: '
+        "fusion_accel_bias), else the input message's covariance; >= 0: that on the diagonal "
+        'of every message (0: zeros, "unknown" to ROS).', floats=(-1.0, 100.0))
     max_gap_factor: float = _p(
         MAX_GAP_FACTOR, 'A stamp gap above this many nominal periods restarts the network '
         'history (warm-up) and holds the attitude across the gap.', floats=(1.5, 1000.0))
@@ -286,11 +286,13 @@ class Settings:
         """
         Whether imu/corrected carries each sample's accelerometer variance.
 
-        The model's, fitted on its accelerometer less the bias it removes: not with another
-        bias (``fusion_accel_bias`` off) or an override.
+        The model's, where the accelerometer published is the one it was fitted on (less
+        the same bias: not after ``fusion_accel_bias`` or a later cross-validation changed
+        it), and no override.
         """
-        return (loaded.meta.accel_variance is not None and self.linear_acceleration_stddev < 0
-                and self.choice('fusion_accel_bias') == 'model')
+        spec = loaded.meta.accel_variance
+        return (spec is not None and self.linear_acceleration_stddev < 0
+                and spec.accel_bias_m_s2 == tuple(self.corrected_accel_bias(loaded)))
 
     def accel_covariance(self) -> np.ndarray | None:
         """Return imu/corrected's fixed accelerometer covariance; None: the input's own."""

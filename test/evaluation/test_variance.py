@@ -9,6 +9,7 @@ from denoise_imu_ros.core.schema import SampleVariance
 from denoise_imu_ros.evaluation.variance import fit, nees, Windows
 from denoise_imu_ros.pipeline.covariance import features, variances
 import numpy as np
+import pytest
 
 TRUE = SampleVariance((-8.0, 1.2, 0.0, 0.0))
 RATE = 200.0
@@ -143,3 +144,23 @@ def test_fit_variance_fits_on_the_tails_stores_it_and_refuses_a_shipped_file(tmp
     assert main(['fit-variance', '--model', 'euroc', '--attach']) == 1  # before any work
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and 'shipped' in err
+
+
+def test_each_window_length_weighs_alike_and_the_gradient_is_the_likelihoods():
+    from denoise_imu_ros.evaluation.variance import _nll
+    seq, gyro, accel = _recording(0, n=6000)
+    windows = [Windows.of(seq, gyro, features(gyro, accel, RATE, TRUE))]
+    params = np.array([-7.6, 1.0, 0.2, -0.1, -18.0])
+    value, grad = _nll(params, windows)
+    alone = [_nll(params, [Windows(w.phi, w.dt2, [found])])[0]
+             for w in windows for found in w.found]
+    assert len(alone) == 5 and value == pytest.approx(np.mean(alone), rel=1e-12)
+    every = _nll(params, windows, lengths_alike=False)[0]  # the 0.1 s windows outweigh
+    counts = [len(starts) for _, starts, _, _ in windows[0].found]
+    assert every == pytest.approx(np.dot(alone, counts) / sum(counts), rel=1e-12)
+    for alike in (True, False):
+        value, grad = _nll(params, windows, alike)
+        step = 1e-6
+        numeric = [(_nll(params + step * e, windows, alike)[0] - value) / step
+                   for e in np.eye(5)]
+        np.testing.assert_allclose(grad, numeric, rtol=1e-3, atol=1e-6)

@@ -4,13 +4,13 @@
 
 from denoise_imu_ros.core.limits import GRAVITY_M_S2
 from denoise_imu_ros.core.schema import SampleVariance
-from denoise_imu_ros.pipeline.covariance import features, variances
+from denoise_imu_ros.pipeline.covariance import features, MAX_LOG_VARIANCE, Variance, variances
 from denoise_imu_ros.pipeline.stages import Event, Flow, Pipeline, VarianceStage
 import numpy as np
 import pytest
 
 SPEC = SampleVariance((-7.5, 1.5, 2.0, -1.5), 0.1, (0.1, 0.5, 1.0))
-ACCEL = SampleVariance((-4.4, 0.6, 1.1, 0.1), 0.1, (0.1, 0.5, 1.0))
+ACCEL = SampleVariance((-4.4, 0.6, 1.1, 0.1), 0.1, (0.1, 0.5, 1.0), (0.01, -0.02, 0.03))
 
 
 def _motion(n: int = 3000, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -73,6 +73,19 @@ def test_a_variance_model_that_is_none_is_refused_in_one_line(entry, said):
         parse_meta({'gyro_variance': SPEC.as_dict(), 'accel_variance': entry}, 'x')
 
 
+def test_a_glitch_gives_a_huge_but_finite_variance_on_both_paths():
+    gyro, accel = _motion(400)
+    gyro[200] = 1e12  # a glitch the model's motion features blow up on
+    wild = SampleVariance((10.0, 99.0, 0.0, 0.0))
+    batch = Pipeline([VarianceStage(wild, 200.0, wild)]).run(
+        Flow(np.hstack([gyro, accel]), out=gyro))
+    online = Variance(wild, 200.0, wild)
+    stage = [online.update(g, a) for g, a in zip(gyro, accel)]
+    assert np.isfinite(batch.variance).all() and np.isfinite(stage).all()
+    np.testing.assert_allclose(np.array(stage)[:, 1], batch.accel_variance, rtol=1e-9)
+    assert batch.variance.max() == np.exp(MAX_LOG_VARIANCE)
+
+
 @pytest.mark.parametrize('gyro', [None, {'theta': [0, 0, 0, 0], 'mean_s': 0.2}])
 def test_an_accelerometer_variance_without_the_gyros_features_is_refused(gyro):
     from denoise_imu_ros.core.errors import ModelFileError
@@ -84,3 +97,7 @@ def test_an_accelerometer_variance_without_the_gyros_features_is_refused(gyro):
         parse_meta(entries, 'x')
     meta = parse_meta({'accel_variance': ACCEL.as_dict(), 'gyro_variance': SPEC.as_dict()}, 'x')
     assert meta.accel_variance == ACCEL and meta.gyro_variance == SPEC
+    with pytest.raises(ModelFileError, match='x: accel_variance needs its accel_bias_m_s2'):
+        parse_meta({'accel_variance': SPEC.as_dict(), 'gyro_variance': SPEC.as_dict()}, 'x')
+    with pytest.raises(ValueError, match="not on the gyro's features"):
+        Variance(SPEC, 200.0, SampleVariance(ACCEL.theta, 0.2))

@@ -71,7 +71,9 @@ def test_the_accelerometer_covariance_is_each_samples_own_the_fixed_one_or_the_i
     out.per_sample_accel = True
     out.send(raw, sample)                  # the sample's own
     out.send(raw, sample._replace(accel_var=3.5e-3))
+    out.send(raw, sample._replace(accel_var=None))  # a sample without one: the input's
     out.per_sample_accel, out.accel_cov = False, np.eye(3).ravel() * 0.01
     out.send(raw, sample)                  # the node's override
     np.testing.assert_array_equal(sent, [input_cov, np.eye(3).ravel() * 2.5e-3,
-                                         np.eye(3).ravel() * 3.5e-3, np.eye(3).ravel() * 0.01])
+                                         np.eye(3).ravel() * 3.5e-3, input_cov,
+                                         np.eye(3).ravel() * 0.01])

@@ -43,7 +43,8 @@ def test_process_bag_writes_exactly_what_the_node_publishes(harness, model_file,
         blend={'weight': 0.6, 'tracking': {'sigma_motion_deg_s': 0.1, 'forgetting_s': 100.0}}
         if track else None,
         gyro_variance={'theta': [-7.5, 1.5, 2.0, -1.5]} if track else None,
-        accel_variance={'theta': [-4.4, 0.6, 1.1, 0.1]} if track else None,
+        accel_variance={'theta': [-4.4, 0.6, 1.1, 0.1], 'accel_bias_m_s2': [0.02, -0.1, 0.05]}
+        if track else None,
         train_config={'heading_weight': heading})
     bag = crop_bag(SAMPLE, tmp_path / 'head', 3.5)  # every topic, 700 IMU messages
     assert cli(['process-bag', '--input', str(bag), '--out', str(tmp_path / 'out'), '--model',

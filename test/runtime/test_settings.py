@@ -113,3 +113,31 @@ def test_imu_corrected_leaves_the_accelerometer_bias_out_where_it_carries(
     assert off.corrected_accel_bias(loaded) == (0.0, 0.0, 0.0)
     assert not settings.fusion(loaded).classical_tilt  # the file's: none stored
     assert settings.with_(fusion_classical_tilt='on').fusion(loaded).classical_tilt
+
+
+def test_each_messages_accelerometer_variance_only_on_the_accelerometer_it_was_fitted_on(
+        model_file):
+    """Less the same bias (the file's, its cross-validation's, fusion_accel_bias), no override."""
+    from denoise_imu_ros.core.modelfile import add_metadata, read_model_file
+    from denoise_imu_ros.pipeline.fusion import FusionSettings
+    from denoise_imu_ros.runtime.outputs import Outputs
+    variance = {'theta': [-7.5, 1.5, 2.0, -1.5]}
+    fitted = {'theta': [-4.4, 0.6, 1.1, 0.1], 'accel_bias_m_s2': [0.02, -0.1, 0.05]}
+    add_metadata(model_file, gyro_variance=variance, accel_variance=fitted, fusion={
+        'settings': FusionSettings(4.0, False, (0.02, -0.1, 0.05)).as_dict()})
+    loaded = read_model_file(model_file)
+    out = Outputs(None, print, None, print, 'odom', [], [])
+    for settings, carried, fixed in (
+            (Settings(), True, None),
+            (Settings(fusion_accel_bias='off'), False, None),        # another accelerometer
+            (Settings(linear_acceleration_stddev=0.1), False, 0.01),  # the node's override
+            (Settings(linear_acceleration_stddev=0.0), False, 0.0)):
+        settings.configure(out, loaded)
+        assert out.per_sample_accel == carried and out.per_sample_gyro
+        assert (out.accel_cov is None) == (fixed is None)
+        if fixed is not None:
+            assert out.accel_cov[0] == pytest.approx(fixed) and out.accel_cov[1] == 0.0
+    add_metadata(model_file, fusion={'settings': FusionSettings(4.0, False, (0.0, 0.1, 0.0)
+                                                                ).as_dict()})
+    Settings().configure(out, read_model_file(model_file))  # the bias refitted since
+    assert not out.per_sample_accel and out.accel_cov is None
