@@ -164,3 +164,20 @@ def test_each_window_length_weighs_alike_and_the_gradient_is_the_likelihoods():
         numeric = [(_nll(params + step * e, windows, alike)[0] - value) / step
                    for e in np.eye(5)]
         np.testing.assert_allclose(grad, numeric, rtol=1e-3, atol=1e-6)
+
+
+def test_a_refit_without_positions_drops_the_accelerometers_old_variance(
+        capsys, monkeypatch, model_file):
+    from denoise_imu_ros.cli import main
+    from denoise_imu_ros.core.modelfile import add_metadata, read_model_file
+    from denoise_imu_ros.evaluation import variance
+    gyro = {'theta': [-7.5, 1.5, 2.0, -1.5], 'nees': {}, 'held_out': {}, 'fitted_on': 'tails',
+            'reference_noise_deg': 0.0}
+    add_metadata(model_file, gyro_variance=gyro, accel_variance={
+        'theta': [-4.4, 0.6, 1.1, 0.1], 'accel_bias_m_s2': [0.0, 0.0, 0.0]})
+    monkeypatch.setattr(variance, 'fit_model', lambda *a, **k: {'gyro_variance': gyro})
+    assert main(['fit-variance', '--model', str(model_file), '--attach', '--quiet']) == 0
+    assert "accelerometer: no variance fitted (a recording's poses have no positions)" in (
+        capsys.readouterr().out)
+    meta = read_model_file(model_file).meta
+    assert meta.accel_variance is None and meta.gyro_variance is not None
