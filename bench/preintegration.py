@@ -127,7 +127,7 @@ def main() -> None:
                                                              datasheet)
                 var = np.repeat(variances(full, stream[:, 3:], rate, spec)[
                     len(seq.lead_in):, None], 3, axis=1)
-            if accel_spec is not None:
+            if accel_spec is not None and Settings().per_sample_accel(mf):  # as published
                 imus[f'{label}, its gyro variance'] = (gyro, seq.imu[:, 3:] - bias, var,
                                                        datasheet)
                 accel_var = np.repeat(variances(full, stream[:, 3:], rate, accel_spec)[

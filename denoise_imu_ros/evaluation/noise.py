@@ -297,6 +297,7 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     from ..core.compat import check_baseline
     from ..learn.checkpoint import load_model
     from ..pipeline.covariance import variances
+    from ..runtime.settings import Settings
     from .evaluate import check_inputs, default_baseline, recording_names
     from .reports import fitting_note, scored_on_training_samples
     names = recording_names(sequences)  # before the slow part: a name twice is refused
@@ -310,8 +311,9 @@ def noise(model_spec: str, data: str, sequences: list[str], out: str,
     if note:
         print(f'warning: {note}', file=sys.stderr)
     seqs, gyros = [], {'raw': [], 'calibrated': [], 'corrected': []}
-    specs = {'published_density': net.meta.gyro_variance,
-             'published_accel_density': net.meta.accel_variance}
+    specs = {'published_density': net.meta.gyro_variance,  # where the node publishes them
+             'published_accel_density': net.meta.accel_variance
+             if Settings().per_sample_accel(net) else None}
     published: dict[str, list[np.ndarray]] = {}
     for name, short in zip(sequences, names):
         seq = load_sequence(Path(data) / name, imu_topic, pose_topic,
