@@ -24,7 +24,10 @@ fold's tracker-only row) are combined per sample:
   bound (``--spreads``, deg/s): the ensemble's own doubt, beyond what its members saw;
 - ``highpass``: T + W HP(N - T), the difference's causal first-order high-pass at TAU s
   (``--highpass``): the network gives what changes within seconds, the classical tracker
-  the slow rest (the bias a new power-on moves).
+  the slow rest (the bias a new power-on moves);
+- ``rates``: the blend W where the gyro's causal RATE_S mean norm is at least a bound
+  (``--rates``, deg/s), T below it: the network in fast motion only, where a bias tracker
+  cannot follow scale and misalignment, the classical pipeline in slow motion.
 Prints, per fold and setting, the mean against tracker only, the mean per-trial ratio and
 the worst, for the ensemble and each seed. Run: .venv/bin/python
 scripts/reproduce/blend_fallback.py OUT ../shared/data/broad --weights 1 0.7 0.5 0.3
@@ -46,6 +49,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 SPREAD_S = 1.0  # s, the causal mean of the seeds' spread
+RATE_S = 1.0    # s, the causal mean of the gyro's norm (--rates)
 
 
 def trials(out: Path, data: Path, release_s: float = 0.0) -> dict[str, dict]:
@@ -86,18 +90,23 @@ def trials(out: Path, data: Path, release_s: float = 0.0) -> dict[str, dict]:
                 'fold': i, 'seq': seq, 'accel': fed[:, 3:], 'rate': rate,
                 'classical': track_bias(fed[:, :3], fed[:, 3:], rate, classical_tracking),
                 'nets': outputs, 'untrusted': untrusted, 'sustained': flags,
-                'steady': steady}
+                'steady': steady, 'speed': causal_mean(np.linalg.norm(fed[:, :3], axis=1),
+                                                       max(1, int(RATE_S * rate)))}
     return found
+
+
+def causal_mean(values: np.ndarray, n: int) -> np.ndarray:
+    """Return each sample's mean of ``values`` (N,) over the last n samples (fewer at first)."""
+    total = np.concatenate([[0.0], np.cumsum(values)])
+    k = np.arange(len(values))
+    start = np.maximum(k + 1 - n, 0)
+    return (total[k + 1] - total[start]) / (k + 1 - start)
 
 
 def seed_spread(nets: list[np.ndarray], rate: float) -> np.ndarray:
     """Return the causal SPREAD_S mean of the seeds' outputs' spread (rad/s) per sample."""
     spread = np.sqrt(np.mean(np.var(np.stack(nets), axis=0), axis=1))
-    n = max(1, int(SPREAD_S * rate))
-    total = np.concatenate([[0.0], np.cumsum(spread)])
-    k = np.arange(len(spread))
-    start = np.maximum(k + 1 - n, 0)
-    return (total[k + 1] - total[start]) / (k + 1 - start)
+    return causal_mean(spread, max(1, int(SPREAD_S * rate)))
 
 
 def high_pass(diff: np.ndarray, rate: float, tau_s: float) -> np.ndarray:
@@ -142,19 +151,24 @@ def main() -> None:
     parser.add_argument('--highpass', type=float, nargs='+', default=[], metavar='TAU',
                         help="also the blend of the difference's high-pass at TAU s (one "
                              'setting per weight and TAU)')
+    parser.add_argument('--rates', type=float, nargs='+', default=[], metavar='DEG_S',
+                        help='also the blend where the 1 s mean rate is at least DEG_S deg/s '
+                             '(T below it), one setting per weight and bound')
     parser.add_argument('--release', type=float, default=0.0, metavar='S',
                         help='the sustained flag kept S s after its last sample')
     args = parser.parse_args()
     found = trials(args.out, args.data, args.release)
-    settings = [(f'blend {w:g}', w, None, None, None) for w in args.weights]
+    settings = [(f'blend {w:g}', w, None, None, None, None) for w in args.weights]
     if args.gravity:
         settings += [(f'gravity {args.gravity[0]:g} s / {args.gravity[1]:g} s, blend {w:g}, '
-                      f'margin {m:g} deg', w, np.radians(m), None, None)
+                      f'margin {m:g} deg', w, np.radians(m), None, None, None)
                      for w in args.weights for m in args.margins]
-    settings += [(f'spread within {b:g} deg/s, blend {w:g}', w, None, np.radians(b), None)
-                 for w in args.weights for b in args.spreads]
-    settings += [(f'high-pass {tau:g} s, blend {w:g}', w, None, None, tau)
+    settings += [(f'spread within {b:g} deg/s, blend {w:g}', w, None, np.radians(b), None,
+                  None) for w in args.weights for b in args.spreads]
+    settings += [(f'high-pass {tau:g} s, blend {w:g}', w, None, None, tau, None)
                  for w in args.weights for tau in args.highpass]
+    settings += [(f'from {r:g} deg/s, blend {w:g}', w, None, None, None, np.radians(r))
+                 for w in args.weights for r in args.rates]
     for fold in sorted({t['fold'] for t in found.values()}):
         names = [n for n, t in found.items() if t['fold'] == fold]
         bar = np.array([score(found[n]['seq'], found[n]['seq'].on_poses(
@@ -162,7 +176,7 @@ def main() -> None:
         print(f'fold {fold}: tracker only {bar.mean():.2f} over ' + ', '.join(names))
         turned = {}  # T's gravity drift per trial and network: the same for every setting
         spread = {n: seed_spread(found[n]['nets'][:-1], found[n]['rate']) for n in names}
-        for label, weight, margin, bound, tau in settings:
+        for label, weight, margin, bound, tau, fast in settings:
             aoe = []
             for n in names:
                 t = found[n]
@@ -183,6 +197,8 @@ def main() -> None:
                             turned[n, k] + margin
                     if bound is not None:
                         w *= spread[n] <= bound
+                    if fast is not None:
+                        w *= t['speed'] >= fast
                     w = np.where(flag, 0.0, w)[:, None]
                     diff = net - classical
                     if tau is not None:
