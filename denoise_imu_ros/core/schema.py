@@ -225,6 +225,14 @@ class Blend:
                 'tracking': None if self.tracking is None else self.tracking.as_dict()}
 
 
+def _accel_bias(bias: Any) -> tuple[float, float, float]:
+    """Return an accelerometer bias as floats, or refuse what no IMU's bias is."""
+    if not (_triple(bias) and all(abs(b) <= MAX_ACCEL_BIAS_M_S2 for b in bias)):
+        raise ValueError(f'accel_bias_m_s2 must be three numbers within '
+                         f'±{MAX_ACCEL_BIAS_M_S2:g} m/s^2, not {bias!r}')
+    return tuple(float(b) for b in bias)
+
+
 @dataclass(frozen=True)
 class SampleVariance:
     """
@@ -255,15 +263,11 @@ class SampleVariance:
                              f'{self.mean_s!r}')
         if not (_triple(self.scales) and min(self.scales) > 0):
             raise ValueError(f'scales must be three positive numbers, not {self.scales!r}')
-        bias = self.accel_bias_m_s2
-        if bias is not None and not (_triple(bias) and max(map(abs, bias)) <= MAX_ACCEL_BIAS_M_S2):
-            raise ValueError(f'accel_bias_m_s2 must be three numbers within '
-                             f'{MAX_ACCEL_BIAS_M_S2:g} m/s^2, not {bias!r}')
         object.__setattr__(self, 'theta', tuple(map(float, theta)))
         object.__setattr__(self, 'mean_s', float(self.mean_s))
         object.__setattr__(self, 'scales', tuple(map(float, self.scales)))
-        if bias is not None:
-            object.__setattr__(self, 'accel_bias_m_s2', tuple(map(float, bias)))
+        if self.accel_bias_m_s2 is not None:
+            object.__setattr__(self, 'accel_bias_m_s2', _accel_bias(self.accel_bias_m_s2))
 
     def as_dict(self) -> dict[str, Any]:
         """Return the variance model as stored in a model file."""
@@ -290,11 +294,7 @@ class FusionSettings:
         for name in ('bias_estimation', 'classical_tilt'):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f'{name} must be true or false, not {getattr(self, name)!r}')
-        bias = self.accel_bias_m_s2
-        if not (_triple(bias) and all(abs(b) <= MAX_ACCEL_BIAS_M_S2 for b in bias)):
-            raise ValueError(f'accel_bias_m_s2 must be three numbers within '
-                             f'±{MAX_ACCEL_BIAS_M_S2:g} m/s^2, not {bias!r}')
-        object.__setattr__(self, 'accel_bias_m_s2', tuple(float(b) for b in bias))
+        object.__setattr__(self, 'accel_bias_m_s2', _accel_bias(self.accel_bias_m_s2))
 
     def as_dict(self) -> dict[str, Any]:
         """Return the settings as stored in a model file."""

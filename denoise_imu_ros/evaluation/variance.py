@@ -46,7 +46,7 @@ from ..core.modelfile import sample_rate
 from ..core.records import Sequence
 from ..core.schema import SampleVariance
 from ..learn.checkpoint import load_model
-from ..pipeline.covariance import features
+from ..pipeline.covariance import features, from_features
 from ..runtime.settings import Settings
 
 __all__ = ['Fit', 'fit', 'fit_model', 'nees', 'Windows', 'WINDOWS_S']
@@ -165,7 +165,7 @@ def nees(spec: SampleVariance, windows: list[Windows], reference_var: float = 0.
     """
     per: dict[float, list[np.ndarray]] = {}
     for w in windows:
-        sums = np.r_[0.0, np.cumsum(np.exp(w.phi @ np.array(spec.theta)) * w.dt2)]
+        sums = np.r_[0.0, np.cumsum(from_features(w.phi, spec) * w.dt2)]  # as published
         for window_s, starts, length, err2 in w.found:
             per.setdefault(window_s, []).append(
                 err2 / (sums[starts + length] - sums[starts] + reference_var))

@@ -97,6 +97,9 @@ def test_an_accelerometer_variance_without_the_gyros_features_is_refused(gyro):
         parse_meta(entries, 'x')
     meta = parse_meta({'accel_variance': ACCEL.as_dict(), 'gyro_variance': SPEC.as_dict()}, 'x')
     assert meta.accel_variance == ACCEL and meta.gyro_variance == SPEC
+    with pytest.raises(ModelFileError, match='x: .*accel_bias_m_s2 must be three numbers'):
+        parse_meta({'gyro_variance': SPEC.as_dict(), 'accel_variance': dict(
+            ACCEL.as_dict(), accel_bias_m_s2=[5.0, 0.0, 0.0])}, 'x')  # not an IMU's bias
     with pytest.raises(ModelFileError, match='x: accel_variance needs its accel_bias_m_s2'):
         parse_meta({'accel_variance': SPEC.as_dict(), 'gyro_variance': SPEC.as_dict()}, 'x')
     with pytest.raises(ValueError, match="not on the gyro's features"):
