@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+import signal
+import threading
 import time
 from typing import Any, Iterator
 
@@ -115,6 +117,16 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,
         validate_topic_name(topic)
     except InvalidTopicNameException as err:
         raise DenoiseError(f'--topic {topic!r}: {" ".join(str(err).split()[:12])}') from err
+    # rclpy's own handler shuts rclpy down and then calls the one before it, this: Ctrl-C
+    # is known even where its KeyboardInterrupt is lost in a publish that the shutdown ended
+    interrupts: list[int] = []
+
+    def on_sigint(signum: int, _frame: object) -> None:
+        interrupts.append(signum)
+        raise KeyboardInterrupt
+
+    main_thread = threading.current_thread() is threading.main_thread()
+    before = signal.signal(signal.SIGINT, on_sigint) if main_thread else None
     rclpy.init()
     player, count, interrupted, where = None, 0, False, topic
     try:
@@ -135,7 +147,9 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,
         if player is not None:
             player.destroy_node()
         shutdown_rclpy()
-    if interrupted:
+        if main_thread:
+            signal.signal(signal.SIGINT, before)
+    if interrupted or interrupts:
         raise KeyboardInterrupt
     stopped = '' if count == len(messages) else f' (stopped: {count} of {len(messages)})'
     print(f'published {count} IMU messages from {bag} on {where}{stopped}')
