@@ -7,6 +7,7 @@ Imported by the test modules (never from one test module into another); torch an
 rclpy are imported only inside the helpers that need them.
 """
 
+import functools
 import math
 import os
 from pathlib import Path
@@ -248,3 +249,24 @@ def imu_msg(stamp_ns, gyro, accel, frame='imu4'):
      msg.linear_acceleration.z) = map(float, accel)
     msg.linear_acceleration_covariance[0] = 0.04
     return msg
+
+
+@functools.cache
+def _sample_cdr() -> tuple[bytes, ...]:
+    """Return the bundled sample bag's IMU messages as serialised, read once per process."""
+    from denoise_imu_ros.data.bags import IMU_TYPE, open_bag, pick_connections
+    with open_bag(SAMPLE) as reader:
+        conns = pick_connections(reader, None, (IMU_TYPE,), 'IMU', SAMPLE)
+        return tuple(bytes(raw) for _, _, raw in reader.messages(connections=conns))
+
+
+def sample_messages(n: int) -> list:
+    """
+    Return the sample bag's first n IMU messages as rclpy messages, new ones at every call.
+
+    Equal to ``read_imu_messages(SAMPLE)[:n]`` (test_player checks it), without
+    deserialising the whole bag for each test that plays its head.
+    """
+    from rclpy.serialization import deserialize_message
+    from sensor_msgs.msg import Imu
+    return [deserialize_message(raw, Imu) for raw in _sample_cdr()[:n]]

@@ -15,7 +15,13 @@ import warnings
 import numpy as np
 
 from ..core.errors import DatasetError
+from ..core.memo import files_key, Kept
 from ..core.records import check_recording, Recording
+
+# The CSVs of the last recordings read, by their files (core.memo): crossval, eval and the
+# trainings of one process read each recording several times, its text parse the costly part
+ROWS_KEPT = 4_000_000
+_READ: Kept[tuple[np.ndarray, np.ndarray]] = Kept(ROWS_KEPT, lambda read: len(read[0]))
 
 
 def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
@@ -24,10 +30,19 @@ def read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
 
     The stamps (~1.4e18 ns) do not survive a float64 parse: they are read as integers,
     by numpy's parser; a file it refuses is parsed again line by line, so that the error
-    names the file and the line.
+    names the file and the line. A file read before and unchanged since is not parsed
+    again; the arrays returned are the caller's own.
     """
     if not path.is_file():
         raise DatasetError(f'{path}: file not found')
+    files = files_key(path)
+    stamps, values = _READ.get(None if files is None else (files, ncols),
+                               lambda: _read_csv(path, ncols))
+    return stamps.copy(), values.copy()
+
+
+def _read_csv(path: Path, ncols: int) -> tuple[np.ndarray, np.ndarray]:
+    """Return :func:`read_csv`'s arrays, parsed."""
     with path.open(encoding='utf-8-sig', errors='strict') as f:  # a BOM is no data
         lines = text_lines(f, path)
     try:

@@ -30,6 +30,20 @@ def test_quaternions_are_read_as_wxyz_and_stored_xyzw(tmp_path):
     assert seq.stamp_ns[0] == T0  # nanoseconds survive parsing exactly
 
 
+def test_a_csv_read_again_is_parsed_once_and_written_anew_is_read_anew(tmp_path, monkeypatch):
+    from denoise_imu_ros.data import asl
+    root = write_asl(tmp_path / 's', n_imu=400)
+    first = asl.read_asl(root)
+    first.imu[:] = 0.0  # the caller's own arrays: what is kept stays as read
+    parsed = []
+    real = asl._read_csv
+    monkeypatch.setattr(asl, '_read_csv', lambda *args: parsed.append(args) or real(*args))
+    assert asl.read_asl(root).imu[0, 5] == 9.81 and parsed == []
+    csv = root / 'mav0' / 'imu0' / 'data.csv'
+    csv.write_text(csv.read_text().replace(',9.81\n', ',9.8\n'))  # same size or not: anew
+    assert asl.read_asl(root).imu[0, 5] == 9.8 and [a[0] for a in parsed] == [csv]
+
+
 def test_overlap_crop_and_interpolation_to_imu_stamps(tmp_path):
     seq = load_sequence(write_asl(tmp_path / 's', gt_rate=120.0, gt_offset_s=0.5))
     assert seq.stamp_ns[0] >= T0 + 500_000_000

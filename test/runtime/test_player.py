@@ -2,7 +2,7 @@
 # SPDX-License-Identifier: Apache-2.0
 """denoise-imu play: a bag's IMU published in real time."""
 
-from helpers import DOMAIN, SAMPLE
+from helpers import DOMAIN, SAMPLE, sample_messages
 import pytest
 
 
@@ -10,6 +10,7 @@ def test_player_publishes_a_bag_in_order_with_clock(harness):
     from denoise_imu_ros.runtime.player import Player, read_imu_messages
     from rosgraph_msgs.msg import Clock
     messages = read_imu_messages(SAMPLE)[:300]
+    assert messages == sample_messages(300)  # what the other tests play
     h = harness()
     clocks = []
     h.client.create_subscription(Clock, '/clock', clocks.append, 1000)

@@ -4,7 +4,7 @@
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import DatasetError
-from helpers import crop_bag, N, SAMPLE, write_ros1_bag
+from helpers import crop_bag, N, SAMPLE, sample_messages, write_ros1_bag
 import numpy as np
 import pytest
 
@@ -219,14 +219,13 @@ def test_receive_order_jitter_drops_nothing_and_qos_and_compression_are_kept(
     from denoise_imu_ros.cli import main as cli
     from denoise_imu_ros.core import msgs
     from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
-    from denoise_imu_ros.runtime.player import read_imu_messages
     from rosbags.highlevel import AnyReader
     from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness,
                                     QosReliability, QosTime)
     from rosbags.rosbag2 import Writer
     from helpers import crop_bag
     head = crop_bag(SAMPLE, tmp_path / 'head', 16.0)  # the sample's first 3000 and more
-    imu = read_imu_messages(head)[:3000]
+    imu = sample_messages(3000)
     rng = np.random.default_rng(0)
     latency = rng.uniform(1e6, 15e6, len(imu)).astype(np.int64)  # 1-15 ms of transport
     never = QosTime(sec=0, nsec=0)
@@ -344,9 +343,8 @@ def test_a_clock_set_back_mid_bag_is_two_sessions_not_one_interleaved(tmp_path, 
     from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
     from denoise_imu_ros.runtime.process_bag import process_bag, stamp_order
     from denoise_imu_ros.runtime.settings import Settings
-    from denoise_imu_ros.runtime.player import read_imu_messages
     from rosbags.rosbag2 import Writer
-    imu = read_imu_messages(SAMPLE)[:1200]
+    imu = sample_messages(1200)
     t0 = msgs.stamp_ns(imu[0].header)
     stamps = [t0 + 5_000_000 * k for k in range(600)]  # 3 s, then the clock goes back
     stamps += [t0 + 2_500_000 + 5_000_000 * k for k in range(600)]  # inside the first
@@ -376,13 +374,12 @@ def test_a_node_restarted_mid_bag_starts_afresh_as_process_bag_on_the_rest(
     from denoise_imu_ros.core.modelfile import add_metadata
     from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
     from denoise_imu_ros.pipeline.rest_bias import RestBiasSettings
-    from denoise_imu_ros.runtime.player import read_imu_messages
     from rosbags.highlevel import AnyReader
     from rosbags.rosbag2 import Writer
     add_metadata(model_file, rest_bias=RestBiasSettings(prior_rad_s=(0.01, -0.02, 0.03)).to_dict(),
                  bias_tracking={'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0})
     from helpers import imu_msg
-    imu = read_imu_messages(SAMPLE)[:1400]
+    imu = sample_messages(1400)
     t0 = msgs.stamp_ns(imu[0].header)
     still = [imu_msg(t0 - 5_000_000 * (400 - k), (0.02, -0.01, 0.04), (0.0, 0.0, 9.81))
              for k in range(400)]  # 2 s still at a bias other than the prior
@@ -424,11 +421,10 @@ def test_a_host_clock_stepped_back_is_read_as_the_node_received_it(harness, tmp_
     from denoise_imu_ros.data.bags import (BAG_TYPES, IMU_TYPE, messages_as_written,
                                            open_bag, TYPESTORE)
     from denoise_imu_ros.pipeline.online import OnlineDenoiser
-    from denoise_imu_ros.runtime.player import read_imu_messages
     from denoise_imu_ros.runtime.process_bag import process_bag
     from denoise_imu_ros.runtime.settings import Settings
     from rosbags.rosbag2 import StoragePlugin, Writer
-    imu = read_imu_messages(SAMPLE)[:1200]
+    imu = sample_messages(1200)
     t0 = msgs.stamp_ns(imu[0].header)
     stamps = [t0 + 5_000_000 * k for k in range(600)]  # 3 s, then the clock goes back 2 s
     stamps += [t0 + 1_000_000_000 + 5_000_000 * k for k in range(600)]
@@ -469,9 +465,8 @@ def test_imu_stamps_on_two_clocks_are_refused_in_one_line_and_nothing_is_written
     """Every 10th message 12 years later: not 800 one-sample recordings, exit 0."""
     from denoise_imu_ros.core import msgs
     from denoise_imu_ros.data.bags import BAG_TYPES, IMU_TYPE, TYPESTORE
-    from denoise_imu_ros.runtime.player import read_imu_messages
     from rosbags.rosbag2 import Writer
-    imu = read_imu_messages(SAMPLE)[:1000]
+    imu = sample_messages(1000)
     t0 = msgs.stamp_ns(imu[0].header)
     with Writer(tmp_path / 'in', version=9) as w:
         conn = w.add_connection('/imu0', IMU_TYPE, typestore=TYPESTORE)
@@ -531,7 +526,7 @@ def test_process_bag_with_the_nodes_params_file_writes_what_that_node_publishes(
                  input_envelope={'gyro_rad_s': 0.002, 'accel_offset_m_s2': 3.0},
                  blend={'weight': 0.5, 'tracking': {'sigma_motion_deg_s': 0.1,
                                                     'forgetting_s': 100.0}})
-    imu = read_imu_messages(SAMPLE)[:700]
+    imu = sample_messages(700)
     t0 = msgs.stamp_ns(imu[0].header)
     stamps = [t0 + 5_000_000 * (k if k < 300 else k + 3) for k in range(600)]
     stamps += [stamps[-1] - 800_000_000 + 5_000_000 * k for k in range(100)]
