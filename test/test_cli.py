@@ -3,6 +3,7 @@
 """denoise-imu correct / eval end to end, and one-line errors with exit code 1."""
 
 from pathlib import Path
+import re
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.data.load import load_imu
@@ -183,9 +184,8 @@ def test_garbage_inputs_and_bad_options_are_one_line_errors(model_file, tmp_path
 
 def test_no_command_writes_over_an_input_or_an_existing_output(model_file, tmp_path, capsys):
     """An existing bag output is refused, a second process-bag before any work."""
-    import shutil
-    bag = tmp_path / 'in'
-    shutil.copytree(SAMPLE, bag)
+    from helpers import crop_bag
+    bag = crop_bag(SAMPLE, tmp_path / 'in', 5.0)
     before = {p: p.read_bytes() for p in bag.rglob('*') if p.is_file()}
     inner = next(p for p in before if p.suffix == '.mcap')
     for out in (bag, inner):
@@ -240,18 +240,21 @@ def test_an_imu_mounted_unlike_the_models_is_said_in_one_line(tmp_path, capsys):
     import dataclasses
     from denoise_imu_ros.data.bags import write_bag
     from denoise_imu_ros.data.load import load_recording
+    from helpers import crop_bag
     from scipy.spatial.transform import Rotation
-    rec = load_recording(SAMPLE)
+    head = crop_bag(SAMPLE, tmp_path / 'head', 10.0)
+    rec = load_recording(head)
     # the same motion seen by an IMU turned 90 deg about y (EuRoC's x up, now z up)
     turn = Rotation.from_rotvec([0.0, 90.0, 0.0], degrees=True)
     imu = np.hstack([turn.apply(rec.imu[:, :3]), turn.apply(rec.imu[:, 3:])])
     write_bag(dataclasses.replace(rec, imu=imu), tmp_path / 'turned')
-    for source, said in ((SAMPLE, False), (tmp_path / 'turned', True)):
+    for source, said in ((head, False), (tmp_path / 'turned', True)):
         assert main(['correct', '--model', 'euroc', '--input', str(source), '--out',
                      str(tmp_path / 'out.csv'), '--overwrite']) == 0
         err = capsys.readouterr().err
-        assert (f"warning: {source}: gravity is 90 deg from where the model's training IMU "
-                'had it' in err) == said, err
+        turned = re.search(f"warning: {source}: gravity is (89|90|91) deg from where the "
+                           "model's training IMU had it", err)
+        assert bool(turned) == said, err
 
 
 def test_version_is_the_code_version_a_model_file_records(capsys):

@@ -112,11 +112,11 @@ def main(bag: str, imu_topic: str | None, topic: str, rate: float, clock: bool,
     import rclpy
     from rclpy.executors import ExternalShutdownException
     from .node import shutdown_rclpy
-    messages = read_imu_messages(bag, imu_topic)
     try:
         validate_topic_name(topic)
     except InvalidTopicNameException as err:
         raise DenoiseError(f'--topic {topic!r}: {" ".join(str(err).split()[:12])}') from err
+    messages = read_imu_messages(bag, imu_topic)
     # rclpy's own handler shuts rclpy down and then calls the one before it, this: Ctrl-C
     # is known even where its KeyboardInterrupt is lost in a publish that the shutdown ended
     interrupts: list[int] = []
