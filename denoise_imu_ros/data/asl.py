@@ -20,7 +20,7 @@ from ..core.records import check_recording, Recording
 
 # The CSVs of the last recordings read, by their files (core.memo): crossval, eval and the
 # trainings of one process read each recording several times, its text parse the costly part
-ROWS_KEPT = 4_000_000
+ROWS_KEPT = 2_000_000  # rows of up to 8 numbers: 128 MB at most; all of EuRoC is 0.5 M
 _READ: Kept[tuple[np.ndarray, np.ndarray]] = Kept(ROWS_KEPT, lambda read: len(read[0]))
 
 

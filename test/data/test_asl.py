@@ -40,7 +40,7 @@ def test_a_csv_read_again_is_parsed_once_and_written_anew_is_read_anew(tmp_path,
     monkeypatch.setattr(asl, '_read_csv', lambda *args: parsed.append(args) or real(*args))
     assert asl.read_asl(root).imu[0, 5] == 9.81 and parsed == []
     csv = root / 'mav0' / 'imu0' / 'data.csv'
-    csv.write_text(csv.read_text().replace(',9.81\n', ',9.8\n'))  # same size or not: anew
+    csv.write_text(csv.read_text().replace(',9.81\n', ',9.8\n'))  # written anew: read anew
     assert asl.read_asl(root).imu[0, 5] == 9.8 and [a[0] for a in parsed] == [csv]
 
 
