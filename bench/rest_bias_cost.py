@@ -7,7 +7,8 @@ Runs the same model over the same real samples through ``OnlineDenoiser.process`
 node's and process-bag's per-sample work, without ROS) with ``rest_bias`` off and on
 (the turn-on bias before the model, and its output's tracking where the file has one),
 alternating rounds so that a change in the machine's speed hits both alike, and each
-estimator alone (``RestBias.update``, ``BiasTracker.update``), and the input envelope's
+estimator alone (``RestBias.update``, ``BiasTracker.update``; the tracker with and without
+its hold through fast rotation, ``hold_above_deg_s``), and the input envelope's
 guard alone where the file has one (``Guard.check`` and ``Guard.apply``, which both
 settings run), and the vertical's projection alone (``Vertical.apply``, which both run for
 a model taught without its poses' heading). Where the file blends its output with the
@@ -16,7 +17,7 @@ classical pipeline's (its ``blend``), also rounds with ``rest_bias`` on and
 ``imu/data``'s filter (the file's settings), with and without the classical tilt (a
 second VQF on the raw IMU), their order swapped every round, and each filter alone
 (``GravityFilter.update``). Prints the median per-sample time of each, and the ratios
-on/off, blend/no blend and classical tilt/own tilt.
+on/off, blend/no blend, held/unheld tracker and classical tilt/own tilt.
 Run: .venv/bin/python bench/rest_bias_cost.py [--model broad_network]
      [--data ../shared/data/broad] [--recording 03_undisturbed_slow_rotation_C]
      [--samples 20000] [--rounds 5]
@@ -30,6 +31,7 @@ import time
 
 from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
 from denoise_imu_ros.data.load import load_imu
+from denoise_imu_ros.evaluation.crossval import HOLD_ABOVE_DEG_S
 from denoise_imu_ros.pipeline.blend import Blender
 from denoise_imu_ros.pipeline.envelope import Guard
 from denoise_imu_ros.pipeline.fusion import GravityFilter
@@ -70,7 +72,8 @@ def main() -> None:
     times = {'off': [], 'on': [], 'on, no blend': [], **{name: [] for name in filters},
              **{f'{name} filter alone': [] for name in filters},
              'estimator alone': [],
-             'tracker alone': [], 'envelope guard alone': [], 'blend alone': [],
+             'tracker alone': [], 'held tracker alone': [], 'envelope guard alone': [],
+             'blend alone': [],
              'vertical alone': []}
     for _ in range(args.rounds):
         for name, choice, mix in (('off', 'off', 'model'), ('on', 'on', 'model'),
@@ -89,9 +92,10 @@ def main() -> None:
         times['estimator alone'].append(
             per_sample_s(lambda t, g, a: rest.update(g, a), stamps, imu))
         if model.meta.bias_tracking is not None:
-            track = BiasTracker(model.meta.bias_tracking, sample_rate(model))
-            times['tracker alone'].append(
-                per_sample_s(lambda t, g, a: track.update(g, a), stamps, imu))
+            for name, bound in (('tracker alone', None), ('held tracker alone', HOLD_ABOVE_DEG_S)):
+                settings = dataclasses.replace(model.meta.bias_tracking, hold_above_deg_s=bound)
+                track = BiasTracker(settings, sample_rate(model))
+                times[name].append(per_sample_s(lambda t, g, a: track.update(g, a), stamps, imu))
         if model.meta.input_envelope is not None:
             guard = Guard(model.meta.input_envelope, model.config.receptive_field,
                           sample_rate(model))
@@ -123,6 +127,11 @@ def main() -> None:
               f'{value * 1e6:.1f} us' if name.endswith(' alone')
               else f'  rest_bias {name}: {value * 1e6:.1f} us')
     print(f'  on / off: {median["on"] / median["off"]:.3f}')
+    if 'tracker alone' in median:
+        print(f'  held / unheld tracker: '
+              f'{median["held tracker alone"] / median["tracker alone"]:.3f}, the difference '
+              f'{(median["held tracker alone"] - median["tracker alone"]) / median["on"]:.3f} '
+              'of rest_bias on')
     if blended:
         print(f'  blend / no blend (rest_bias on): {median["on"] / median["on, no blend"]:.3f}')
     print(f'  imu/data / none (rest_bias on): {median["on, imu/data"] / median["on"]:.3f}')

@@ -283,9 +283,7 @@ def _rest_model(args: argparse.Namespace) -> None:
     fusion = None if tracking is None or like.meta.crossval is None else fusion_metadata(
         like.meta.crossval.report, TRACKER_ONLY, like.meta)  # the classical row's, as chosen
     write_rest_only_model(like, args.out, tracking, fusion)
-    tracked = '' if tracking is None else (
-        f', its bias tracked (sigma {tracking.sigma_motion_deg_s:g} deg/s, forgetting '
-        f'{tracking.forgetting_s:g} s)')
+    tracked = '' if tracking is None else f', its bias tracked ({tracking.describe()})'
     print(f'wrote {args.out}: the gyro less its turn-on bias{tracked}, nothing learnt '
           f'({sample_rate(like):g} Hz, the estimator of {like.path.name})')
 

@@ -23,7 +23,7 @@ from .limits import MAX_RATE_HZ
 __all__ = ['ACCEL_CHOICES', 'AS_IT_CAME', 'BiasTracking', 'Blend', 'Fusion', 'FusionSettings',
            'InputEnvelope', 'JUDGED', 'judged_on', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'NO_MODEL',
            'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'SampleVariance', 'TRACKER_ONLY',
-           'Validation', 'VARIANCE_KEYS', 'Verdict']
+           'tracking_from_dict', 'Validation', 'VARIANCE_KEYS', 'Verdict']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
 # the ``kind`` of a model file that runs the classical pipeline, no model: the turn-on bias
@@ -148,17 +148,30 @@ class BiasTracking:
     # VQF's biasSigmaInit, its certainty of the 0 it starts from; a file without the key
     # runs with VQF's default, as its tracking was chosen
     sigma_init_deg_s: float = VQF_BIAS_SIGMA_INIT_DEG_S
+    # the estimate held where the gyro it tracks turns at least this fast (its mean norm
+    # over the last 0.1 s): there VQF's own attitude takes the gyro's scale error, which its
+    # motion estimate would read as a bias; None (a file without the key): never held
+    hold_above_deg_s: float | None = None
 
     def __post_init__(self) -> None:
         """Refuse settings VQF cannot run with (model files are user input)."""
-        for name in ('sigma_motion_deg_s', 'forgetting_s', 'sigma_init_deg_s'):
+        for name in ('sigma_motion_deg_s', 'forgetting_s', 'sigma_init_deg_s',
+                     'hold_above_deg_s'):
             value = getattr(self, name)
+            if name == 'hold_above_deg_s' and value is None:
+                continue
             if not (_number(value) and 0 < value < 1e6):
                 raise ValueError(f'{name} must be a positive number, not {value!r}')
 
-    def as_dict(self) -> dict[str, float]:
+    def as_dict(self) -> dict[str, float | None]:
         """Return the settings as stored in a model file."""
         return asdict(self)
+
+    def describe(self) -> str:
+        """Say the settings in words (reports, the node's log)."""
+        held = ('' if self.hold_above_deg_s is None
+                else f', held above {self.hold_above_deg_s:g} deg/s')
+        return f'sigma {self.sigma_motion_deg_s:g} deg/s, forgetting {self.forgetting_s:g} s{held}'
 
 
 @dataclass(frozen=True)
@@ -534,9 +547,11 @@ def _settings(raw: dict[str, Any], key: str, where: str,
         raise ModelFileError(f'{where}: inconsistent {key} ({err})') from err
 
 
-def _tracking(v: dict[str, Any]) -> BiasTracking:
+def tracking_from_dict(v: dict[str, Any]) -> BiasTracking:
+    """Return the tracking a model file stores (``as_dict``); ValueError where inconsistent."""
     return BiasTracking(v.get('sigma_motion_deg_s'), v.get('forgetting_s'),
-                        v.get('sigma_init_deg_s', VQF_BIAS_SIGMA_INIT_DEG_S))
+                        v.get('sigma_init_deg_s', VQF_BIAS_SIGMA_INIT_DEG_S),
+                        v.get('hold_above_deg_s'))
 
 
 TRACKING_KEYS = {f.name for f in fields(BiasTracking)} | {'label', 'chosen_on'}
@@ -548,7 +563,7 @@ def _blend(v: dict[str, Any]) -> Blend:
                                      and set(tracking) <= TRACKING_KEYS):
         raise ValueError(f'tracking must be a mapping of {", ".join(sorted(TRACKING_KEYS))} '
                          f'or null, not {tracking!r}')
-    return Blend(v.get('weight'), None if tracking is None else _tracking(tracking))
+    return Blend(v.get('weight'), None if tracking is None else tracking_from_dict(tracking))
 
 
 VARIANCE_KEYS = {'theta', 'mean_s', 'scales', 'accel_bias_m_s2', 'fitted_on',
@@ -605,7 +620,7 @@ def parse_meta(raw: dict[str, Any], where: str) -> ModelMeta:
         fusion=_fusion(raw, where),
         crossval=_verdict(raw, where),
         rest_bias=None if rest is None else RestBiasSettings.from_dict(rest, where),
-        bias_tracking=_settings(raw, 'bias_tracking', where, _tracking, TRACKING_KEYS),
+        bias_tracking=_settings(raw, 'bias_tracking', where, tracking_from_dict, TRACKING_KEYS),
         blend=_settings(raw, 'blend', where, _blend, {'weight', 'tracking', 'label',
                                                       'chosen_on'}),
         input_envelope=_settings(raw, 'input_envelope', where, lambda v: InputEnvelope(

@@ -78,12 +78,16 @@ UNBLENDED = 'network unblended'  # the network row before the blend, reported be
 ACCEL_WINDOW_S = 1.0  # the velocity increments the accelerometer is judged on (keyframes')
 BIAS_REMOVED = ACCEL_CHOICES[0]
 # the candidates: VQF's biasSigmaMotion (its default 0.1 deg/s) and biasForgettingTime
-# (its default 100 s), beside none; each starts as certain of its 0 as its motion updates
-# ever make it, not at VQF's 0.5 deg/s for a raw gyro: what is left after the model is
-# small, and from 0.5 deg/s a start whose accelerations are not gravity (a drone carried)
-# teaches it a bias an open-loop attitude never forgets (docs/method.md)
-TRACKING_GRID = tuple(BiasTracking(sigma, forget, sigma)
-                      for sigma in (0.03, 0.05, 0.07, 0.1, 0.2) for forget in (30.0, 100.0, 300.0))
+# (its default 100 s), each held through rotation faster than HOLD_ABOVE_DEG_S or never,
+# beside none; each starts as certain of its 0 as its motion updates ever make it, not at
+# VQF's 0.5 deg/s for a raw gyro: what is left after the model is small, and from 0.5 deg/s
+# a start whose accelerations are not gravity (a drone carried) teaches it a bias an
+# open-loop attitude never forgets (docs/method.md). The held one comes first: where the
+# motion never turns that fast the two are the same, and a tie goes to it
+HOLD_ABOVE_DEG_S = 400.0  # BROAD's fast trials (docs/experiments.md, run 45)
+TRACKING_GRID = tuple(BiasTracking(sigma, forget, sigma, hold)
+                      for sigma in (0.03, 0.05, 0.07, 0.1, 0.2) for forget in (30.0, 100.0, 300.0)
+                      for hold in (HOLD_ABOVE_DEG_S, None))
 
 
 # imu/data's filter, chosen as the tracking is: VQF's accelerometer time constant and its own
@@ -102,9 +106,7 @@ def fusion_label(flt: Filter, removed: bool) -> str:
 
 def tracking_label(settings: BiasTracking | None) -> str:
     """Name a tracking candidate in reports."""
-    if settings is None:
-        return 'none'
-    return f'sigma {settings.sigma_motion_deg_s:g} deg/s, forgetting {settings.forgetting_s:g} s'
+    return 'none' if settings is None else settings.describe()
 
 
 # each recipe key's default: what a model file written before the key existed was made with

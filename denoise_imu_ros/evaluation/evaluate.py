@@ -30,7 +30,7 @@ from ..core.metrics import (align_yaw, error_components, sequence_errors,
                             tilt_growth_deg_min)
 from ..core.modelfile import sample_rate, shipped_models
 from ..core.records import Sequence
-from ..core.schema import ModelMeta, REST_ONLY
+from ..core.schema import ModelMeta, REST_ONLY, tracking_from_dict
 from ..data.check import label_noise
 from ..data.load import load_sequence
 from ..data.pose_alignment import offset_text
@@ -287,9 +287,9 @@ def _write(out_dir: Path, report: dict[str, Any], rest_only: bool) -> None:
              + fused_table(fused, report['fused_average']) + growth_table(results, fused))
     table += rest_note(report['rest_bias_input'], rest_only)
     for m, t in report['bias_tracking'].items():
-        table += (f"The {m} row tracks its output's bias at rest and in motion (VQF, sigma "
-                  f'{t["sigma_motion_deg_s"]:g} deg/s, forgetting {t["forgetting_s"]:g} s, '
-                  f'started at {t["sigma_init_deg_s"]:g} deg/s, '
+        tracking = tracking_from_dict(t)
+        table += (f"The {m} row tracks its output's bias at rest and in motion (VQF, "
+                  f'{tracking.describe()}, started at {tracking.sigma_init_deg_s:g} deg/s, '
                   'chosen by crossval on recordings its folds never trained on) and removes '
                   'it, as online.\n')
     if report['start_sample']:

@@ -28,12 +28,15 @@ is tracked after the model where its file says so (``bias_tracking``,
 bias estimators on, fed the model's output from a bias of 0; its estimate is removed
 from the output (:func:`track_bias` over arrays, :class:`BiasTracker` per sample; its
 estimate restored after motion faster than the model was trained on: the stage table,
-:mod:`denoise_imu_ros.pipeline.stages`).
+:mod:`denoise_imu_ros.pipeline.stages`), and after rotation faster than its settings'
+``hold_above_deg_s`` (:class:`FastRotation`): there VQF's own attitude takes the gyro's
+scale error, which its motion estimate reads as a bias.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+import math
 from pathlib import Path
 from typing import Any, Iterable, NamedTuple
 
@@ -43,13 +46,14 @@ from vqf import VQF
 from ..core.architecture import ModelConfig
 from ..core.errors import ModelFileError
 from ..core.modelfile import code_version, Described, ModelFile, sample_rate, write_model_file
-from ..core.schema import BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings, TRACKER_ONLY
+from ..core.schema import (BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings, TRACKER_ONLY,
+                           tracking_from_dict)
 
 __all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES',
-           'classical_tracking', 'estimator', 'Nominal', 'nominal_bias',
-           'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch', 'RestBiasSettings',
-           'track_bias', 'tracked_bias', 'tracker', 'tracker_only_gyro', 'tracking',
-           'write_rest_only_model']
+           'classical_tracking', 'estimator', 'fast_rotation', 'FastRotation', 'Nominal',
+           'nominal_bias', 'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch',
+           'RestBiasSettings', 'track_bias', 'tracked_bias', 'tracker', 'tracker_only_gyro',
+           'tracking', 'write_rest_only_model']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
@@ -57,6 +61,7 @@ AMBIGUOUS_CLIP_FRACTION = 0.5  # a rest bias this far out in its clip may be a s
 # the tracker-only row's settings where neither crossval nor the model chose any: what
 # crossval chose for BROAD's sessions (docs/results.md), started as sure of its 0 as that
 CLASSICAL_TRACKING = BiasTracking(0.05, 30.0, 0.05)
+FAST_WINDOW_S = 0.1  # the gyro's mean norm over this is compared with a hold bound
 
 
 def estimator(settings: RestBiasSettings, rate_hz: float) -> VQF:
@@ -103,6 +108,45 @@ def tracking(meta: ModelMeta, choice: str) -> BiasTracking | None:
     return None if _checked(choice) == 'off' else meta.bias_tracking
 
 
+class FastRotation:
+    """
+    Whether a gyro's mean norm over the last FAST_WINDOW_S reaches a bound, sample by sample.
+
+    The running sum takes each new norm less the one leaving the window, in the order
+    :func:`fast_rotation` sums them over arrays, so that the two agree bit for bit.
+    """
+
+    def __init__(self, bound_deg_s: float, rate_hz: float) -> None:
+        self._n = max(1, round(FAST_WINDOW_S * rate_hz))
+        self._bound = math.radians(bound_deg_s)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the rates seen (a new run)."""
+        self._norms = [0.0] * self._n  # a list: its floats cost less per sample than numpy's
+        self._seen = 0
+        self._sum = 0.0
+
+    def update(self, gyro: np.ndarray) -> bool:
+        """Take one sample (rad/s); return whether the window up to it turns that fast."""
+        x, y, z = float(gyro[0]), float(gyro[1]), float(gyro[2])
+        norm = math.sqrt(x * x + y * y + z * z)
+        i = self._seen % self._n
+        self._sum += norm - self._norms[i]
+        self._norms[i] = norm
+        self._seen += 1
+        return bool(self._sum >= self._bound * min(self._seen, self._n))
+
+
+def fast_rotation(gyro: np.ndarray, rate_hz: float, bound_deg_s: float) -> np.ndarray:
+    """Return :class:`FastRotation` (N,) of a gyro (N, 3) rad/s over a whole run."""
+    n = max(1, round(FAST_WINDOW_S * rate_hz))
+    norm = np.sqrt(gyro[:, 0] * gyro[:, 0] + gyro[:, 1] * gyro[:, 1] + gyro[:, 2] * gyro[:, 2])
+    leaving = np.concatenate([np.zeros(min(n, len(norm))), norm[:len(norm) - n]])
+    count = np.minimum(np.arange(1, len(norm) + 1), n)
+    return np.cumsum(norm - leaving) >= math.radians(bound_deg_s) * count
+
+
 class BiasTracker:
     """The tracked bias of a model's output (fed that output), one sample at a time."""
 
@@ -113,24 +157,31 @@ class BiasTracker:
         self._rate_hz = rate_hz
         self._gyro = np.zeros(3)
         self._accel = np.zeros(3)
+        bound = settings.hold_above_deg_s if isinstance(settings, BiasTracking) else None
+        self._fast = None if bound is None else FastRotation(bound, rate_hz)
         self.reset()
 
     def reset(self) -> None:
         """Start again (a new run: another power-on, a bag loop)."""
         self._vqf = self._start(self.settings, self._rate_hz)
         self._held: tuple[np.ndarray, np.ndarray] | None = None
+        if self._fast is not None:
+            self._fast.reset()
 
     def update(self, gyro: np.ndarray, accel: np.ndarray, hold: bool = False) -> np.ndarray:
         """
         Take one sample (rad/s, m/s^2); return the bias to remove at it (3,).
 
         That is the estimate after it, or, with ``hold`` (this sample is within a held
-        stretch), the estimate from before the stretch, to which the estimate and its
-        covariance are restored at the first sample after it (:func:`tracked_bias`).
+        stretch) or where it turns faster than the settings' hold bound, the estimate
+        from before the stretch, to which the estimate and its covariance are restored at
+        the first sample after it (:func:`tracked_bias`).
         """
+        self._gyro[:] = gyro
+        if self._fast is not None:
+            hold = self._fast.update(self._gyro) or hold
         if hold != (self._held is not None):
             self._held = _hold(self._vqf, self._held)
-        self._gyro[:] = gyro
         self._accel[:] = accel
         self._vqf.update(self._gyro, self._accel)
         return self._vqf.getBiasEstimate()[0] if self._held is None else self._held[0]
@@ -139,6 +190,11 @@ class BiasTracker:
         """Return the current bias (3,) and its standard deviation, both rad/s."""
         bias, sigma = self._vqf.getBiasEstimate()
         return bias, float(sigma)
+
+    @property
+    def held(self) -> bool:
+        """Whether the last sample was within a held stretch (its estimate from before)."""
+        return self._held is not None
 
 
 class RestBias(BiasTracker):
@@ -219,15 +275,18 @@ def tracked_bias(gyro: np.ndarray, accel: np.ndarray, rate_hz: float,
     """
     Return the tracked bias (N, 3) to remove from a model's output (N, 3) at each sample.
 
-    ``hold`` (N,): held stretches. The tracker runs through them (its orientation goes
-    on), and at the first sample after each its bias estimate and covariance are restored
-    to those from before it: what it learnt there is forgotten (not what it learns after,
-    from an orientation the stretch may have moved); through a stretch the bias removed
-    is the one from before it.
+    ``hold`` (N,): held stretches, and where the gyro turns faster than the settings'
+    hold bound (:func:`fast_rotation`). The tracker runs through them (its orientation
+    goes on), and at the first sample after each its bias estimate and covariance are
+    restored to those from before it: what it learnt there is forgotten (not what it
+    learns after, from an orientation the stretch may have moved); through a stretch the
+    bias removed is the one from before it.
     """
     vqf = tracker(settings, rate_hz)
     gyro, accel = (np.ascontiguousarray(a, dtype=float) for a in (gyro, accel))
     hold = np.zeros(len(gyro), bool) if hold is None else hold
+    if settings.hold_above_deg_s is not None:
+        hold = hold | fast_rotation(gyro, rate_hz, settings.hold_above_deg_s)
     ends = np.append(np.flatnonzero(np.diff(hold)) + 1, len(gyro)) if len(gyro) else []
     bias, held, start = np.empty_like(gyro), None, 0
     for end in ends:
@@ -302,9 +361,7 @@ def classical_tracking(meta: ModelMeta) -> BiasTracking | None:
     if TRACKER_ONLY in chosen:
         stored = chosen[TRACKER_ONLY]
         try:
-            return None if stored is None else BiasTracking(
-                stored.get('sigma_motion_deg_s'), stored.get('forgetting_s'),
-                stored.get('sigma_init_deg_s'))
+            return None if stored is None else tracking_from_dict(stored)
         except (AttributeError, ValueError) as err:
             raise ModelFileError(f'inconsistent crossval.tracking.chosen.{TRACKER_ONLY} '
                                  f'({err})') from err

@@ -223,7 +223,7 @@ class BiasTrackingStage(Stage):
         self.tracker.reset()
 
     def step(self, flow: Flow) -> None:
-        """Remove the bias tracked up to this sample (held while the envelope says)."""
+        """Remove the bias tracked up to this sample (held as the envelope or its bound says)."""
         flow.bias = self.tracker.update(flow.out, flow.fed[3:], flow.hold)
         flow.out = flow.out - flow.bias
 

@@ -113,8 +113,8 @@ def _bias_values(den: OnlineDenoiser) -> dict[str, str]:
                        'rest_bias_sigma_rad_s': f'{sigma:.6f}'})
     if track is not None:
         bias, sigma = track.estimate()
-        guard = den.guard  # held through motion faster or longer than trained on
+        # held through motion faster or longer than trained on, or faster than its bound
         values.update({'tracked_bias_rad_s': ' '.join(f'{v:.6f}' for v in bias),
                        'tracked_bias_sigma_rad_s': f'{sigma:.6f}',
-                       'tracked_bias_held': str(guard is not None and guard.hold)})
+                       'tracked_bias_held': str(track.held)})
     return values

@@ -136,9 +136,7 @@ class GyroDenoiser(Node):
                'bias removed: estimated from stillness, until then '
                f'{[round(b, 5) for b in rest.settings.prior_rad_s]} rad/s')
             + ('' if self._denoiser.track is None else
-               '; output bias tracked (VQF: sigma in motion '
-               f'{self._denoiser.track.settings.sigma_motion_deg_s:g} deg/s, forgetting '
-               f'{self._denoiser.track.settings.forgetting_s:g} s)')
+               f'; output bias tracked (VQF: {self._denoiser.track.settings.describe()})')
             + ('' if self._denoiser.guard is None else
                '; no correction beyond the motion trained on (gyro '
                f'{self._denoiser.guard.envelope.gyro_rad_s:.2f} rad/s, accelerometer '

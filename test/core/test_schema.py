@@ -40,6 +40,16 @@ def test_typed_entries_and_what_this_version_does_not_know_survive_a_copy():
     assert meta.crossval.accel_deploy is None  # a report from before the accelerometer's
 
 
+def test_a_tracking_held_above_a_rate_is_stored_and_read_back_and_older_files_never_hold():
+    from denoise_imu_ros.core.schema import BiasTracking
+    held = BiasTracking(0.05, 30.0, 0.05, 400.0)
+    assert parse_meta({'bias_tracking': held.as_dict()}, 'm').bias_tracking == held
+    older = {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0, 'sigma_init_deg_s': 0.05}
+    assert parse_meta({'bias_tracking': older}, 'm').bias_tracking.hold_above_deg_s is None
+    assert held.describe() == 'sigma 0.05 deg/s, forgetting 30 s, held above 400 deg/s'
+    assert BiasTracking(0.05, 30.0).describe() == 'sigma 0.05 deg/s, forgetting 30 s'
+
+
 @pytest.mark.parametrize('raw, message', [
     ({'rest_bias': [1, 2]}, 'rest_bias'), ({'rest_bias': {'rest_min_s': 'long'}}, 'rest_bias'),
     ({'rest_bias': {'prior_rad_s': [0.0, 0.0]}}, 'rest_bias'),
@@ -54,6 +64,10 @@ def test_typed_entries_and_what_this_version_does_not_know_survive_a_copy():
     ({'rest_bias': {'bias_clip_deg_s': 500.0}}, 'beyond any MEMS gyro turn-on bias'),
     ({'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0, 'forget': 9.0}},
      r"bias_tracking has unknown entries \['forget'\]"),
+    ({'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0,
+                        'hold_above_deg_s': -400.0}}, 'hold_above_deg_s must be a positive'),
+    ({'bias_tracking': {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0,
+                        'hold_above_deg_s': '400'}}, 'hold_above_deg_s must be a positive'),
     ({'input_envelope': {'gyro_rad_s': 5.0, 'accel_offset_m_s2': 9.0, 'gyro': 1.0}},
      r"input_envelope has unknown entries \['gyro'\]"),
     ({'input_envelope': {'gyro_rad_s': 5.0, 'accel_offset_m_s2': 9.0,

@@ -255,7 +255,7 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     assert (stored is None) == (chosen is None)
     if chosen is not None:
         assert stored.as_dict() == {k: chosen[k] for k in (
-            'sigma_motion_deg_s', 'forgetting_s', 'sigma_init_deg_s')}
+            'sigma_motion_deg_s', 'forgetting_s', 'sigma_init_deg_s', 'hold_above_deg_s')}
         assert stored.sigma_init_deg_s == stored.sigma_motion_deg_s  # started at its sigma
     assert set(report['tracking']['per_fold']) == {'0', '1', '2'}
     # and its blend with the classical pipeline, which the model file's pipeline then runs

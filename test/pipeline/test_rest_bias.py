@@ -286,6 +286,34 @@ def test_a_held_stretch_leaves_the_estimate_where_it_was_online_as_in_batch():
     assert np.array_equal(held[:2000], learnt[:2000])
 
 
+def test_a_tracker_held_above_a_rate_forgets_what_fast_rotation_taught_it_online_as_in_batch():
+    from denoise_imu_ros.core.schema import BiasTracking
+    held_settings, settings = BiasTracking(0.05, 30.0, 0.05, 400.0), BiasTracking(0.05, 30.0, 0.05)
+    imu = _tilted_turns(60.0, np.array([0.004, -0.003, 0.002]), seed=2)
+    # a spin the accelerometer does not see: the tracker would take it for a bias
+    imu[2000:5000, 2] += math.radians(600.0)
+    fast = rest_bias.fast_rotation(imu[:, :3], RATE, 400.0)
+    assert fast[2020:5000].all() and not fast[:2000].any() and not fast[5020:].any()
+    online_fast = rest_bias.FastRotation(400.0, RATE)
+    assert np.array_equal([online_fast.update(g) for g in imu[:, :3]], fast)
+    batch = rest_bias.track_bias(imu[:, :3], imu[:, 3:], RATE, held_settings)
+    assert np.array_equal(batch, rest_bias.track_bias(imu[:, :3], imu[:, 3:], RATE, settings,
+                                                      fast))
+    online = rest_bias.BiasTracker(held_settings, RATE)
+    step = np.array([s[:3] - online.update(s[:3], s[3:]) for s in imu])
+    assert np.array_equal(step, batch)
+    assert not online.held
+    online.reset()  # a new run: the rates seen before are forgotten too
+    assert np.array_equal(imu[:1, :3] - online.update(imu[0, :3], imu[0, 3:]), batch[:1])
+    for sample in imu[1:3000]:
+        online.update(sample[:3], sample[3:])
+    assert online.held  # within the spin: /diagnostics' tracked_bias_held
+    free = rest_bias.track_bias(imu[:, :3], imu[:, 3:], RATE, settings)
+    held, learnt = imu[:, :3] - batch, imu[:, :3] - free
+    assert np.abs(held[5020] - held[2019]).max() < 2e-4
+    assert np.abs(learnt[5020] - learnt[2019]).max() > 2e-3
+
+
 def test_tracking_runs_where_the_model_file_says_unless_switched_off():
     from denoise_imu_ros.core.errors import ModelFileError
     from denoise_imu_ros.core.schema import BiasTracking
