@@ -419,11 +419,25 @@ def _candidates(seq: Any, gyros: dict[str, np.ndarray], rate_hz: float, fed: np.
     Each gyro (over the recording's whole stream, as ``fed``) tracked and guarded by its
     row's input envelope, and its correction about the vertical dropped where the recipe's
     is (``drop``; the tracker only corrects nothing to drop), as every path ends it
-    (:func:`~denoise_imu_ros.pipeline.stages.finish`).
+    (:func:`~denoise_imu_ros.pipeline.stages.finish`). A candidate held above a rate the
+    gyro never reaches runs as its unheld twin: its figures are that one's, not run again.
     """
-    return {label: {m: score(seq, seq.on_poses(stages.finish(
-        g, fed, rate_hz, t, bounds[m], fields[m], drop and m != TRACKER_ONLY)))
-        for m, g in gyros.items()} for label, t in CANDIDATES.items()}
+    figures: dict[str, dict[str, dict[str, float]]] = {label: {} for label in CANDIDATES}
+    for m, g in gyros.items():
+        reached: dict[float, bool] = {}  # hold bound -> whether this gyro turns that fast
+        runs: dict[BiasTracking | None, dict[str, float]] = {}  # tracking as run -> figures
+        for label, t in CANDIDATES.items():
+            bound = None if t is None else t.hold_above_deg_s
+            if bound is not None:
+                if bound not in reached:
+                    reached[bound] = bool(rest_bias.fast_rotation(g, rate_hz, bound).any())
+                if not reached[bound]:
+                    t = dataclasses.replace(t, hold_above_deg_s=None)
+            if t not in runs:
+                runs[t] = score(seq, seq.on_poses(stages.finish(
+                    g, fed, rate_hz, t, bounds[m], fields[m], drop and m != TRACKER_ONLY)))
+            figures[label][m] = dict(runs[t])
+    return figures
 
 
 def _choose(tracked: dict[str, Any], names: list[str], key: str,

@@ -554,3 +554,33 @@ def test_the_accelerometer_bias_is_removed_only_where_it_carries_to_unseen_recor
     rows['rec0'] = accel_rows(seqs[0], seqs[0].imu[:, :3], None)
     assert list(rows['rec0']) == ['as it came']
     assert accel_verdict(rows)['deploy'] == 'as it came'
+
+
+def test_a_held_candidate_the_gyro_never_reaches_scores_as_its_unheld_twin_not_run_again(
+        tmp_path, monkeypatch):
+    import dataclasses
+    import math
+    from denoise_imu_ros.evaluation import crossval as module
+    from denoise_imu_ros.pipeline import stages
+    from helpers import write_asl
+    seq = load_sequence(write_asl(tmp_path / 'rec', n_imu=2000, yaw_rate=0.5, gyro_bias=0.01))
+    slow = seq.stream[:, :3].copy()
+    fast = slow + [math.radians(module.HOLD_ABOVE_DEG_S + 50.0), 0.0, 0.0]  # gravity disagrees
+    rows = {'tracker only': slow, 'network': fast}
+    none = {m: None for m in rows}
+    runs = []
+    finish = stages.finish
+    monkeypatch.setattr(stages, 'finish', lambda *a: runs.append(a[3]) or finish(*a))
+    got = module._candidates(seq, rows, seq.rate_hz, seq.stream, none, dict.fromkeys(rows, 1),
+                             False)
+    held = [label for label, t in module.CANDIDATES.items() if t and t.hold_above_deg_s]
+    for label in held:
+        twin = module.tracking_label(dataclasses.replace(module.CANDIDATES[label],
+                                                         hold_above_deg_s=None))
+        assert got[label]['tracker only'] == got[twin]['tracker only']  # never that fast
+        assert got[label]['network'] != got[twin]['network']  # held through the spin
+        t = module.CANDIDATES[label]
+        assert got[label]['network'] == module.score(seq, seq.on_poses(finish(
+            fast, seq.stream, seq.rate_hz, t, None, 1, False)))
+    # the slow gyro ran each tracking once, the fast one every candidate
+    assert len(runs) == (len(module.CANDIDATES) - len(held)) + len(module.CANDIDATES)
