@@ -31,12 +31,11 @@ import time
 
 from denoise_imu_ros.core.modelfile import read_model_file, sample_rate
 from denoise_imu_ros.data.load import load_imu
-from denoise_imu_ros.evaluation.crossval import HOLD_ABOVE_DEG_S
 from denoise_imu_ros.pipeline.blend import Blender
 from denoise_imu_ros.pipeline.envelope import Guard
 from denoise_imu_ros.pipeline.fusion import GravityFilter
 from denoise_imu_ros.pipeline.online import OnlineDenoiser
-from denoise_imu_ros.pipeline.rest_bias import BiasTracker, resolve, RestBias
+from denoise_imu_ros.pipeline.rest_bias import BiasTracker, HOLD_ABOVE_DEG_S, resolve, RestBias
 from denoise_imu_ros.pipeline.vertical import Vertical
 import numpy as np
 

@@ -139,8 +139,9 @@ class BiasTracking:
     What a turn-on bias removed at the start does not catch (a session's bias in motion
     off its bias at rest, a network's constant error on an unseen recording) VQF
     estimates from the accelerometer's tilt corrections while moving and from the gyro
-    while still; ``crossval`` chooses its two settings, or none, on recordings its folds
-    never trained on, each started at its ``sigma_motion_deg_s``.
+    while still; ``crossval`` chooses its settings (VQF's two, and whether to hold through
+    fast rotation), or none, on recordings its folds never trained on, each started at its
+    ``sigma_motion_deg_s``.
     """
 
     sigma_motion_deg_s: float  # VQF's biasSigmaMotion: smaller trusts motion updates more
@@ -163,9 +164,12 @@ class BiasTracking:
             if not (_number(value) and 0 < value < 1e6):
                 raise ValueError(f'{name} must be a positive number, not {value!r}')
 
-    def as_dict(self) -> dict[str, float | None]:
-        """Return the settings as stored in a model file."""
-        return asdict(self)
+    def as_dict(self) -> dict[str, float]:
+        """Return the settings as stored in a model file (never held: no key, as before it)."""
+        stored = asdict(self)
+        if self.hold_above_deg_s is None:
+            del stored['hold_above_deg_s']
+        return stored
 
     def describe(self) -> str:
         """Say the settings in words (reports, the node's log)."""

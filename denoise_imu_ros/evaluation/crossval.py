@@ -84,10 +84,9 @@ BIAS_REMOVED = ACCEL_CHOICES[0]
 # a start whose accelerations are not gravity (a drone carried) teaches it a bias an
 # open-loop attitude never forgets (docs/method.md). The held one comes first: where the
 # motion never turns that fast the two are the same, and a tie goes to it
-HOLD_ABOVE_DEG_S = 400.0  # BROAD's fast trials (docs/experiments.md, run 45)
 TRACKING_GRID = tuple(BiasTracking(sigma, forget, sigma, hold)
                       for sigma in (0.03, 0.05, 0.07, 0.1, 0.2) for forget in (30.0, 100.0, 300.0)
-                      for hold in (HOLD_ABOVE_DEG_S, None))
+                      for hold in (rest_bias.HOLD_ABOVE_DEG_S, None))
 
 
 # imu/data's filter, chosen as the tracking is: VQF's accelerometer time constant and its own

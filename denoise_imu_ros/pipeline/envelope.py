@@ -34,8 +34,9 @@ Every path uses it identically (:func:`too_fast`, :func:`beyond` and :func:`guar
 over arrays for ``eval``, ``correct`` and ``crossval``; :class:`Guard` per sample for the
 node and ``process-bag``; equal bit for bit), in the order of
 :data:`~denoise_imu_ros.pipeline.stages.STAGES`. The node's ``envelope_guard``
-parameter (``correct``'s and ``process-bag``'s option) turns it off, and the hold with
-it: the model's output everywhere, tracked throughout (:func:`resolve`).
+parameter (``correct``'s and ``process-bag``'s option) turns it off, and the envelope's
+hold with it: the model's output everywhere, tracked throughout but where it turns faster
+than the tracking's own ``hold_above_deg_s`` (:func:`resolve`).
 """
 
 from __future__ import annotations

@@ -50,7 +50,8 @@ from ..core.schema import (BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings,
                            tracking_from_dict)
 
 __all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES',
-           'classical_tracking', 'estimator', 'fast_rotation', 'FastRotation', 'Nominal',
+           'classical_tracking', 'estimator', 'fast_rotation', 'FastRotation',
+           'HOLD_ABOVE_DEG_S', 'Nominal',
            'nominal_bias', 'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch',
            'RestBiasSettings', 'track_bias', 'tracked_bias', 'tracker', 'tracker_only_gyro',
            'tracking', 'write_rest_only_model']
@@ -62,6 +63,9 @@ AMBIGUOUS_CLIP_FRACTION = 0.5  # a rest bias this far out in its clip may be a s
 # crossval chose for BROAD's sessions (docs/results.md), started as sure of its 0 as that
 CLASSICAL_TRACKING = BiasTracking(0.05, 30.0, 0.05)
 FAST_WINDOW_S = 0.1  # the gyro's mean norm over this is compared with a hold bound
+# the bound crossval offers each tracking candidate (found on BROAD's fast trials, run 45
+# of docs/experiments.md: beyond it VQF's own attitude takes the gyro's scale error)
+HOLD_ABOVE_DEG_S = 400.0
 
 
 def estimator(settings: RestBiasSettings, rate_hz: float) -> VQF:
@@ -142,7 +146,7 @@ def fast_rotation(gyro: np.ndarray, rate_hz: float, bound_deg_s: float) -> np.nd
     """Return :class:`FastRotation` (N,) of a gyro (N, 3) rad/s over a whole run."""
     n = max(1, round(FAST_WINDOW_S * rate_hz))
     norm = np.sqrt(gyro[:, 0] * gyro[:, 0] + gyro[:, 1] * gyro[:, 1] + gyro[:, 2] * gyro[:, 2])
-    leaving = np.concatenate([np.zeros(min(n, len(norm))), norm[:len(norm) - n]])
+    leaving = np.concatenate([np.zeros(min(n, len(norm))), norm[:max(len(norm) - n, 0)]])
     count = np.minimum(np.arange(1, len(norm) + 1), n)
     return np.cumsum(norm - leaving) >= math.radians(bound_deg_s) * count
 

@@ -46,6 +46,7 @@ def test_a_tracking_held_above_a_rate_is_stored_and_read_back_and_older_files_ne
     assert parse_meta({'bias_tracking': held.as_dict()}, 'm').bias_tracking == held
     older = {'sigma_motion_deg_s': 0.05, 'forgetting_s': 30.0, 'sigma_init_deg_s': 0.05}
     assert parse_meta({'bias_tracking': older}, 'm').bias_tracking.hold_above_deg_s is None
+    assert BiasTracking(0.05, 30.0, 0.05).as_dict() == older  # what an older reader knows
     assert held.describe() == 'sigma 0.05 deg/s, forgetting 30 s, held above 400 deg/s'
     assert BiasTracking(0.05, 30.0).describe() == 'sigma 0.05 deg/s, forgetting 30 s'
 

@@ -6,7 +6,7 @@ import json
 
 from denoise_imu_ros.cli import main
 from denoise_imu_ros.core.errors import TrainingError
-from denoise_imu_ros.core.schema import judged_on, parse_meta
+from denoise_imu_ros.core.schema import judged_on, parse_meta, tracking_from_dict
 from denoise_imu_ros.data.load import load_sequence
 from denoise_imu_ros.evaluation.crossval import (attach_mismatches, BLEND_WEIGHTS, crossval, folds,
                                                  summarize)
@@ -254,8 +254,7 @@ def test_crossval_command_trains_folds_scores_and_stores_the_report(
     stored = load_model(model_file).meta.bias_tracking
     assert (stored is None) == (chosen is None)
     if chosen is not None:
-        assert stored.as_dict() == {k: chosen[k] for k in (
-            'sigma_motion_deg_s', 'forgetting_s', 'sigma_init_deg_s', 'hold_above_deg_s')}
+        assert stored == tracking_from_dict(chosen)
         assert stored.sigma_init_deg_s == stored.sigma_motion_deg_s  # started at its sigma
     assert set(report['tracking']['per_fold']) == {'0', '1', '2'}
     # and its blend with the classical pipeline, which the model file's pipeline then runs
@@ -561,13 +560,13 @@ def test_a_held_candidate_the_gyro_never_reaches_scores_as_its_unheld_twin_not_r
     import dataclasses
     import math
     from denoise_imu_ros.evaluation import crossval as module
-    from denoise_imu_ros.pipeline import stages
+    from denoise_imu_ros.pipeline import rest_bias, stages
     from helpers import write_asl
     seq = load_sequence(write_asl(tmp_path / 'rec', n_imu=2000, yaw_rate=0.5, gyro_bias=0.01))
     slow = seq.stream[:, :3].copy()
-    fast = slow + [math.radians(module.HOLD_ABOVE_DEG_S + 50.0), 0.0, 0.0]  # gravity disagrees
+    fast = slow + [math.radians(rest_bias.HOLD_ABOVE_DEG_S + 50.0), 0.0, 0.0]  # gravity disagrees
     rows = {'tracker only': slow, 'network': fast}
-    none = {m: None for m in rows}
+    none = dict.fromkeys(rows)
     runs = []
     finish = stages.finish
     monkeypatch.setattr(stages, 'finish', lambda *a: runs.append(a[3]) or finish(*a))

@@ -303,15 +303,27 @@ def test_a_tracker_held_above_a_rate_forgets_what_fast_rotation_taught_it_online
     step = np.array([s[:3] - online.update(s[:3], s[3:]) for s in imu])
     assert np.array_equal(step, batch)
     assert not online.held
-    online.reset()  # a new run: the rates seen before are forgotten too
-    assert np.array_equal(imu[:1, :3] - online.update(imu[0, :3], imu[0, 3:]), batch[:1])
-    for sample in imu[1:3000]:
+    online.reset()
+    for sample in imu[:3000]:
         online.update(sample[:3], sample[3:])
     assert online.held  # within the spin: /diagnostics' tracked_bias_held
+    online.reset()  # a new run from within the spin: the rates seen before are forgotten
+    after = imu[5000:]
+    assert np.array_equal([s[:3] - online.update(s[:3], s[3:]) for s in after],
+                          after[:, :3] - rest_bias.tracked_bias(after[:, :3], after[:, 3:],
+                                                                RATE, held_settings))
     free = rest_bias.track_bias(imu[:, :3], imu[:, 3:], RATE, settings)
     held, learnt = imu[:, :3] - batch, imu[:, :3] - free
     assert np.abs(held[5020] - held[2019]).max() < 2e-4
     assert np.abs(learnt[5020] - learnt[2019]).max() > 2e-3
+
+
+@pytest.mark.parametrize('n', [0, 1, 10, 11, 19, 20, 21, 45])
+def test_the_rate_hold_per_sample_equals_it_over_arrays_at_any_length(n):
+    gyro = np.random.default_rng(n).normal(0.0, 4.5, (n, 3))  # rad/s: about the bound
+    online = rest_bias.FastRotation(400.0, RATE)  # over 20 samples at 200 Hz
+    fast = rest_bias.fast_rotation(gyro, RATE, 400.0)
+    assert fast.shape == (n,) and np.array_equal([online.update(g) for g in gyro], fast)
 
 
 def test_tracking_runs_where_the_model_file_says_unless_switched_off():

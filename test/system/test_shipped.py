@@ -5,9 +5,10 @@
 from denoise_imu_ros.core.modelfile import read_model_file, shipped_models
 from denoise_imu_ros.core.schema import Blend, NO_MODEL, tracking_from_dict
 from denoise_imu_ros.evaluation import evaluate as evaluate_module
-from denoise_imu_ros.evaluation.crossval import BLEND_WEIGHTS, HOLD_ABOVE_DEG_S
+from denoise_imu_ros.evaluation.crossval import BLEND_WEIGHTS
 from denoise_imu_ros.learn.checkpoint import load_model
 from denoise_imu_ros.learn.model import correct_gyro
+from denoise_imu_ros.pipeline.rest_bias import HOLD_ABOVE_DEG_S
 from denoise_imu_ros.pipeline.streaming import StreamingCorrector
 from denoise_imu_ros.runtime.advice import deployment_warning
 from helpers import SAMPLE
