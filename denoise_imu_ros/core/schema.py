@@ -23,7 +23,8 @@ from .limits import MAX_RATE_HZ
 __all__ = ['ACCEL_CHOICES', 'AS_IT_CAME', 'BiasTracking', 'Blend', 'Fusion', 'FusionSettings',
            'InputEnvelope', 'JUDGED', 'judged_on', 'MAX_ACCEL_BIAS_M_S2', 'ModelMeta', 'NO_MODEL',
            'parse_meta', 'REST_ONLY', 'RestBiasSettings', 'SampleVariance', 'TRACKER_ONLY',
-           'tracking_from_dict', 'Validation', 'VARIANCE_KEYS', 'Verdict']
+           'tracking_from_dict', 'Validation', 'VARIANCE_KEYS', 'Verdict',
+           'VQF_BIAS_SIGMA_INIT_DEG_S']
 
 REST_ONLY = 'rest bias'  # the ``kind`` of a model file that removes the turn-on bias alone
 # the ``kind`` of a model file that runs the classical pipeline, no model: the turn-on bias

@@ -57,7 +57,8 @@ from ..core.metrics import FusedErrors, score
 from ..core.modelfile import sample_rate
 from ..core.records import Sequence
 from ..core.schema import (ACCEL_CHOICES, AS_IT_CAME, BiasTracking, Blend, InputEnvelope,
-                           JUDGED, judged_on, ModelMeta, parse_meta, REST_ONLY, TRACKER_ONLY)
+                           JUDGED, judged_on, ModelMeta, parse_meta, REST_ONLY, TRACKER_ONLY,
+                           VQF_BIAS_SIGMA_INIT_DEG_S)
 from ..data.load import load_sequence
 from ..learn import parallel
 from ..learn.checkpoint import load_model, LoadedModel
@@ -78,14 +79,17 @@ UNBLENDED = 'network unblended'  # the network row before the blend, reported be
 ACCEL_WINDOW_S = 1.0  # the velocity increments the accelerometer is judged on (keyframes')
 BIAS_REMOVED = ACCEL_CHOICES[0]
 # the candidates: VQF's biasSigmaMotion (its default 0.1 deg/s) and biasForgettingTime
-# (its default 100 s), each held through rotation faster than HOLD_ABOVE_DEG_S or never,
-# beside none; each starts as certain of its 0 as its motion updates ever make it, not at
-# VQF's 0.5 deg/s for a raw gyro: what is left after the model is small, and from 0.5 deg/s
-# a start whose accelerations are not gravity (a drone carried) teaches it a bias an
-# open-loop attitude never forgets (docs/method.md). The held one comes first: where the
-# motion never turns that fast the two are the same, and a tie goes to it
-TRACKING_GRID = tuple(BiasTracking(sigma, forget, sigma, hold)
+# (its default 100 s), beside none; each started as certain of its 0 as its motion
+# updates ever make it or at VQF's 0.5 deg/s for a raw gyro (after a model what is left
+# is small, and from 0.5 deg/s a start whose accelerations are not gravity, a drone
+# carried, teaches it a bias an open-loop attitude never forgets: docs/method.md; after
+# the turn-on bias alone a new power-on's bias in motion may be further off its bias at
+# rest, which 0.5 deg/s learns sooner); each held through rotation faster than
+# HOLD_ABOVE_DEG_S or never, the held one first: where the motion never turns that fast
+# the two are the same, and a tie goes to it
+TRACKING_GRID = tuple(BiasTracking(sigma, forget, init, hold)
                       for sigma in (0.03, 0.05, 0.07, 0.1, 0.2) for forget in (30.0, 100.0, 300.0)
+                      for init in (sigma, VQF_BIAS_SIGMA_INIT_DEG_S)
                       for hold in (rest_bias.HOLD_ABOVE_DEG_S, None))
 
 
@@ -104,8 +108,12 @@ def fusion_label(flt: Filter, removed: bool) -> str:
 
 
 def tracking_label(settings: BiasTracking | None) -> str:
-    """Name a tracking candidate in reports."""
-    return 'none' if settings is None else settings.describe()
+    """Name a tracking candidate in reports (its start where it is not its sigma)."""
+    if settings is None:
+        return 'none'
+    init = settings.sigma_init_deg_s
+    started = '' if init == settings.sigma_motion_deg_s else f', started at {init:g} deg/s'
+    return settings.describe() + started
 
 
 # each recipe key's default: what a model file written before the key existed was made with
