@@ -112,6 +112,11 @@ def tracking(meta: ModelMeta, choice: str) -> BiasTracking | None:
     return None if _checked(choice) == 'off' else meta.bias_tracking
 
 
+def _fast_window(rate_hz: float) -> int:
+    """Return the samples in FAST_WINDOW_S (one at least), per sample and over arrays alike."""
+    return max(1, round(FAST_WINDOW_S * rate_hz))
+
+
 class FastRotation:
     """
     Whether a gyro's mean norm over the last FAST_WINDOW_S reaches a bound, sample by sample.
@@ -121,7 +126,7 @@ class FastRotation:
     """
 
     def __init__(self, bound_deg_s: float, rate_hz: float) -> None:
-        self._n = max(1, round(FAST_WINDOW_S * rate_hz))
+        self._n = _fast_window(rate_hz)
         self._bound = math.radians(bound_deg_s)
         self.reset()
 
@@ -144,7 +149,7 @@ class FastRotation:
 
 def fast_rotation(gyro: np.ndarray, rate_hz: float, bound_deg_s: float) -> np.ndarray:
     """Return :class:`FastRotation` (N,) of a gyro (N, 3) rad/s over a whole run."""
-    n = max(1, round(FAST_WINDOW_S * rate_hz))
+    n = _fast_window(rate_hz)
     norm = np.sqrt(gyro[:, 0] * gyro[:, 0] + gyro[:, 1] * gyro[:, 1] + gyro[:, 2] * gyro[:, 2])
     leaving = np.concatenate([np.zeros(min(n, len(norm))), norm[:max(len(norm) - n, 0)]])
     count = np.minimum(np.arange(1, len(norm) + 1), n)
