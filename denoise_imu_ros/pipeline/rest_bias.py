@@ -51,10 +51,9 @@ from ..core.schema import (BiasTracking, ModelMeta, REST_ONLY, RestBiasSettings,
 
 __all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES',
            'classical_tracking', 'estimator', 'fast_rotation', 'FastRotation',
-           'HOLD_ABOVE_DEG_S', 'Nominal',
-           'nominal_bias', 'remove_rest_bias', 'resolve', 'RestBias', 'rest_bias_batch',
-           'RestBiasSettings', 'track_bias', 'tracked_bias', 'tracker', 'tracker_only_gyro',
-           'tracking', 'write_rest_only_model']
+           'HOLD_ABOVE_DEG_S', 'Nominal', 'nominal_bias', 'remove_rest_bias', 'resolve',
+           'RestBias', 'rest_bias_batch', 'RestBiasSettings', 'track_bias', 'tracked_bias',
+           'tracker', 'tracker_only_gyro', 'tracking', 'write_rest_only_model']
 
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
