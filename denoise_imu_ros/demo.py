@@ -202,7 +202,10 @@ def _live(args: argparse.Namespace, messages: list, received: Received,
         player = Player(messages, rate=args.rate)
         node_proc = subprocess.Popen(
             [sys.executable, '-m', 'denoise_imu_ros.runtime.node', '--ros-args', '-p',
-             f'model:={args.model}', '-p', 'fixed_frame:=world', '--log-level', 'warn'],
+             f'model:={args.model}', '-p', 'fixed_frame:=world',
+             # every sample scored against the ground truth: none dropped on a busy machine
+             '-p', 'qos_overrides./imu/data_raw.subscription.reliability:=reliable',
+             '--log-level', 'warn'],
             env=dict(os.environ))
         print(f'waiting for gyro_denoiser (model {args.model}) ...', flush=True)
         while not player.has_subscribers() or not all(
@@ -240,9 +243,13 @@ def _live(args: argparse.Namespace, messages: list, received: Received,
 def _collect(executor: SingleThreadedExecutor, received: Received,
              node_proc: subprocess.Popen, done: threading.Event, expected: int,
              progress: Callable[[], str]) -> None:
-    """Spin until the player is done and the node quiet; print a line every 10 s."""
+    """Spin until the player is done and the node quiet; print a line every 10 s.
+
+    Quiet is 2 s without a new attitude: a node that lags behind a loaded machine is
+    waited for while it still publishes.
+    """
     attitudes = received.topics[OPEN_LOOP]
-    next_report, quiet_since = 10.0, None
+    next_report, quiet_since, seen = 10.0, None, 0
     while True:
         executor.spin_once(timeout_sec=0.05)
         if len(attitudes) > 1 and (attitudes[-1][0] - attitudes[0][0]) * 1e-9 >= next_report:
@@ -252,7 +259,8 @@ def _collect(executor: SingleThreadedExecutor, received: Received,
             raise DenoiseError(f'gyro_denoiser stopped (exit {node_proc.returncode}) '
                                f'after {len(attitudes)} attitudes')
         if done.is_set():
-            quiet_since = quiet_since or time.monotonic()
+            if quiet_since is None or len(attitudes) > seen:
+                quiet_since, seen = time.monotonic(), len(attitudes)
             if len(attitudes) >= expected or time.monotonic() - quiet_since > 2.0:
                 return
 

@@ -11,7 +11,7 @@ def test_live_demo_runs_node_player_and_monitor(tmp_path, monkeypatch, capsys):
     assert demo.main(['--model', 'euroc', '--rate', '2', '--seconds', '10',
                       '--out', str(tmp_path)]) == 0  # 10 s of the bag in 5 s
     out = capsys.readouterr().out
-    assert '2000/2000 samples corrected live over DDS' in out
+    assert '2000/2000 samples corrected live over DDS' in out, out
     rms = {line.split(':')[0].strip(): float(line.split(':')[1].split('/')[0])
            for line in out.splitlines() if ' / ' in line and line.startswith('  ')}
     assert set(rms) == {'raw gyro', 'calibrated IMU', 'gyro_denoiser imu/attitude',
