@@ -243,7 +243,8 @@ def _live(args: argparse.Namespace, messages: list, received: Received,
 def _collect(executor: SingleThreadedExecutor, received: Received,
              node_proc: subprocess.Popen, done: threading.Event, expected: int,
              progress: Callable[[], str]) -> None:
-    """Spin until the player is done and the node quiet; print a line every 10 s.
+    """
+    Spin until the player is done and the node quiet; print a line every 10 s.
 
     Quiet is 2 s without a new attitude: a node that lags behind a loaded machine is
     waited for while it still publishes.
