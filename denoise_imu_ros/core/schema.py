@@ -141,8 +141,7 @@ class BiasTracking:
     off its bias at rest, a network's constant error on an unseen recording) VQF
     estimates from the accelerometer's tilt corrections while moving and from the gyro
     while still; ``crossval`` chooses its settings (VQF's two, and whether to hold through
-    fast rotation), or none, on recordings its folds never trained on, each started at its
-    ``sigma_motion_deg_s``.
+    fast rotation) and its start, or none, on recordings its folds never trained on.
     """
 
     sigma_motion_deg_s: float  # VQF's biasSigmaMotion: smaller trusts motion updates more
@@ -173,10 +172,13 @@ class BiasTracking:
         return stored
 
     def describe(self) -> str:
-        """Say the settings in words (reports, the node's log)."""
+        """Say the settings in words (reports, the node's log); the start where not sigma."""
         held = ('' if self.hold_above_deg_s is None
                 else f', held above {self.hold_above_deg_s:g} deg/s')
-        return f'sigma {self.sigma_motion_deg_s:g} deg/s, forgetting {self.forgetting_s:g} s{held}'
+        init = self.sigma_init_deg_s
+        started = '' if init == self.sigma_motion_deg_s else f', started at {init:g} deg/s'
+        return (f'sigma {self.sigma_motion_deg_s:g} deg/s, forgetting {self.forgetting_s:g} s'
+                f'{held}{started}')
 
 
 @dataclass(frozen=True)

@@ -108,12 +108,8 @@ def fusion_label(flt: Filter, removed: bool) -> str:
 
 
 def tracking_label(settings: BiasTracking | None) -> str:
-    """Name a tracking candidate in reports (its start where it is not its sigma)."""
-    if settings is None:
-        return 'none'
-    init = settings.sigma_init_deg_s
-    started = '' if init == settings.sigma_motion_deg_s else f', started at {init:g} deg/s'
-    return settings.describe() + started
+    """Name a tracking candidate in reports."""
+    return 'none' if settings is None else settings.describe()
 
 
 # each recipe key's default: what a model file written before the key existed was made with

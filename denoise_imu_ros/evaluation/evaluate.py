@@ -289,7 +289,7 @@ def _write(out_dir: Path, report: dict[str, Any], rest_only: bool) -> None:
     for m, t in report['bias_tracking'].items():
         tracking = tracking_from_dict(t)
         table += (f"The {m} row tracks its output's bias at rest and in motion (VQF, "
-                  f'{tracking.describe()}, started at {tracking.sigma_init_deg_s:g} deg/s, '
+                  f'{tracking.describe()}, '
                   'chosen by crossval on recordings its folds never trained on) and removes '
                   'it, as online.\n')
     if report['start_sample']:

@@ -48,7 +48,10 @@ def test_a_tracking_held_above_a_rate_is_stored_and_read_back_and_older_files_ne
     assert parse_meta({'bias_tracking': older}, 'm').bias_tracking.hold_above_deg_s is None
     assert BiasTracking(0.05, 30.0, 0.05).as_dict() == older  # what an older reader knows
     assert held.describe() == 'sigma 0.05 deg/s, forgetting 30 s, held above 400 deg/s'
-    assert BiasTracking(0.05, 30.0).describe() == 'sigma 0.05 deg/s, forgetting 30 s'
+    assert BiasTracking(0.05, 30.0, 0.05).describe() == 'sigma 0.05 deg/s, forgetting 30 s'
+    # a start that is not sigma is said: the node's log of the shipped broad
+    assert BiasTracking(0.05, 30.0, 0.5, 400.0).describe() == (
+        'sigma 0.05 deg/s, forgetting 30 s, held above 400 deg/s, started at 0.5 deg/s')
 
 
 @pytest.mark.parametrize('raw, message', [
