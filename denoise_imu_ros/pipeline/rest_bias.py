@@ -58,8 +58,9 @@ __all__ = ['baseline_gyro', 'baseline_settings', 'BiasTracker', 'CHOICES',
 CHOICES = ('model', 'on', 'off')  # the node's rest_bias parameter, process-bag's option
 WIDE_CLIP_DEG_S = 10.0  # a clip that finds a turn-on bias of any MEMS gyro's size
 AMBIGUOUS_CLIP_FRACTION = 0.5  # a rest bias this far out in its clip may be a slow turn
-# the tracker-only row's settings where neither crossval nor the model chose any: what
-# crossval chose for BROAD's sessions (docs/results.md), started as sure of its 0 as that
+# the tracker-only row's settings where neither crossval nor the model chose any: the
+# sigma and forgetting BROAD's sessions choose (docs/results.md), started at that sigma and
+# never held; the start and the hold are what crossval chooses per recipe
 CLASSICAL_TRACKING = BiasTracking(0.05, 30.0, 0.05)
 FAST_WINDOW_S = 0.1  # the gyro's mean norm over this is compared with a hold bound
 # the bound crossval offers each tracking candidate (found on BROAD's fast trials, run 45
